@@ -1,0 +1,55 @@
+#!/usr/bin/env python3
+"""The arrows of DESIGN.md, checked over every #include:
+
+  firmware/core  includes only firmware/core/, shared/, Eigen and standard headers that need
+                 no heap and no OS;
+  firmware/      never includes host/;
+  shared/        includes only shared/ and those standard headers.
+
+  layering_check.py REPO_ROOT     prints each violation as FILE:LINE and exits 1 if any
+"""
+import pathlib
+import re
+import sys
+
+INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]')
+FREESTANDING_STD = {
+    "algorithm", "array", "bit", "cassert", "cfloat", "climits", "cmath", "compare", "concepts", "cstddef",
+    "cstdint", "cstring", "initializer_list", "iterator", "limits", "numbers", "numeric", "optional", "ratio",
+    "span", "tuple", "type_traits", "utility", "variant",
+}
+SOURCES = ("*.hpp", "*.h", "*.cpp", "*.cc", "*.c")
+
+
+def allowed(rel, target):
+    if rel.startswith("firmware/") and target.startswith("host/"):
+        return "firmware must not include host code"
+    if rel.startswith("firmware/core/") or rel.startswith("shared/"):
+        own = ("firmware/core/", "shared/") if rel.startswith("firmware/core/") else ("shared/",)
+        if target.startswith(own) or target in FREESTANDING_STD:
+            return None
+        if rel.startswith("firmware/core/") and target.startswith("Eigen/"):
+            return None
+        return f"{rel.split('/')[0]}/{'core/' if rel.startswith('firmware/') else ''} may not include <{target}>"
+    return None
+
+
+def main(root):
+    root = pathlib.Path(root)
+    problems = []
+    for top in ("firmware", "shared"):
+        for pattern in SOURCES:
+            for path in sorted((root / top).rglob(pattern)):
+                rel = path.relative_to(root).as_posix()
+                for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+                    m = INCLUDE.match(line)
+                    if m:
+                        why = allowed(rel, m.group(2))
+                        if why:
+                            problems.append(f"{rel}:{number}: {why}")
+    print("\n".join(problems) if problems else "layering: ok")
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1] if len(sys.argv) > 1 else "."))

@@ -1,0 +1,70 @@
+# Firmware discipline for the Cortex-M4 build, as link options and ctest checks:
+#   no heap   allocator, operator new/delete and exception entry points are --wrap'ed with no
+#             wrapper defined, so using one fails the link and names the caller; plus
+#             toolchain/check_no_heap.py over the symbols (libraries and images);
+#   stack     toolchain/check_stack.py over GCC's call graphs (-fcallgraph-info=su);
+#   size      toolchain/check_size.py over arm-none-eabi-size.
+
+set(KINCAL_NO_HEAP_WRAPS
+  malloc free calloc realloc _malloc_r _free_r _calloc_r _realloc_r
+  _Znwj _Znaj _ZdlPv _ZdaPv _ZdlPvj _ZdaPvj _ZnwjRKSt9nothrow_t _ZnajRKSt9nothrow_t
+  __cxa_allocate_exception __cxa_throw)
+list(TRANSFORM KINCAL_NO_HEAP_WRAPS PREPEND "-Wl,--wrap=" OUTPUT_VARIABLE KINCAL_NO_HEAP_LINK_OPTIONS)
+
+# The .ci call graphs GCC writes beside a target's objects: one per C/C++ source. Named from
+# the target's sources (not globbed), so a stale file of an earlier build cannot leak in.
+function(kincal_callgraph_files target out)
+  get_target_property(dir ${target} BINARY_DIR)
+  get_target_property(sources ${target} SOURCES)
+  set(files)
+  foreach(source ${sources})
+    if(source MATCHES "\\.(c|cc|cpp)$")
+      list(APPEND files ${dir}/CMakeFiles/${target}.dir/${source}.ci)
+    endif()
+  endforeach()
+  set(${out} ${files} PARENT_SCOPE)
+endfunction()
+
+# A firmware library: its objects must not refer to the heap, and each global function's
+# worst stack must fit STACK_BUDGET.
+function(kincal_firmware_library_checks target)
+  cmake_parse_arguments(ARG "" "STACK_BUDGET" "" ${ARGN})
+  kincal_callgraph_files(${target} ci_files)
+  add_test(NAME m4.${target}.no_heap
+    COMMAND ${Python3_EXECUTABLE} ${PROJECT_SOURCE_DIR}/toolchain/check_no_heap.py
+            --nm ${CMAKE_NM} --archive $<TARGET_FILE:${target}>)
+  add_test(NAME m4.${target}.stack
+    COMMAND ${Python3_EXECUTABLE} ${PROJECT_SOURCE_DIR}/toolchain/check_stack.py --name ${target}
+            --budget ${ARG_STACK_BUDGET} --nm ${CMAKE_NM} --entries-from $<TARGET_FILE:${target}> ${ci_files})
+  set_tests_properties(m4.${target}.no_heap m4.${target}.stack PROPERTIES LABELS "m4;checks")
+endfunction()
+
+# A firmware image: linked with the no-heap wraps; its flash and RAM within budget; the
+# worst stack of each STACK_ENTRIES symbol (through LIBRARIES' code too) within STACK_BUDGET.
+function(kincal_firmware_image target)
+  cmake_parse_arguments(ARG "" "FLASH_BUDGET;RAM_BUDGET;STACK_BUDGET" "STACK_ENTRIES;LIBRARIES" ${ARGN})
+  target_link_options(${target} PRIVATE ${KINCAL_NO_HEAP_LINK_OPTIONS}
+    -Wl,-Map=$<TARGET_FILE:${target}>.map)
+  target_link_libraries(${target} PRIVATE ${ARG_LIBRARIES})
+  add_custom_command(TARGET ${target} POST_BUILD
+    COMMAND ${CMAKE_OBJCOPY} -O binary $<TARGET_FILE:${target}> $<TARGET_FILE_DIR:${target}>/${target}.bin
+    COMMENT "Flashable binary ${target}.bin")
+
+  set(ci_files)
+  foreach(t ${target} ${ARG_LIBRARIES})
+    kincal_callgraph_files(${t} files)
+    list(APPEND ci_files ${files})
+  endforeach()
+  list(TRANSFORM ARG_STACK_ENTRIES PREPEND "--entry=" OUTPUT_VARIABLE entries)
+
+  add_test(NAME m4.${target}.no_heap
+    COMMAND ${Python3_EXECUTABLE} ${PROJECT_SOURCE_DIR}/toolchain/check_no_heap.py
+            --nm ${CMAKE_NM} --image $<TARGET_FILE:${target}> --map $<TARGET_FILE:${target}>.map)
+  add_test(NAME m4.${target}.size
+    COMMAND ${Python3_EXECUTABLE} ${PROJECT_SOURCE_DIR}/toolchain/check_size.py --size ${CMAKE_SIZE}
+            --flash-budget ${ARG_FLASH_BUDGET} --ram-budget ${ARG_RAM_BUDGET} $<TARGET_FILE:${target}>)
+  add_test(NAME m4.${target}.stack
+    COMMAND ${Python3_EXECUTABLE} ${PROJECT_SOURCE_DIR}/toolchain/check_stack.py --name ${target}
+            --budget ${ARG_STACK_BUDGET} ${entries} ${ci_files})
+  set_tests_properties(m4.${target}.no_heap m4.${target}.size m4.${target}.stack PROPERTIES LABELS "m4;checks")
+endfunction()
