@@ -25,9 +25,9 @@ class Mismatches {
   explicit Mismatches(const char* table) : table_(table) {}
   void expect(std::int64_t got, std::int64_t expected, std::int64_t a, std::int64_t b = 0) {
     if (got == expected) return;
-    if (++count_ <= 3) MESSAGE(table_, ": a=", a, " b=", b, " got ", got, " expected ", expected);
+    if (++count_ <= 3) MESSAGE(doctest::String(table_), ": a=", a, " b=", b, " got ", got, " expected ", expected);
   }
-  ~Mismatches() { CHECK_MESSAGE(count_ == 0, table_, ": ", count_, " mismatches"); }
+  ~Mismatches() { CHECK_MESSAGE(count_ == 0, doctest::String(table_), ": ", count_, " mismatches"); }
   Mismatches(const Mismatches&) = delete;
   Mismatches& operator=(const Mismatches&) = delete;
 
