@@ -5,7 +5,7 @@ option(KINCAL_SANITIZE "Build native code with AddressSanitizer and UndefinedBeh
 # Strict warnings as errors on our own code (STYLE.md habit 6).
 set(KINCAL_WARNINGS
     -Wall -Wextra -Wpedantic -Wconversion -Wsign-conversion -Wdouble-promotion -Wshadow
-    -Wold-style-cast -Wcast-align -Wnull-dereference -Wimplicit-fallthrough -Werror)
+    -Wold-style-cast -Wcast-align -Wimplicit-fallthrough -Werror)
 # GCC's note that the AAPCS changed in GCC 7 concerns only mixing old and new objects.
 if(CMAKE_CROSSCOMPILING)
   list(APPEND KINCAL_WARNINGS -Wno-psabi)
