@@ -4,7 +4,7 @@
 set -eu
 
 packages="
-  cmake ninja-build g++ python3
+  cmake ninja-build g++ python3 clang-format
   libeigen3-dev libcli11-dev doctest-dev
   gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib libnewlib-arm-none-eabi qemu-system-arm
 "

@@ -35,8 +35,8 @@ namespace kincal::core {
 namespace fixed_detail {
 
 template <class Rep>
-concept Storage = std::is_integral_v<Rep> && !std::is_same_v<Rep, bool> &&
-                  (sizeof(Rep) == 1 || sizeof(Rep) == 2 || sizeof(Rep) == 4);
+concept Storage =
+    std::is_integral_v<Rep> && !std::is_same_v<Rep, bool> && (sizeof(Rep) == 1 || sizeof(Rep) == 2 || sizeof(Rep) == 4);
 
 // Bits of magnitude an int64_t intermediate may use without overflow.
 inline constexpr int kMagnitudeBits = 62;
@@ -169,11 +169,11 @@ template <class T>
 concept FixedPoint = is_fixed_v<T>;
 
 // The formats the pixel path uses; the name says signedness, integer and fraction bits.
-using q15 = Fixed<std::int16_t, 15>;      // [-1, 1): unit-range coefficients (colour weights)
-using q31 = Fixed<std::int32_t, 31>;      // [-1, 1): unit-range coefficients, full precision
-using uq8_8 = Fixed<std::uint16_t, 8>;    // [0, 256): pixel intensity with a fraction
-using q24_8 = Fixed<std::int32_t, 8>;     // +-8.4e6: coordinates and sums with 1/256 resolution
-using q16_16 = Fixed<std::int32_t, 16>;   // +-32768: sub-pixel positions, 1.5e-5 px resolution
+using q15 = Fixed<std::int16_t, 15>;     // [-1, 1): unit-range coefficients (colour weights)
+using q31 = Fixed<std::int32_t, 31>;     // [-1, 1): unit-range coefficients, full precision
+using uq8_8 = Fixed<std::uint16_t, 8>;   // [0, 256): pixel intensity with a fraction
+using q24_8 = Fixed<std::int32_t, 8>;    // +-8.4e6: coordinates and sums with 1/256 resolution
+using q16_16 = Fixed<std::int32_t, 16>;  // +-32768: sub-pixel positions, 1.5e-5 px resolution
 
 // x in another format: rounded when fraction bits are dropped, saturated when out of range.
 template <FixedPoint To, FixedPoint From>
@@ -187,9 +187,10 @@ constexpr To fixed_cast(From x) noexcept {
 template <FixedPoint To, FixedPoint A, FixedPoint B>
 constexpr To mul(A a, B b) noexcept {
   constexpr int shift = To::frac_bits - A::frac_bits - B::frac_bits;
-  static_assert(fixed_detail::kWidth<typename A::rep> + fixed_detail::kWidth<typename B::rep> + (shift > 0 ? shift : 0) <=
-                    fixed_detail::kMagnitudeBits,
-                "product would not fit int64_t");
+  static_assert(
+      fixed_detail::kWidth<typename A::rep> + fixed_detail::kWidth<typename B::rep> + (shift > 0 ? shift : 0) <=
+          fixed_detail::kMagnitudeBits,
+      "product would not fit int64_t");
   const std::int64_t product = std::int64_t{a.raw()} * b.raw();
   return To::from_raw(fixed_detail::saturate<typename To::rep>(fixed_detail::rescale(product, shift)));
 }

@@ -36,8 +36,8 @@ int run_demo(std::ostream& out) {
   show<core::q15>(out, "colour weight", "q15", -0.333333333, "");
   const auto second_moment = core::q24_8::from_double(2.25);
   char line[200];
-  std::snprintf(line, sizeof line, "  %-26s %-7s %14.9f %-3s -> sqrt  %14.9f px (blob sigma)\n", "second moment", "q24_8",
-                second_moment.to_double(), "px2", core::sqrt(second_moment).to_double());
+  std::snprintf(line, sizeof line, "  %-26s %-7s %14.9f %-3s -> sqrt  %14.9f px (blob sigma)\n", "second moment",
+                "q24_8", second_moment.to_double(), "px2", core::sqrt(second_moment).to_double());
   out << line;
   return 0;
 }

@@ -35,7 +35,8 @@ extern "C" void Fault_Handler() {
   __asm volatile(
       "mov r0, #0x18\n\t"
       "ldr r1, =0x20023\n\t"
-      "bkpt 0xAB" ::: "r0", "r1", "memory");
+      "bkpt 0xAB" ::
+          : "r0", "r1", "memory");
   for (;;) {
   }
 }
@@ -46,8 +47,10 @@ extern "C" int getentropy(void*, std::size_t) {
   return -1;
 }
 
+// clang-format off
 __attribute__((section(".vectors"), used)) const Vector kVectors[16] = {
     reinterpret_cast<Vector>(&__stack_top),  // initial stack pointer
     Reset_Handler, Fault_Handler, Fault_Handler, Fault_Handler, Fault_Handler, Fault_Handler,
     nullptr, nullptr, nullptr, nullptr,
     Fault_Handler, Fault_Handler, nullptr, Fault_Handler, Fault_Handler};
+// clang-format on

@@ -7,9 +7,9 @@
 namespace kincal::stm32f4 {
 
 enum class ClockStatus : std::uint8_t {
-  kPll168MHz,          // running from the PLL at 168 MHz
-  kHseFailedOnHsi,     // the crystal did not start: still on the 16 MHz internal oscillator
-  kPllFailedOnHsi,     // the PLL did not lock: still on the 16 MHz internal oscillator
+  kPll168MHz,       // running from the PLL at 168 MHz
+  kHseFailedOnHsi,  // the crystal did not start: still on the 16 MHz internal oscillator
+  kPllFailedOnHsi,  // the PLL did not lock: still on the 16 MHz internal oscillator
 };
 
 // Set once by Reset_Handler before main(); the application reports it in its status.

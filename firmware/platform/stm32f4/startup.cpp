@@ -1,8 +1,9 @@
 // Reset, vector table and clock tree for the STM32F407 (RM0090): the sensor platform's MCU.
 // Reset_Handler copies .data, zeroes .bss, enables the FPU, runs the clock set-up, then
 // calls firmware_main() (main.cpp; C++ forbids calling main()). The firmware has no static
-// constructors (the linker script asserts it), so the stack analysis sees no indirect call. Every interrupt handler is a weak alias of
-// Default_Handler, so a driver defines e.g. CAN1_RX0_IRQHandler() to take its interrupt.
+// constructors (the linker script asserts it), so the stack analysis sees no indirect call.
+// Every interrupt handler is a weak alias of Default_Handler, so a driver defines e.g.
+// CAN1_RX0_IRQHandler() to take its interrupt.
 #include <cstdint>
 
 #include "firmware/platform/stm32f4/clock.hpp"
@@ -20,6 +21,8 @@ extern "C" void Default_Handler() {
   for (;;) __asm volatile("bkpt 0");
 }
 
+// One table row per line reads better than any reflow.
+// clang-format off
 #define KINCAL_STM32F4_EXCEPTIONS(X) \
   X(NMI_Handler) X(HardFault_Handler) X(MemManage_Handler) X(BusFault_Handler) X(UsageFault_Handler) \
   X(SVC_Handler) X(DebugMon_Handler) X(PendSV_Handler) X(SysTick_Handler)
@@ -43,6 +46,7 @@ extern "C" void Default_Handler() {
   extern "C" void name##_IRQHandler() __attribute__((weak, alias("Default_Handler")));
 KINCAL_STM32F4_EXCEPTIONS(KINCAL_WEAK_EXCEPTION)
 KINCAL_STM32F4_IRQS(KINCAL_WEAK_IRQ)
+// clang-format on
 
 namespace {
 
@@ -63,6 +67,7 @@ static_assert(sizeof(VectorTable) == (16 + 82) * sizeof(Vector));
 
 }  // namespace
 
+// clang-format off
 __attribute__((section(".vectors"), used)) const VectorTable kVectors = {
     reinterpret_cast<Vector>(&__stack_top),
     Reset_Handler,
@@ -72,6 +77,7 @@ __attribute__((section(".vectors"), used)) const VectorTable kVectors = {
     nullptr,
     PendSV_Handler, SysTick_Handler,
     {KINCAL_STM32F4_IRQS(KINCAL_IRQ_ENTRY)}};
+// clang-format on
 
 extern "C" void Reset_Handler() {
   const std::uint32_t* src = &__data_load__;

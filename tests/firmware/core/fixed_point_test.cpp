@@ -92,34 +92,33 @@ q16_16 random_q16_16(std::uint64_t z) {
 
 }  // namespace
 
-#define KINCAL_SAME_FORMAT_TABLES(F)                                                   \
-  TEST_CASE("fixed " #F ": negation, sqrt and float conversions match the reference") { \
-    using T = vectors::F;                                                              \
-    {                                                                                  \
-      Mismatches m(#F "_neg");                                                         \
-      for (const auto& c : vectors::F##_neg) m.expect((-raw_of<T>(c.a)).raw(), c.expected, c.a); \
-    }                                                                                  \
-    {                                                                                  \
-      Mismatches m(#F "_sqrt");                                                        \
-      for (const auto& c : vectors::F##_sqrt) m.expect(sqrt(raw_of<T>(c.a)).raw(), c.expected, c.a); \
-    }                                                                                  \
-    {                                                                                  \
-      Mismatches m(#F "_to_float");                                                    \
-      for (const auto& c : vectors::F##_to_float)                                      \
-        m.expect(float_bits(raw_of<T>(c.a).to_float()), c.bits, c.a);                  \
-    }                                                                                  \
-    {                                                                                  \
-      Mismatches m(#F "_from_double");                                                 \
-      for (const auto& c : vectors::F##_from_double) m.expect(T::from_double(c.in).raw(), c.expected, 0); \
-    }                                                                                  \
-  }                                                                                    \
-  TEST_CASE("fixed " #F ": + and - match the reference") {                             \
-    check_binary<vectors::F>(#F "_add", vectors::F##_add, [](auto a, auto b) { return a + b; }); \
-    check_binary<vectors::F>(#F "_sub", vectors::F##_sub, [](auto a, auto b) { return a - b; }); \
+#define KINCAL_SAME_FORMAT_TABLES(F)                                                                            \
+  TEST_CASE("fixed " #F ": negation, sqrt and float conversions match the reference") {                         \
+    using T = vectors::F;                                                                                       \
+    {                                                                                                           \
+      Mismatches m(#F "_neg");                                                                                  \
+      for (const auto& c : vectors::F##_neg) m.expect((-raw_of<T>(c.a)).raw(), c.expected, c.a);                \
+    }                                                                                                           \
+    {                                                                                                           \
+      Mismatches m(#F "_sqrt");                                                                                 \
+      for (const auto& c : vectors::F##_sqrt) m.expect(sqrt(raw_of<T>(c.a)).raw(), c.expected, c.a);            \
+    }                                                                                                           \
+    {                                                                                                           \
+      Mismatches m(#F "_to_float");                                                                             \
+      for (const auto& c : vectors::F##_to_float) m.expect(float_bits(raw_of<T>(c.a).to_float()), c.bits, c.a); \
+    }                                                                                                           \
+    {                                                                                                           \
+      Mismatches m(#F "_from_double");                                                                          \
+      for (const auto& c : vectors::F##_from_double) m.expect(T::from_double(c.in).raw(), c.expected, 0);       \
+    }                                                                                                           \
+  }                                                                                                             \
+  TEST_CASE("fixed " #F ": + and - match the reference") {                                                      \
+    check_binary<vectors::F>(#F "_add", vectors::F##_add, [](auto a, auto b) { return a + b; });                \
+    check_binary<vectors::F>(#F "_sub", vectors::F##_sub, [](auto a, auto b) { return a - b; });                \
   }
 
-#define KINCAL_MUL_DIV_TABLES(F)                                                                  \
-  TEST_CASE("fixed " #F ": * and / match the reference") {                                        \
+#define KINCAL_MUL_DIV_TABLES(F)                                                                 \
+  TEST_CASE("fixed " #F ": * and / match the reference") {                                       \
     check_binary<vectors::F>(#F "_mul", vectors::F##_mul, [](auto a, auto b) { return a * b; }); \
     check_binary<vectors::F>(#F "_div", vectors::F##_div, [](auto a, auto b) { return a / b; }); \
   }
@@ -154,14 +153,12 @@ TEST_CASE("fixed_cast rounds and saturates as the reference does") {
 
 TEST_CASE("mixed-format mul and div round once, as the reference does") {
   using V = vectors::q16_16;
-  check_mixed<V, vectors::q15, vectors::q24_8>(
-      "mul q15*q24_8->q16_16", vectors::mul_q15_q24_8_to_q16_16,
-      [](auto a, auto b) { return mul<vectors::q16_16>(a, b); });
-  check_mixed<vectors::uq8_8, vectors::uq8_8, vectors::q15>(
-      "mul uq8_8*q15->uq8_8", vectors::mul_uq8_8_q15_to_uq8_8,
-      [](auto a, auto b) { return mul<vectors::uq8_8>(a, b); });
-  check_mixed<vectors::q31, vectors::q15, vectors::q15>(
-      "mul q15*q15->q31", vectors::mul_q15_q15_to_q31, [](auto a, auto b) { return mul<vectors::q31>(a, b); });
+  check_mixed<V, vectors::q15, vectors::q24_8>("mul q15*q24_8->q16_16", vectors::mul_q15_q24_8_to_q16_16,
+                                               [](auto a, auto b) { return mul<vectors::q16_16>(a, b); });
+  check_mixed<vectors::uq8_8, vectors::uq8_8, vectors::q15>("mul uq8_8*q15->uq8_8", vectors::mul_uq8_8_q15_to_uq8_8,
+                                                            [](auto a, auto b) { return mul<vectors::uq8_8>(a, b); });
+  check_mixed<vectors::q31, vectors::q15, vectors::q15>("mul q15*q15->q31", vectors::mul_q15_q15_to_q31,
+                                                        [](auto a, auto b) { return mul<vectors::q31>(a, b); });
   check_mixed<vectors::q32_0, V, V>("mul q16_16*q16_16->q32_0", vectors::mul_q16_16_q16_16_to_q32_0,
                                     [](auto a, auto b) { return mul<vectors::q32_0>(a, b); });
   check_mixed<V, vectors::q24_8, vectors::q24_8>("div q24_8/q24_8->q16_16", vectors::div_q24_8_q24_8_to_q16_16,
