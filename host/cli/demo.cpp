@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <iostream>
 #include <ostream>
 
 #include "firmware/core/fixed_point.hpp"
@@ -22,8 +23,6 @@ void show(std::ostream& out, const char* what, const char* format, double value,
   out << line;
 }
 
-}  // namespace
-
 int run_demo(std::ostream& out) {
   out << "kincal demo: the calibration loop (simulated Kapucu & Baysec rig and ARID platform,\n"
          "identification, report) is not built yet; it lands with issue #6.\n\n"
@@ -40,6 +39,13 @@ int run_demo(std::ostream& out) {
                 "q24_8", second_moment.to_double(), "px2", core::sqrt(second_moment).to_double());
   out << line;
   return 0;
+}
+
+}  // namespace
+
+void add_demo_command(CLI::App& app, int& status) {
+  auto* demo = app.add_subcommand("demo", "Run the main job end to end (today: what the build already does)");
+  demo->callback([&status] { status = run_demo(std::cout); });
 }
 
 }  // namespace kincal::cli

@@ -2,10 +2,11 @@
 // shows what the build already does: the firmware core's pixel-path number formats.
 #pragma once
 
-#include <iosfwd>
+#include <CLI/App.hpp>
 
 namespace kincal::cli {
 
-int run_demo(std::ostream& out);
+// Registers the subcommand; when it runs, its exit status goes to `status`.
+void add_demo_command(CLI::App& app, int& status);
 
 }  // namespace kincal::cli

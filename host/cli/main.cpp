@@ -1,7 +1,6 @@
-// Entry point of the `kincal` command: parses the command line (CLI11) and dispatches.
+// Entry point of the `kincal` command: parses the command line (CLI11) and dispatches to the
+// subcommands, each registered by its own file in host/cli/.
 #include <CLI/CLI.hpp>
-
-#include <iostream>
 
 #include "host/cli/demo.hpp"
 
@@ -11,8 +10,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
 
   int status = 0;
-  auto* demo = app.add_subcommand("demo", "Run the main job end to end (today: what the build already does)");
-  demo->callback([&status] { status = kincal::cli::run_demo(std::cout); });
+  kincal::cli::add_demo_command(app, status);
 
   CLI11_PARSE(app, argc, argv);
   return status;
