@@ -46,9 +46,11 @@ function(kincal_firmware_image target)
   target_link_options(${target} PRIVATE ${KINCAL_NO_HEAP_LINK_OPTIONS}
     -Wl,-Map=$<TARGET_FILE:${target}>.map)
   target_link_libraries(${target} PRIVATE ${ARG_LIBRARIES})
+  # Intel hex, not a flat .bin: a .bin would span gaps in the image (the STM32F407's parameter
+  # sectors) with zeros and overwrite whatever a flashing tool finds there.
   add_custom_command(TARGET ${target} POST_BUILD
-    COMMAND ${CMAKE_OBJCOPY} -O binary $<TARGET_FILE:${target}> $<TARGET_FILE_DIR:${target}>/${target}.bin
-    COMMENT "Flashable binary ${target}.bin")
+    COMMAND ${CMAKE_OBJCOPY} -O ihex $<TARGET_FILE:${target}> $<TARGET_FILE_DIR:${target}>/${target}.hex
+    COMMENT "Flashable Intel hex ${target}.hex")
 
   set(ci_files)
   foreach(t ${target} ${ARG_LIBRARIES})

@@ -33,6 +33,7 @@ class Graph:
         self.frame = {}   # symbol -> (bytes, qualifier)
         self.label = {}
         self.calls = {}   # symbol -> set of callees
+        self.comdat = {}  # plain symbol -> titles "FILE:SYMBOL" of its copies
 
     def read(self, path):
         for line in path.read_text(encoding="utf-8", errors="replace").splitlines():
@@ -43,6 +44,8 @@ class Graph:
                 if f:
                     self.frame[title] = (int(f.group(1)), f.group(2))
                     self.label[title] = label.split("\\n")[0]
+                    if ":" in title:
+                        self.comdat.setdefault(title.rsplit(":", 1)[1], set()).add(title)
                 continue
             m = EDGE.search(line)
             if m:
@@ -54,6 +57,17 @@ class Graph:
             raise ValueError("recursion: " + " -> ".join(stack + (symbol,)))
         if symbol == "__indirect_call":
             raise ValueError("indirect call from " + stack[-1])
+        if symbol not in self.frame:
+            # A complete-object constructor or destructor (C1, D1) that GCC emitted as an alias of
+            # the base-object one (C2, D2): the call graph has a node only for the latter.
+            alias = re.sub(r"([CD])1(E|I)", r"\g<1>2\2", symbol, count=1)
+            if alias != symbol and (alias in self.frame or alias in self.comdat):
+                return self.worst(alias, stack)
+        if symbol not in self.frame and symbol in self.comdat:
+            # An inline or template function that GCC emitted out of line (a weak, COMDAT
+            # symbol): the call graphs title each copy "FILE:SYMBOL". The linker keeps one of
+            # them, so the worst copy bounds it.
+            return max((self.worst(title, stack) for title in sorted(self.comdat[symbol])), key=lambda r: r[0])
         if symbol not in self.frame:
             if RUNTIME_LEAVES.match(symbol):
                 return RUNTIME_LEAF_BYTES, [symbol]

@@ -7,6 +7,10 @@ packages="
   cmake ninja-build g++ python3 clang-format
   libeigen3-dev libcli11-dev doctest-dev
   gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib libnewlib-arm-none-eabi qemu-system-arm
+  libopencv-dev nlohmann-json3-dev opencv-doc clang libclang-rt-14-dev
+  python3-canmatrix can-utils busybox-static cpio qemu-system-x86 linux-image-amd64
+  openocd
+  libceres-dev libyaml-cpp-dev
 "
 
 missing=""

@@ -2,7 +2,17 @@
 // subcommands, each registered by its own file in host/cli/.
 #include <CLI/CLI.hpp>
 
+#include "host/cli/blobs.hpp"
+#include "host/cli/colour_table.hpp"
+#include "host/cli/dbc_command.hpp"
 #include "host/cli/demo.hpp"
+#include "host/cli/exercise.hpp"
+#include "host/cli/fiducials.hpp"
+#include "host/cli/identify_command.hpp"
+#include "host/cli/monitor.hpp"
+#include "host/cli/plan_command.hpp"
+#include "host/cli/predict_command.hpp"
+#include "host/cli/urdf_command.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"kincal: find the true kinematic parameters of a serial robot and correct it online", "kincal"};
@@ -11,6 +21,17 @@ int main(int argc, char** argv) {
 
   int status = 0;
   kincal::cli::add_demo_command(app, status);
+  kincal::cli::add_monitor_command(app, status);
+  kincal::cli::add_exercise_command(app, status);
+  kincal::cli::add_dbc_command(app, status);
+  kincal::cli::add_blobs_command(app, status);
+  kincal::cli::add_fiducials_command(app, status);
+  kincal::cli::add_colour_table_command(app, status);
+
+  kincal::cli::add_identify_command(app, status);
+  kincal::cli::add_predict_command(app, status);
+  kincal::cli::add_plan_command(app, status);
+  kincal::cli::add_urdf_command(app, status);
 
   CLI11_PARSE(app, argc, argv);
   return status;

@@ -32,6 +32,13 @@ bool wait_for(std::uintptr_t address, std::uint32_t mask, std::uint32_t value) {
 
 }  // namespace
 
+static_assert(clock_rates(0x940Au, 0x07405408u).core_hz == 168000000);  // the PLL set-up below
+static_assert(clock_rates(0x940Au, 0x07405408u).apb1_hz == 42000000);
+static_assert(clock_rates(0x940Au, 0x07405408u).apb2_hz == 84000000);
+static_assert(clock_rates(0, 0x07405408u).apb1_hz == 16000000 && clock_rates(0x1400u, 0).apb1_hz == 4000000);
+
+ClockRates clock_rates() { return clock_rates(reg(kRccCfgr), reg(kRccPllcfgr)); }
+
 void enable_fpu() {
   reg(kScbCpacr) = reg(kScbCpacr) | (0xFu << 20);
   __asm volatile("dsb\n\tisb" ::: "memory");

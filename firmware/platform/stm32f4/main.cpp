@@ -1,6 +1,83 @@
-// The sensor platform's firmware on the STM32F407. Today it boots, brings the clock to
-// 168 MHz and sleeps between interrupts: the application (CAN protocol, camera and rangers,
-// measurement scheduling) arrives with issue #5 in firmware/app.
+// The sensor platform's firmware on the STM32F407: firmware/app bound to this board's ports, as
+// firmware/platform/native binds the same application to Linux's.
+//   CAN          Bxcan (bxcan.hpp): CAN1 at 1 Mbit/s, classic frames only (AppConfig::fd = false)
+//   storage      FlashStorage (flash_storage.hpp): eight flash sectors, one per slot
+//   measurement  RangerMeasurement over AdcRangers (adc_rangers.hpp): four analog rangers on ADC1
+//   correction   JointOffsetCorrection
+// Start-up (Reset_Handler has set the clock tree): SysTick clock, rangers, CAN1, then the
+// application, which loads its parameter blocks from flash.
+// Main loop: every received frame to on_frame() (at most one ring's worth per pass, so poll()
+// runs at least once per 64 frames), a drop in the receive path to note_rx_overflow(), then
+// poll(). When the application has nothing due and no frame waits, the core sleeps (WFI) until
+// the next interrupt: a received frame or the 1 ms SysTick, so timed work runs at most 1 ms late.
+// The check for pending work and the WFI happen with interrupts masked, so a frame arriving
+// between them still wakes the core (WFI wakes on a pending interrupt even when masked).
+//
+// Memory: the application object (about 10 KiB) is built by placement new into static storage in
+// CCM RAM, beside the stack: no heap, and no static constructor (stm32f407vg.ld forbids them).
+// The ports are in firmware_main's frame, which never returns. Failure modes: a CAN controller
+// that does not start leaves the platform mute (nothing can report it); rangers that do not start
+// make every measurement report kRangerFailure; the clock fall-back sets kClockFallback.
+#include <cstddef>
+#include <new>
+
+#include "firmware/app/joint_offset_correction.hpp"
+#include "firmware/app/platform_app.hpp"
+#include "firmware/app/ranger_measurement.hpp"
+#include "firmware/platform/stm32f4/adc_rangers.hpp"
+#include "firmware/platform/stm32f4/bxcan.hpp"
+#include "firmware/platform/stm32f4/clock.hpp"
+#include "firmware/platform/stm32f4/flash_storage.hpp"
+#include "firmware/platform/stm32f4/systick_clock.hpp"
+
+namespace {
+
+namespace board = kincal::stm32f4;
+using Measure = kincal::app::RangerMeasurement<board::AdcRangers>;
+using App = kincal::app::PlatformApp<board::Bxcan, board::FlashStorage, Measure, kincal::app::JointOffsetCorrection>;
+
+// NOLOAD: the constructor initialises the object, so the bytes need no zeroing at reset.
+alignas(App) __attribute__((section(".ccm_noinit.app"))) std::byte app_storage[sizeof(App)];
+
+}  // namespace
+
 extern "C" [[noreturn]] void firmware_main() {
-  for (;;) __asm volatile("wfi");
+  const board::ClockRates rates = board::clock_rates();
+  board::systick::start(rates.core_hz);
+
+  board::FlashStorage storage;
+  board::AdcRangers rangers;
+  // On failure every read reports kFailed, so every measurement reports kRangerFailure.
+  (void)rangers.start(rates.apb2_hz);
+  Measure measure(rangers);
+  kincal::app::JointOffsetCorrection correct;
+
+  kincal::app::AppConfig config;
+  config.fd = false;  // bxCAN: classic CAN only
+  if (board::clock_status != board::ClockStatus::kPll168MHz)
+    config.board_error_flags |= kincal::shared::error_flag::kClockFallback;
+
+  // kWaitingForBus is normal with an idle-less bus at start; the controller then joins by itself.
+  // Any other failure leaves CAN off, and with it the only way to report anything.
+  (void)board::can1.start(rates.apb1_hz);
+
+  App& app = *::new (static_cast<void*>(app_storage)) App(config, board::can1, storage, measure, correct);
+  app.start(board::systick::now_us());
+
+  std::uint32_t rx_dropped_seen = 0;
+  for (;;) {
+    kincal::shared::CanFrame frame;
+    for (std::size_t i = 0; i < board::Bxcan::kRxRingFrames && board::can1.try_receive(frame); ++i)
+      app.on_frame(frame, board::systick::now_us());
+    const std::uint32_t rx_dropped = board::can1.rx_dropped_frames();
+    if (rx_dropped != rx_dropped_seen) {
+      rx_dropped_seen = rx_dropped;
+      app.note_rx_overflow();
+    }
+    app.poll(board::systick::now_us());
+
+    __asm volatile("cpsid i" ::: "memory");
+    if (!board::can1.rx_pending() && app.next_deadline_us() > board::systick::now_us()) __asm volatile("wfi");
+    __asm volatile("cpsie i" ::: "memory");
+  }
 }

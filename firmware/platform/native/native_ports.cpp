@@ -1,0 +1,175 @@
+#include "firmware/platform/native/native_ports.hpp"
+
+#include <fcntl.h>
+#include <linux/can.h>
+#include <linux/can/raw.h>
+#include <net/if.h>
+#include <sys/ioctl.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+#include "firmware/app/parameter_store.hpp"
+
+namespace kincal::native {
+
+namespace {
+
+[[noreturn]] void fail(const std::string& what) { throw std::runtime_error(what + ": " + std::strerror(errno)); }
+
+}  // namespace
+
+std::uint64_t monotonic_us() {
+  return static_cast<std::uint64_t>(
+      std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now().time_since_epoch())
+          .count());
+}
+
+SocketCanPort::SocketCanPort(const std::string& interface, bool fd) : interface_(interface), fd_frames_(fd) {
+  fd_ = ::socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK, CAN_RAW);
+  if (fd_ < 0) fail(interface + ": cannot open a CAN_RAW socket (is the module can-raw loaded?)");
+  const int on = 1;
+  if (fd && setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FD_FRAMES, &on, sizeof on) < 0)
+    fail(interface + ": cannot enable CAN FD frames");
+  ifreq request{};
+  if (interface.size() >= IFNAMSIZ) throw std::runtime_error("interface name '" + interface + "' is too long");
+  std::strncpy(request.ifr_name, interface.c_str(), IFNAMSIZ - 1);
+  if (ioctl(fd_, SIOCGIFINDEX, &request) < 0) fail(interface + ": no such CAN interface");
+  sockaddr_can address{};
+  address.can_family = AF_CAN;
+  address.can_ifindex = request.ifr_ifindex;
+  if (bind(fd_, reinterpret_cast<sockaddr*>(&address), sizeof address) < 0) fail(interface + ": cannot bind");
+}
+
+SocketCanPort::~SocketCanPort() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+bool SocketCanPort::try_send(const shared::CanFrame& frame) {
+  if (frame.fd && !fd_frames_) return true;  // a classic-only bus cannot carry it: dropped like a controller would
+  canfd_frame k{};
+  k.can_id = frame.id | (frame.extended ? CAN_EFF_FLAG : 0u);
+  k.len = frame.length;
+  k.flags = frame.fd && frame.brs ? CANFD_BRS : 0;
+  std::memcpy(k.data, frame.data.data(), frame.length);
+  const std::size_t size = frame.fd ? CANFD_MTU : CAN_MTU;
+  const ssize_t n = ::write(fd_, &k, size);
+  if (n == static_cast<ssize_t>(size)) return true;
+  if (n < 0 && (errno == EAGAIN || errno == ENOBUFS)) return false;  // queue full: retried by the app
+  std::cerr << "kincal_platform: " << interface_ << ": send failed: " << std::strerror(errno) << "\n";
+  return true;  // a frame the interface refuses would be retried forever
+}
+
+bool SocketCanPort::try_receive(shared::CanFrame& out) {
+  canfd_frame k{};
+  const ssize_t n = ::read(fd_, &k, sizeof k);
+  if (n != CAN_MTU && n != CANFD_MTU) return false;
+  if (k.can_id & CAN_ERR_FLAG) return false;
+  out = shared::CanFrame{};
+  out.extended = (k.can_id & CAN_EFF_FLAG) != 0;
+  out.id = k.can_id & (out.extended ? CAN_EFF_MASK : CAN_SFF_MASK);
+  out.fd = n == CANFD_MTU;
+  out.brs = out.fd && (k.flags & CANFD_BRS) != 0;
+  out.length = k.len > 64 ? 64 : k.len;
+  std::memcpy(out.data.data(), k.data, out.length);
+  if (k.can_id & CAN_RTR_FLAG) out.length = 0;
+  return true;
+}
+
+FileStorage::FileStorage(const std::string& directory) {
+  fds_.fill(-1);
+  if (::mkdir(directory.c_str(), 0755) < 0 && errno != EEXIST) fail("cannot create storage directory " + directory);
+  for (std::size_t slot = 0; slot < fds_.size(); ++slot) {
+    const std::string path = directory + "/slot" + std::to_string(slot) + ".bin";
+    fds_[slot] = ::open(path.c_str(), O_RDWR | O_CREAT, 0644);
+    if (fds_[slot] < 0) fail("cannot open storage slot " + path);
+    struct stat st {};
+    if (fstat(fds_[slot], &st) < 0) fail("cannot stat " + path);
+    if (static_cast<std::size_t>(st.st_size) != kSlotBytes &&
+        erase(static_cast<std::uint8_t>(slot)) != app::StorageStatus::kOk)
+      fail("cannot initialise storage slot " + path);
+  }
+}
+
+FileStorage::~FileStorage() {
+  for (const int fd : fds_)
+    if (fd >= 0) ::close(fd);
+}
+
+app::StorageStatus FileStorage::read(std::uint8_t slot, std::uint32_t offset, std::span<std::uint8_t> out) {
+  if (slot >= fds_.size() || offset + out.size() > kSlotBytes) return app::StorageStatus::kFailed;
+  const ssize_t n = ::pread(fds_[slot], out.data(), out.size(), offset);
+  return n == static_cast<ssize_t>(out.size()) ? app::StorageStatus::kOk : app::StorageStatus::kFailed;
+}
+
+app::StorageStatus FileStorage::erase(std::uint8_t slot) {
+  if (slot >= fds_.size()) return app::StorageStatus::kFailed;
+  const std::vector<std::uint8_t> erased(kSlotBytes, 0xFF);
+  if (::pwrite(fds_[slot], erased.data(), erased.size(), 0) != static_cast<ssize_t>(erased.size()) ||
+      ::fsync(fds_[slot]) < 0)
+    return app::StorageStatus::kFailed;
+  return app::StorageStatus::kOk;
+}
+
+app::StorageStatus FileStorage::write(std::uint8_t slot, std::uint32_t offset, std::span<const std::uint8_t> in) {
+  if (slot >= fds_.size() || offset + in.size() > kSlotBytes) return app::StorageStatus::kFailed;
+  if (::pwrite(fds_[slot], in.data(), in.size(), offset) != static_cast<ssize_t>(in.size()) || ::fsync(fds_[slot]) < 0)
+    return app::StorageStatus::kFailed;
+  return app::StorageStatus::kOk;
+}
+
+LineRangers::LineRangers(const std::string& path) : path_(path) {
+  if (path.empty()) return;
+  if (path == "-") {
+    in_ = &std::cin;
+    return;
+  }
+  file_.open(path);
+  if (!file_) throw std::runtime_error("cannot open ranges file " + path);
+  in_ = &file_;
+}
+
+app::RangerStatus LineRangers::read(std::array<std::uint32_t, shared::kRangers>& ranges_um, std::uint64_t& time_us) {
+  time_us = monotonic_us();
+  if (in_ == nullptr) {
+    ranges_um = {200000, 210000, 190000, 200000};
+    return app::RangerStatus::kOk;
+  }
+  std::string line;
+  if (!std::getline(*in_, line)) {
+    std::cerr << "kincal_platform: " << path_ << ": no more range lines\n";
+    return app::RangerStatus::kFailed;
+  }
+  std::istringstream fields(line);
+  for (std::size_t i = 0; i < shared::kRangers; ++i) {
+    std::string token;
+    double range_m = 0;
+    if (!(fields >> token)) {
+      std::cerr << "kincal_platform: " << path_ << ": expected 4 ranges in metres, got '" << line << "'\n";
+      return app::RangerStatus::kFailed;
+    }
+    try {
+      std::size_t used = 0;
+      range_m = std::stod(token, &used);
+      if (used != token.size()) throw std::invalid_argument(token);
+    } catch (const std::exception&) {
+      std::cerr << "kincal_platform: " << path_ << ": '" << token << "' is not a range in metres\n";
+      return app::RangerStatus::kFailed;
+    }
+    ranges_um[i] = std::isfinite(range_m) && range_m >= 0 && range_m < 4000.0
+                       ? static_cast<std::uint32_t>(std::lround(range_m * 1e6))
+                       : app::kNoEchoUm;
+  }
+  return app::RangerStatus::kOk;
+}
+
+}  // namespace kincal::native

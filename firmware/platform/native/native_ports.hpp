@@ -1,0 +1,75 @@
+// The platform's ports on Linux (firmware/app/ports.hpp): the firmware as a process.
+//   SocketCanPort   a CAN_RAW socket (classic + CAN FD) on can0/vcan0/...; non-blocking sends;
+//                   CanHealth stays "error active" (SocketCAN reports controller errors as
+//                   error frames, which vcan never produces and this port does not subscribe to).
+//   FileStorage     eight slot files of kSlotBytes in a directory, written with pwrite + fsync,
+//                   so a killed process behaves like a power cut between two byte writes.
+//   LineRangers     four ranges in metres per line ("0.200 0.210 0.190 0.205", "nan" = no echo)
+//                   from a file or a pipe, one line per measurement; without a source, a fixed
+//                   reading (0.2, 0.21, 0.19, 0.2 m), which the end-to-end tests check for.
+// Errors at start-up (no interface, unwritable directory, unreadable file) throw
+// std::runtime_error naming what and where; at run time, ports report failure by status.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <fstream>
+#include <memory>
+#include <string>
+
+#include "firmware/app/parameter_store.hpp"
+#include "firmware/app/ports.hpp"
+#include "firmware/app/ranger_measurement.hpp"
+
+namespace kincal::native {
+
+class SocketCanPort {
+ public:
+  SocketCanPort(const std::string& interface, bool fd);
+  ~SocketCanPort();
+  SocketCanPort(const SocketCanPort&) = delete;
+  SocketCanPort& operator=(const SocketCanPort&) = delete;
+
+  bool try_send(const shared::CanFrame& frame);
+  app::CanHealth health() { return {}; }
+  // Reads one frame if one is waiting.
+  bool try_receive(shared::CanFrame& out);
+  int descriptor() const { return fd_; }
+
+ private:
+  std::string interface_;
+  int fd_ = -1;
+  bool fd_frames_ = false;
+};
+
+class FileStorage {
+ public:
+  static constexpr std::size_t kSlotBytes = 4096;
+  explicit FileStorage(const std::string& directory);
+  ~FileStorage();
+  FileStorage(const FileStorage&) = delete;
+  FileStorage& operator=(const FileStorage&) = delete;
+
+  app::StorageStatus read(std::uint8_t slot, std::uint32_t offset, std::span<std::uint8_t> out);
+  app::StorageStatus erase(std::uint8_t slot);
+  app::StorageStatus write(std::uint8_t slot, std::uint32_t offset, std::span<const std::uint8_t> in);
+
+ private:
+  std::array<int, app::slot_format::kSlotCount> fds_{};
+};
+
+class LineRangers {
+ public:
+  // path empty: the fixed reading. "-" reads standard input.
+  explicit LineRangers(const std::string& path);
+  app::RangerStatus read(std::array<std::uint32_t, shared::kRangers>& ranges_um, std::uint64_t& time_us);
+
+ private:
+  std::string path_;
+  std::ifstream file_;
+  std::istream* in_ = nullptr;
+};
+
+std::uint64_t monotonic_us();
+
+}  // namespace kincal::native

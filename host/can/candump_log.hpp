@@ -1,0 +1,61 @@
+// candump -L log files: the lingua franca of CAN tools. One frame per line:
+//   (1436509052.249713) vcan0 123#DEADBEEF         classic frame, 11-bit ID (3 hex digits)
+//   (1436509052.249713) vcan0 12345678#0102        29-bit ID (8 hex digits)
+//   (1436509052.249713) vcan0 123##1DEADBEEF       CAN FD: flags nibble (1 = BRS, 2 = ESI), data
+//   (1436509052.249713) vcan0 123#R                remote frame (read and skipped by decoders)
+// can-utils' canplayer replays what CandumpWriter writes; CandumpReader reads what candump -L
+// writes. No Debian library exposes this format to C++ (can-utils' lib.c is not packaged as a
+// library), so the reader is strict instead: anything else is an error naming file and line.
+#pragma once
+
+#include <cstdint>
+#include <fstream>
+#include <istream>
+#include <optional>
+#include <string>
+
+#include "host/can/transport.hpp"
+
+namespace kincal::can {
+
+struct LoggedFrame {
+  std::uint64_t time_us = 0;  // since the Unix epoch
+  std::string interface;
+  CanFrame frame;
+  bool remote = false;
+};
+
+// Formats one frame as a candump -L line (without the newline).
+std::string format_candump_line(const LoggedFrame& logged);
+// Parses one line; throws CanError("what is wrong") for a malformed line.
+LoggedFrame parse_candump_line(const std::string& line);
+
+class CandumpWriter {
+ public:
+  // Throws CanError if the file cannot be created.
+  explicit CandumpWriter(const std::string& path);
+  void write(const LoggedFrame& logged);
+  void write(const std::string& interface, const CanFrame& frame);  // stamped with the current time
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::ofstream out_;
+};
+
+class CandumpReader {
+ public:
+  // Throws CanError if the file cannot be opened.
+  explicit CandumpReader(const std::string& path);
+  // The next frame, or nullopt at the end; throws CanError("PATH:LINE: ...") on a bad line.
+  std::optional<LoggedFrame> next();
+
+ private:
+  std::string path_;
+  std::ifstream in_;
+  std::size_t line_number_ = 0;
+};
+
+std::uint64_t now_unix_us();
+
+}  // namespace kincal::can

@@ -1,0 +1,124 @@
+#include "host/cli/blobs.hpp"
+
+#include <fstream>
+#include <iostream>
+#include <iterator>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "host/vision/blob_json.hpp"
+#include "host/vision/image_labeling.hpp"
+
+namespace kincal::cli {
+
+namespace {
+
+struct BlobsOptions {
+  std::vector<std::string> images;
+  std::string polarity = "bright";
+  std::string threshold = "auto";
+  std::string colour_table;
+  int connectivity = 8;
+  std::uint32_t min_area_px = 1;
+  bool no_refine = false;
+};
+
+core::ColourClassTable read_colour_table(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path + ": cannot open the colour table");
+  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  core::ColourClassTable table;
+  switch (core::parse_colour_table(bytes, table)) {
+    case core::ColourTableStatus::kOk:
+      return table;
+    case core::ColourTableStatus::kWrongSize:
+      throw std::runtime_error(path + ": not a colour table (" + std::to_string(bytes.size()) + " bytes, expected " +
+                               std::to_string(core::kColourTableBlockBytes) + ")");
+    case core::ColourTableStatus::kBadMagic:
+      throw std::runtime_error(path + ": not a colour table (bad magic)");
+    case core::ColourTableStatus::kBadCrc:
+      throw std::runtime_error(path + ": colour table corrupted (CRC mismatch)");
+    case core::ColourTableStatus::kUnsupportedVersion:
+      throw std::runtime_error(path + ": colour table of an unsupported version");
+    case core::ColourTableStatus::kUnknownColourSpace:
+      throw std::runtime_error(path + ": colour table with an unknown colour space");
+  }
+  throw std::runtime_error(path + ": colour table not readable");
+}
+
+int run_blobs(const BlobsOptions& o) {
+  vision::LabelOptions options;
+  options.polarity = o.polarity == "dark" ? core::Polarity::kDark : core::Polarity::kBright;
+  if (o.threshold != "auto") options.threshold = static_cast<std::uint8_t>(std::stoi(o.threshold));
+  options.connectivity = o.connectivity == 4 ? core::Connectivity::kFour : core::Connectivity::kEight;
+  options.min_area_px = o.min_area_px;
+  options.refine = !o.no_refine;
+  if (!o.colour_table.empty()) options.colour = read_colour_table(o.colour_table);
+
+  // Read every image first: a bad file stops the command before anything is printed.
+  std::vector<cv::Mat> images;
+  for (const std::string& path : o.images) images.push_back(vision::read_image(path, !options.colour));
+
+  nlohmann::ordered_json out = nlohmann::ordered_json::array();
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    const vision::LabelResult r =
+        options.colour ? vision::label_colour(images[i], options) : vision::label_grey(images[i], options);
+    nlohmann::ordered_json blobs = nlohmann::ordered_json::array();
+    for (const core::Blob& b : r.blobs) blobs.push_back(vision::blob_to_json(b));
+    nlohmann::ordered_json image = {{"image", o.images[i]}, {"summary", vision::summary_to_json(r.summary)}};
+    if (options.colour) {
+      image["colour_table"] = o.colour_table;
+      image["threshold"] = r.threshold;
+    } else {
+      image["polarity"] = o.polarity;
+      image["threshold"] = r.threshold;
+      image["threshold_automatic"] = r.threshold_automatic;
+    }
+    image["blobs"] = std::move(blobs);
+    out.push_back(std::move(image));
+  }
+  std::cout << out.dump(2) << "\n";
+  return 0;
+}
+
+}  // namespace
+
+void add_blobs_command(CLI::App& app, int& status) {
+  auto options = std::make_shared<BlobsOptions>();
+  auto* cmd = app.add_subcommand("blobs", "Label blobs in images with the firmware core's streaming labeler (JSON)");
+  cmd->add_option("images", options->images, "Image files (any format OpenCV reads)")->required();
+  cmd->add_option("--polarity", options->polarity, "Blobs brighter or darker than the threshold")
+      ->check(CLI::IsMember({"bright", "dark"}))
+      ->capture_default_str();
+  cmd->add_option("--threshold", options->threshold, "Grey level N (0..255) or auto (Otsu)")
+      ->check([](const std::string& v) -> std::string {
+        if (v == "auto") return {};
+        try {
+          std::size_t used = 0;
+          const int n = std::stoi(v, &used);
+          if (used == v.size() && n >= 0 && n <= 255) return {};
+        } catch (const std::exception&) {
+        }
+        return "threshold must be auto or an integer 0..255, not '" + v + "'";
+      })
+      ->capture_default_str();
+  cmd->add_option("--colour-table", options->colour_table,
+                  "Colour-class table (kincal colour-table): label that colour class instead of a threshold");
+  cmd->add_option("--connectivity", options->connectivity, "Pixel connectivity")
+      ->check(CLI::IsMember({4, 8}))
+      ->capture_default_str();
+  cmd->add_option("--min-area", options->min_area_px, "Drop blobs with fewer pixels")->capture_default_str();
+  cmd->add_flag("--no-refine", options->no_refine, "Skip the Gaussian-window refinement of spot-like blobs");
+  cmd->callback([options, &status] {
+    try {
+      status = run_blobs(*options);
+    } catch (const std::exception& e) {
+      std::cerr << "kincal blobs: " << e.what() << "\n";
+      status = 1;
+    }
+  });
+}
+
+}  // namespace kincal::cli

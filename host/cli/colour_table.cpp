@@ -1,0 +1,74 @@
+#include "host/cli/colour_table.hpp"
+
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "host/vision/colour_table_builder.hpp"
+#include "host/vision/image_labeling.hpp"
+
+namespace kincal::cli {
+
+namespace {
+
+struct ColourTableOptions {
+  std::vector<std::string> positive, negative;
+  std::string space = "rgb565";
+  std::string output;
+  double max_distance = 3.0;
+};
+
+void add_pixels(const std::string& path, std::vector<cv::Vec3b>& out) {
+  const cv::Mat img = vision::read_image(path, false);
+  for (int y = 0; y < img.rows; ++y)
+    for (int x = 0; x < img.cols; ++x) out.push_back(img.at<cv::Vec3b>(y, x));
+}
+
+int run_colour_table(const ColourTableOptions& o) {
+  vision::ColourTableSamples samples;
+  for (const std::string& p : o.positive) add_pixels(p, samples.positive_bgr);
+  for (const std::string& p : o.negative) add_pixels(p, samples.negative_bgr);
+  const core::ColourSpace space = o.space == "yuv422" ? core::ColourSpace::kYuv422 : core::ColourSpace::kRgb565;
+  const core::ColourClassTable table = vision::build_colour_table(samples, space, o.max_distance);
+  std::array<std::uint8_t, core::kColourTableBlockBytes> block{};
+  core::serialize_colour_table(table, block);
+  std::ofstream out(o.output, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(block.data()), static_cast<std::streamsize>(block.size()));
+  if (!out) throw std::runtime_error(o.output + ": cannot write");
+  std::size_t cells = 0;
+  for (const std::uint8_t s : table.score) cells += s > table.threshold ? 1 : 0;
+  std::cout << "colour table " << o.output << ": " << o.space << ", " << cells << " of " << core::kColourCells
+            << " cells in the class, threshold " << int{table.threshold} << ", from " << samples.positive_bgr.size()
+            << " positive and " << samples.negative_bgr.size() << " negative samples\n";
+  return 0;
+}
+
+}  // namespace
+
+void add_colour_table_command(CLI::App& app, int& status) {
+  auto options = std::make_shared<ColourTableOptions>();
+  auto* cmd = app.add_subcommand("colour-table", "Build the beacon's colour-class table from sample pixels");
+  cmd->add_option("--positive", options->positive, "Images whose every pixel is the class (crops of the beacon)")
+      ->required();
+  cmd->add_option("--negative", options->negative, "Images whose pixels must not be the class");
+  cmd->add_option("--space", options->space, "The camera's colour format")
+      ->check(CLI::IsMember({"rgb565", "yuv422"}))
+      ->capture_default_str();
+  cmd->add_option("--max-distance", options->max_distance, "Class boundary, in standard deviations of the samples")
+      ->check(CLI::Range(0.5, 10.0))
+      ->capture_default_str();
+  cmd->add_option("-o,--output", options->output, "Parameter block to write")->required();
+  cmd->callback([options, &status] {
+    try {
+      status = run_colour_table(*options);
+    } catch (const std::exception& e) {
+      std::cerr << "kincal colour-table: " << e.what() << "\n";
+      status = 1;
+    }
+  });
+}
+
+}  // namespace kincal::cli

@@ -1,0 +1,74 @@
+#include "host/cli/predict_command.hpp"
+
+#include <charconv>
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+#include <Eigen/Geometry>
+
+#include "host/model/dataset.hpp"
+#include "host/model/model_file.hpp"
+
+namespace kincal::cli {
+
+namespace {
+
+std::string number_text(double v) {
+  if (v == 0.0) v = 0.0;
+  char buffer[64];
+  const auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, v);
+  return ec == std::errc() ? std::string(buffer, end) : std::string("nan");
+}
+
+int run_predict(const std::string& model_path, const std::string& joints_path, const std::string& out_path) {
+  try {
+    const model::RobotModel m = model::load_model(model_path);
+    std::ifstream in(joints_path);
+    if (!in) throw model::InputError(joints_path + ": cannot open the joints file");
+    const std::vector<std::vector<double>> rows = model::parse_joints(in, joints_path);
+    if (!rows.empty()) model::check_joint_count(m, static_cast<int>(rows.front().size()), joints_path);
+    std::ofstream file;
+    if (!out_path.empty()) {
+      file.open(out_path);
+      if (!file) throw model::InputError(out_path + ": cannot write");
+    }
+    std::ostream& out = out_path.empty() ? std::cout : file;
+    const bool pose = m.tool == model::ToolKind::frame;
+    for (int j = 1; j <= m.joint_count(); ++j) out << 'q' << j << ',';
+    out << "x,y,z" << (pose ? ",qw,qx,qy,qz" : "") << '\n';
+    for (const std::vector<double>& q : rows) {
+      const model::Transform t = model::forward_kinematics(m, q);
+      for (double v : q) out << number_text(v) << ',';
+      out << number_text(t.translation.x()) << ',' << number_text(t.translation.y()) << ','
+          << number_text(t.translation.z());
+      if (pose) {
+        Eigen::Quaterniond r(t.rotation);
+        if (r.w() < 0) r.coeffs() *= -1.0;
+        out << ',' << number_text(r.w()) << ',' << number_text(r.x()) << ',' << number_text(r.y()) << ','
+            << number_text(r.z());
+      }
+      out << '\n';
+    }
+    return out ? 0 : 1;
+  } catch (const model::InputError& e) {
+    std::cerr << "kincal predict: " << e.what() << '\n';
+    return 1;
+  }
+}
+
+}  // namespace
+
+void add_predict_command(CLI::App& app, int& status) {
+  auto model_path = std::make_shared<std::string>();
+  auto joints_path = std::make_shared<std::string>();
+  auto out_path = std::make_shared<std::string>();
+  auto* cmd = app.add_subcommand("predict", "Predict the tool point (pose) of a model for rows of joint readings");
+  cmd->add_option("--model", *model_path, "model (YAML)")->required();
+  cmd->add_option("--joints", *joints_path, "joint readings (CSV with header q1..qN; other columns ignored)")
+      ->required();
+  cmd->add_option("-o,--out", *out_path, "output CSV (default: standard output)");
+  cmd->callback([=, &status] { status = run_predict(*model_path, *joints_path, *out_path); });
+}
+
+}  // namespace kincal::cli

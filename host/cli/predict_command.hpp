@@ -1,0 +1,12 @@
+// `kincal predict`: the tool point (or pose) a model predicts for each row of joint readings, as
+// CSV, so a model can be checked against measurements kept back.
+#pragma once
+
+#include <CLI/App.hpp>
+
+namespace kincal::cli {
+
+// Registers the subcommand; when it runs, its exit status goes to `status`.
+void add_predict_command(CLI::App& app, int& status);
+
+}  // namespace kincal::cli

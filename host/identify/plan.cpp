@@ -1,0 +1,160 @@
+#include "host/identify/plan.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include <Eigen/Cholesky>
+
+#include "host/identify/identify.hpp"
+
+namespace kincal::identify {
+
+namespace {
+
+using model::InputError;
+
+struct Candidate {
+  std::vector<double> q;
+  Eigen::MatrixXd j;  // scaled rows (3 or 6) x P
+};
+
+double log_det(const Eigen::MatrixXd& m) {
+  Eigen::LLT<Eigen::MatrixXd> llt(m);
+  if (llt.info() != Eigen::Success) return -1e300;
+  return 2.0 * llt.matrixL().toDenseMatrix().diagonal().array().log().sum();
+}
+
+// O1 from the information matrix of `rows` Jacobian rows.
+double o1(const Eigen::MatrixXd& info, double rows) {
+  return std::exp(0.5 * log_det(info) / static_cast<double>(info.rows())) / std::sqrt(rows);
+}
+
+double prediction_rms(const Eigen::MatrixXd& info, const std::vector<Candidate>& pool, int rows) {
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(info);
+  double sum = 0.0;
+  for (const Candidate& c : pool) {
+    const Eigen::MatrixXd p = c.j.topRows(3);
+    sum += (p * ldlt.solve(p.transpose())).trace();
+  }
+  (void)rows;
+  return std::sqrt(sum / static_cast<double>(pool.size()));
+}
+
+}  // namespace
+
+PlanResult plan_configurations(const model::RobotModel& m, const PlanOptions& options) {
+  const int n = m.joint_count();
+  std::vector<double> lower(static_cast<std::size_t>(n)), upper(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    const model::Joint& j = m.joints[static_cast<std::size_t>(i)];
+    const bool finite = std::isfinite(j.lower) && std::isfinite(j.upper);
+    if (!finite && j.type == core::JointType::prismatic)
+      throw InputError("plan: joint " + std::to_string(i + 1) + " (" + j.name + ") is prismatic and has no limits");
+    lower[static_cast<std::size_t>(i)] = finite ? j.lower : -std::numbers::pi;
+    upper[static_cast<std::size_t>(i)] = finite ? j.upper : std::numbers::pi;
+  }
+  const int rows = options.orientation ? 6 : 3;
+  if (options.orientation && m.tool != model::ToolKind::frame)
+    throw InputError("plan: pose measurements need a tool frame in the model");
+  std::mt19937_64 rng(options.seed);
+  const auto random_q = [&] {
+    std::vector<double> q(static_cast<std::size_t>(n));
+    for (std::size_t i = 0; i < q.size(); ++i) q[i] = std::uniform_real_distribution<double>(lower[i], upper[i])(rng);
+    return q;
+  };
+  // Pool and identifiable parameters.
+  const RobotModel start = reparameterize_for_identification(m, 0.1, nullptr);
+  const ParameterIds candidates = candidate_parameters(start);
+  std::vector<Candidate> pool(static_cast<std::size_t>(std::max(options.pool, options.count)));
+  Eigen::MatrixXd all(static_cast<Eigen::Index>(pool.size()) * rows, static_cast<Eigen::Index>(candidates.size()));
+  for (std::size_t k = 0; k < pool.size(); ++k) {
+    pool[k].q = random_q();
+    all.middleRows(static_cast<Eigen::Index>(k) * rows, rows) =
+        model::parameter_jacobian(start, pool[k].q, candidates).topRows(rows);
+  }
+  const Identifiability ident = analyze_identifiability(all, candidates);
+  PlanResult result;
+  result.identified = ident.identified;
+  result.held_fixed = ident.held_fixed;
+  const auto p = static_cast<Eigen::Index>(ident.identified.size());
+  if (options.count * rows < p)
+    throw InputError("plan: " + std::to_string(options.count) + " configurations give " +
+                     std::to_string(options.count * rows) + " equations for " + std::to_string(p) +
+                     " identifiable parameters; ask for at least " + std::to_string((p + rows - 1) / rows + 1));
+  // Columns of the identified parameters, scaled by their RMS over the pool.
+  std::vector<Eigen::Index> columns;
+  for (const core::ParameterId& id : ident.identified)
+    for (std::size_t c = 0; c < candidates.size(); ++c)
+      if (candidates[c].kind == id.kind && candidates[c].link == id.link)
+        columns.push_back(static_cast<Eigen::Index>(c));
+  Eigen::VectorXd scale(p);
+  for (Eigen::Index c = 0; c < p; ++c)
+    scale(c) = all.col(columns[static_cast<std::size_t>(c)]).norm() / std::sqrt(static_cast<double>(pool.size()));
+  for (std::size_t k = 0; k < pool.size(); ++k) {
+    pool[k].j.resize(rows, p);
+    for (Eigen::Index c = 0; c < p; ++c)
+      pool[k].j.col(c) =
+          all.block(static_cast<Eigen::Index>(k) * rows, columns[static_cast<std::size_t>(c)], rows, 1) / scale(c);
+  }
+  const auto information = [&](const std::vector<std::size_t>& set) {
+    Eigen::MatrixXd info = Eigen::MatrixXd::Zero(p, p);
+    for (std::size_t k : set) info += pool[k].j.transpose() * pool[k].j;
+    return info;
+  };
+  const double m_rows = static_cast<double>(options.count * rows);
+  // Random plans for comparison.
+  double random_sum = 0.0, random_pred = 0.0;
+  for (int s = 0; s < options.random_sets; ++s) {
+    std::vector<std::size_t> set;
+    for (int k = 0; k < options.count; ++k)
+      set.push_back(std::uniform_int_distribution<std::size_t>(0, pool.size() - 1)(rng));
+    const Eigen::MatrixXd info = information(set);
+    const double index = o1(info, m_rows);
+    random_sum += index;
+    result.random_index_best = std::max(result.random_index_best, index);
+    random_pred += prediction_rms(info, pool, options.count);
+  }
+  result.random_index_mean = random_sum / std::max(1, options.random_sets);
+  result.random_prediction_rms = random_pred / std::max(1, options.random_sets);
+  // Fedorov exchange from a random start.
+  std::vector<std::size_t> set;
+  for (int k = 0; k < options.count; ++k) set.push_back(static_cast<std::size_t>(k));
+  Eigen::MatrixXd info = information(set);
+  const Eigen::MatrixXd ridge = Eigen::MatrixXd::Identity(p, p) * 1e-9;
+  for (int sweep = 0; sweep < 20; ++sweep) {
+    bool improved = false;
+    for (std::size_t i = 0; i < set.size(); ++i) {
+      const Eigen::MatrixXd reduced = info - pool[set[i]].j.transpose() * pool[set[i]].j + ridge;
+      const Eigen::LDLT<Eigen::MatrixXd> ldlt(reduced);
+      // det(reduced + J^T J) = det(reduced) det(I + J reduced^-1 J^T): compare the small factor.
+      const auto gain = [&](std::size_t c) {
+        const Eigen::MatrixXd& j = pool[c].j;
+        const Eigen::MatrixXd s = Eigen::MatrixXd::Identity(rows, rows) + j * ldlt.solve(j.transpose());
+        return s.determinant();
+      };
+      const double current = gain(set[i]);
+      double best = current;
+      std::size_t best_c = set[i];
+      for (std::size_t c = 0; c < pool.size(); ++c) {
+        const double g = gain(c);
+        if (g > best) {
+          best = g;
+          best_c = c;
+        }
+      }
+      if (best > current * (1.0 + 1e-9)) {
+        info = reduced - ridge + pool[best_c].j.transpose() * pool[best_c].j;
+        set[i] = best_c;
+        improved = true;
+      }
+    }
+    if (!improved) break;
+  }
+  result.index = o1(info, m_rows);
+  result.prediction_rms = prediction_rms(info, pool, options.count);
+  for (std::size_t k : set) result.configurations.push_back(pool[k].q);
+  return result;
+}
+
+}  // namespace kincal::identify

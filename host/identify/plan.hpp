@@ -1,0 +1,48 @@
+// Calibration planning (`kincal plan`): N joint configurations within the limits that make the
+// identification Jacobian well conditioned, compared with random configurations.
+//
+// Index: Borm and Menq's O1 = (s_1 s_2 ... s_P)^(1/P) / sqrt(m), the geometric mean of the
+// singular values of the identification Jacobian (m rows) of the identifiable parameters
+// (chosen as `kincal identify` chooses them), with each parameter's column scaled by its RMS
+// over a pool of random configurations so that metres and radians weigh alike. Maximizing it
+// is D-optimal design: the volume of the parameters' confidence ellipsoid shrinks as
+// O1^-P. Method: Fedorov exchange over a candidate pool drawn uniformly within the limits
+// (revolute joints without limits: [-pi, pi]; prismatic joints need limits), starting from
+// a random set, with the rank-3 (6 with orientation) determinant update, until no exchange
+// improves the index by more than 1e-9 relative.
+//
+// Also reported: the mean predicted position RMS over the pool (the Cramer-Rao bound of the
+// tool point for sigma = 1, a ratio between plans is unit-free), planned vs random.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "host/identify/identifiability.hpp"
+#include "host/model/robot_model.hpp"
+
+namespace kincal::identify {
+
+struct PlanOptions {
+  int count = 30;            // configurations to propose
+  int pool = 1000;           // candidate configurations
+  int random_sets = 50;      // random plans to compare with
+  bool orientation = false;  // pose measurements (the tool must be a frame)
+  std::uint64_t seed = 1;
+};
+
+struct PlanResult {
+  std::vector<std::vector<double>> configurations;
+  ParameterIds identified;
+  std::vector<HeldFixed> held_fixed;
+  double index = 0.0;              // O1 of the plan
+  double random_index_mean = 0.0;  // over random_sets random plans of the same size
+  double random_index_best = 0.0;
+  double prediction_rms = 0.0;         // per unit sigma, mean over the pool
+  double random_prediction_rms = 0.0;  // mean over the random plans
+};
+
+// Throws model::InputError (prismatic joint without limits, count too small for the parameters).
+PlanResult plan_configurations(const model::RobotModel& model, const PlanOptions& options);
+
+}  // namespace kincal::identify

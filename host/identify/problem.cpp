@@ -1,0 +1,190 @@
+#include "host/identify/problem.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Geometry>
+
+namespace kincal::identify {
+
+namespace {
+
+bool is_link(core::ParameterKind kind) { return kind <= core::ParameterKind::link_beta; }
+int motion_index(core::ParameterKind kind) {
+  return static_cast<int>(kind) - static_cast<int>(core::ParameterKind::base_x);
+}
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+}  // namespace
+
+Eigen::Matrix3d so3_right_jacobian(const Eigen::Vector3d& r) {
+  const double t2 = r.squaredNorm();
+  const Eigen::Matrix3d k = skew(r);
+  if (t2 < 1e-10) return Eigen::Matrix3d::Identity() - 0.5 * k + k * k / 6.0;
+  const double t = std::sqrt(t2);
+  return Eigen::Matrix3d::Identity() - (1.0 - std::cos(t)) / t2 * k + (t - std::sin(t)) / (t2 * t) * k * k;
+}
+
+Eigen::Matrix3d so3_right_jacobian_inverse(const Eigen::Vector3d& r) {
+  const double t2 = r.squaredNorm();
+  const Eigen::Matrix3d k = skew(r);
+  if (t2 < 1e-10) return Eigen::Matrix3d::Identity() + 0.5 * k + k * k / 12.0;
+  const double t = std::sqrt(t2);
+  return Eigen::Matrix3d::Identity() + 0.5 * k + (1.0 / t2 - (1.0 + std::cos(t)) / (2.0 * t * std::sin(t))) * k * k;
+}
+
+Eigen::Vector3d so3_log(const Eigen::Matrix3d& r) {
+  const Eigen::AngleAxisd aa(r);
+  return aa.angle() * aa.axis();
+}
+
+Parameterization::Parameterization(const RobotModel& start, ParameterIds ids)
+    : start_(start), start_chain_(model::to_chain(start)), ids_(std::move(ids)) {
+  for (const core::ParameterId& id : ids_) {
+    if (!is_link(id.kind)) {
+      link_column_.push_back(-1);
+      continue;
+    }
+    link_column_.push_back(augmented_.count);
+    augmented_.ids[static_cast<std::size_t>(augmented_.count++)] = id;
+  }
+  for (int k = 0; k < 12; ++k)
+    augmented_.ids[static_cast<std::size_t>(augmented_.count++)] = {
+        static_cast<core::ParameterKind>(static_cast<int>(core::ParameterKind::base_x) + k), 0};
+  if (augmented_.count > core::kMaxErrorParameters) throw std::invalid_argument("too many parameters");
+  delta_.assign(ids_.size(), 0.0);
+  set(delta_);
+}
+
+void Parameterization::set(std::span<const double> delta) {
+  if (delta.size() != ids_.size()) throw std::invalid_argument("Parameterization::set: wrong size");
+  if (ready_ && std::equal(delta.begin(), delta.end(), delta_.begin())) return;
+  std::copy(delta.begin(), delta.end(), delta_.begin());
+  core::ParameterSet chosen;
+  core::ErrorVector<double> errors = core::ErrorVector<double>::Zero();
+  Eigen::Vector3d base_r = Eigen::Vector3d::Zero(), tool_r = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < ids_.size(); ++k) {
+    chosen.ids[static_cast<std::size_t>(chosen.count)] = ids_[k];
+    errors(chosen.count++) = delta_[k];
+    if (!is_link(ids_[k].kind)) {
+      const int m = motion_index(ids_[k].kind);
+      if (m == 3 || m == 4 || m == 5) base_r(m - 3) += delta_[k];
+      if (m == 9 || m == 10 || m == 11) tool_r(m - 9) += delta_[k];
+    }
+  }
+  core::ChainModel<double> current;
+  if (core::apply_parameter_errors(start_chain_, chosen, errors, current) != core::ErrorModelStatus::ok)
+    throw std::invalid_argument("Parameterization: a parameter names a joint the model does not have");
+  core::prepare_chain(current, prepared_);
+  base_exp_t_ = Eigen::AngleAxisd(base_r.norm(), base_r.norm() > 0 ? base_r.normalized() : Eigen::Vector3d::UnitZ())
+                    .toRotationMatrix()
+                    .transpose();
+  tool_exp_t_ = Eigen::AngleAxisd(tool_r.norm(), tool_r.norm() > 0 ? tool_r.normalized() : Eigen::Vector3d::UnitZ())
+                    .toRotationMatrix()
+                    .transpose();
+  base_jr_ = so3_right_jacobian(base_r);
+  tool_jr_ = so3_right_jacobian(tool_r);
+  ready_ = true;
+}
+
+RobotModel Parameterization::model() const {
+  Eigen::VectorXd d = Eigen::Map<const Eigen::VectorXd>(delta_.data(), static_cast<Eigen::Index>(delta_.size()));
+  return model::apply_parameter_errors(start_, ids_, d);
+}
+
+Transform Parameterization::pose(std::span<const double> q, Eigen::MatrixXd* jacobian) const {
+  const core::JointVector<double> qv = model::joint_vector(q);
+  std::array<core::SinCos<double>, core::kMaxJoints> trig{};
+  core::joint_trig(prepared_, qv, trig);
+  core::ChainFrames<double> frames;
+  core::forward_kinematics(prepared_, qv, trig, frames);
+  if (jacobian) {
+    core::ErrorMatrix<double> e;
+    if (core::parameter_jacobian(prepared_, qv, trig, frames, augmented_, e) != core::ErrorModelStatus::ok)
+      throw std::invalid_argument("Parameterization: bad parameter set");
+    const int motions = augmented_.count - 12;
+    // Motion columns corrected to d/d(delta) at the current delta.
+    Eigen::Matrix<double, 6, 12> m;
+    m.leftCols<3>() = e.middleCols<3>(motions) * base_exp_t_;
+    m.middleCols<3>(3) = e.middleCols<3>(motions + 3) * base_jr_;
+    m.middleCols<3>(6) = e.middleCols<3>(motions + 6) * tool_exp_t_;
+    m.rightCols<3>() = e.middleCols<3>(motions + 9) * tool_jr_;
+    jacobian->resize(6, static_cast<Eigen::Index>(ids_.size()));
+    for (std::size_t k = 0; k < ids_.size(); ++k) {
+      const auto c = static_cast<Eigen::Index>(k);
+      jacobian->col(c) = link_column_[k] >= 0 ? Eigen::Matrix<double, 6, 1>(e.col(link_column_[k]))
+                                              : Eigen::Matrix<double, 6, 1>(m.col(motion_index(ids_[k].kind)));
+    }
+  }
+  return frames.base_T_tool;
+}
+
+Weights make_weights(const model::Dataset& data, double sigma_m, double orientation_sigma_rad) {
+  Weights w;
+  for (const model::Measurement& m : data.rows) {
+    if (m.covariance) {
+      // L = inverse of the Cholesky factor: L^T L = C^-1.
+      const Eigen::Matrix3d c_factor = Eigen::LLT<Eigen::Matrix3d>(*m.covariance).matrixL();
+      w.position.push_back(c_factor.inverse());
+    } else {
+      w.position.push_back(Eigen::Matrix3d::Identity() / sigma_m);
+    }
+  }
+  w.orientation = data.has_orientation && orientation_sigma_rad > 0.0 ? 1.0 / orientation_sigma_rad : 0.0;
+  return w;
+}
+
+int residual_size(const Weights& w) { return w.orientation > 0.0 ? 6 : 3; }
+
+void row_residual(const Parameterization& p, const model::Measurement& m, const Eigen::Matrix3d& position_weight,
+                  double orientation_weight, double* residual, Eigen::MatrixXd* jacobian) {
+  Eigen::MatrixXd e;
+  const Transform pose = p.pose(m.q, jacobian ? &e : nullptr);
+  Eigen::Map<Eigen::Vector3d> position_residual(residual);
+  position_residual = position_weight * (m.position - pose.translation);
+  Eigen::Map<Eigen::Vector3d> orientation_residual(residual + 3);
+  const bool orientation = orientation_weight > 0.0 && m.orientation;
+  Eigen::Vector3d phi = Eigen::Vector3d::Zero();
+  if (orientation) {
+    phi = so3_log(m.orientation->toRotationMatrix() * pose.rotation.transpose());
+    orientation_residual = orientation_weight * phi;
+  } else if (orientation_weight > 0.0) {
+    orientation_residual.setZero();
+  }
+  if (jacobian) {
+    const int size = orientation_weight > 0.0 ? 6 : 3;
+    jacobian->resize(size, e.cols());
+    jacobian->topRows(3) = -position_weight * e.topRows(3);
+    if (size == 6) {
+      if (orientation) {
+        jacobian->bottomRows(3) = -orientation_weight * so3_right_jacobian_inverse(phi) * e.bottomRows(3);
+      } else {
+        jacobian->bottomRows(3).setZero();
+      }
+    }
+  }
+}
+
+void stacked(const Parameterization& p, const model::Dataset& data, const Weights& w, const std::vector<int>& rows,
+             Eigen::VectorXd& residual, Eigen::MatrixXd* jacobian) {
+  const int size = residual_size(w);
+  const auto n = static_cast<Eigen::Index>(rows.size()) * size;
+  residual.resize(n);
+  if (jacobian) jacobian->resize(n, p.size());
+  Eigen::MatrixXd j;
+  Eigen::Index at = 0;
+  for (int r : rows) {
+    const auto k = static_cast<std::size_t>(r);
+    row_residual(p, data.rows[k], w.position[k], w.orientation, residual.data() + at, jacobian ? &j : nullptr);
+    if (jacobian) jacobian->middleRows(at, size) = j;
+    at += size;
+  }
+}
+
+}  // namespace kincal::identify

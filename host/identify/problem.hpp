@@ -1,0 +1,84 @@
+// The identification problem every method shares: a starting model, a vector of parameter
+// changes delta over named parameters, the measurements, their weights, and the whitened
+// residuals with their exact Jacobian.
+//
+// Parameterization: model(delta) = model::apply_parameter_errors(start, ids, delta): link
+// parameters add; the base and tool motions compose as base_T_frame0 * [exp(r_b), t_b] and
+// flange_T_tool * [exp(r_t), t_t]. The core's error model gives the twist of the tool pose for a
+// small motion of the *current* frames; jacobian() turns it into d/d(delta) exactly (translation
+// columns through exp(r)^T, rotation columns through the right Jacobian of SO(3)), so the
+// Jacobian is exact at any delta, not only at zero (tests/host/identify check it against
+// central differences).
+//
+// Residuals of one measurement (whitened, so each is N(0, 1) for a correct model):
+//   position     L (p_measured - p_model),   L^T L = inverse position covariance
+//   orientation  w log(R_measured R_model^T),  w = 1 / sigma_rad (when used)
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "host/model/dataset.hpp"
+#include "host/model/robot_model.hpp"
+
+namespace kincal::identify {
+
+using model::RobotModel;
+using model::Transform;
+using ParameterIds = std::vector<core::ParameterId>;
+
+class Parameterization {
+ public:
+  Parameterization(const RobotModel& start, ParameterIds ids);
+
+  const RobotModel& start() const { return start_; }
+  const ParameterIds& ids() const { return ids_; }
+  int size() const { return static_cast<int>(ids_.size()); }
+
+  // Moves the evaluation point (cheap if delta is unchanged).
+  void set(std::span<const double> delta);
+  RobotModel model() const;  // at the current delta
+
+  // The tool pose at readings q, and optionally d(pose twist)/d(delta): 6 x size().
+  Transform pose(std::span<const double> q, Eigen::MatrixXd* jacobian) const;
+
+ private:
+  RobotModel start_;
+  core::ChainModel<double> start_chain_;
+  ParameterIds ids_;
+  core::ParameterSet augmented_;  // the links of ids_, then all 12 base/tool motions
+  std::vector<int> link_column_;  // ids_[k] -> column in augmented_ (links), -1 for motions
+  std::vector<double> delta_;
+  core::PreparedChain<double> prepared_;
+  Eigen::Matrix3d base_exp_t_, base_jr_, tool_exp_t_, tool_jr_;
+  bool ready_ = false;
+};
+
+// Right Jacobian of SO(3) and its inverse: exp(r + d) = exp(r) exp(Jr(r) d) to first order.
+Eigen::Matrix3d so3_right_jacobian(const Eigen::Vector3d& r);
+Eigen::Matrix3d so3_right_jacobian_inverse(const Eigen::Vector3d& r);
+// The rotation vector of R (angle <= pi).
+Eigen::Vector3d so3_log(const Eigen::Matrix3d& r);
+
+struct Weights {
+  std::vector<Eigen::Matrix3d> position;  // per measurement: L with L^T L = covariance^-1
+  double orientation = 0.0;               // 1 / sigma_rad; 0: orientation not used
+};
+
+// Position weights from each row's covariance, or 1/sigma_m for rows without one.
+Weights make_weights(const model::Dataset& data, double sigma_m, double orientation_sigma_rad);
+
+// Residual size of one measurement: 3, or 6 with orientation.
+int residual_size(const Weights& w);
+
+// Whitened residual of row i at the current point, and optionally its Jacobian (size x P).
+void row_residual(const Parameterization& p, const model::Measurement& m, const Eigen::Matrix3d& position_weight,
+                  double orientation_weight, double* residual, Eigen::MatrixXd* jacobian);
+
+// All rows stacked: residual (rows * size) and Jacobian (rows * size x P).
+void stacked(const Parameterization& p, const model::Dataset& data, const Weights& w, const std::vector<int>& rows,
+             Eigen::VectorXd& residual, Eigen::MatrixXd* jacobian);
+
+}  // namespace kincal::identify

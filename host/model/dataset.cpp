@@ -1,0 +1,245 @@
+#include "host/model/dataset.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <istream>
+#include <map>
+#include <ostream>
+#include <sstream>
+
+namespace kincal::model {
+
+namespace {
+
+std::string trim(std::string_view s) {
+  std::size_t b = 0, e = s.size();
+  while (b < e && (s[b] == ' ' || s[b] == '\t' || s[b] == '\r')) ++b;
+  while (e > b && (s[e - 1] == ' ' || s[e - 1] == '\t' || s[e - 1] == '\r')) --e;
+  return std::string(s.substr(b, e - b));
+}
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> fields;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', start);
+    fields.push_back(
+        trim(std::string_view(line).substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return fields;
+}
+
+bool skipped(const std::string& line) {
+  const std::string t = trim(line);
+  return t.empty() || t[0] == '#';
+}
+
+[[noreturn]] void fail(const std::string& source, int line, const std::string& what) {
+  throw InputError(source + ":" + std::to_string(line) + ": " + what);
+}
+
+double parse_number(const std::string& field, const std::string& column, const std::string& source, int line) {
+  double v = 0.0;
+  const char* first = field.data();
+  const char* last = field.data() + field.size();
+  if (first != last && *first == '+') ++first;
+  const auto [end, ec] = std::from_chars(first, last, v);
+  if (field.empty()) fail(source, line, "column " + column + " is empty");
+  if (ec != std::errc() || end != last) fail(source, line, "column " + column + ": '" + field + "' is not a number");
+  if (!std::isfinite(v)) fail(source, line, "column " + column + " is not finite");
+  return v;
+}
+
+// Column name -> index; q1..qN count.
+struct Header {
+  std::map<std::string, std::size_t> index;
+  int joints = 0;
+  std::size_t fields = 0;
+};
+
+Header parse_header(const std::string& line, const std::string& source, int number, bool joints_only) {
+  Header h;
+  const std::vector<std::string> names = split(line);
+  h.fields = names.size();
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    const std::string& n = names[i];
+    if (n.empty()) fail(source, number, "header: column " + std::to_string(i + 1) + " has no name");
+    if (!h.index.emplace(n, i).second) fail(source, number, "header: column '" + n + "' appears twice");
+  }
+  while (h.index.count("q" + std::to_string(h.joints + 1))) ++h.joints;
+  if (h.joints == 0) fail(source, number, "header: no joint columns (expected q1, q2, ...)");
+  if (joints_only) return h;
+  static const char* const kKnown[] = {"x",   "y",   "z",   "qw",  "qx",  "qy",  "qz",
+                                       "cxx", "cxy", "cxz", "cyy", "cyz", "czz", "sigma"};
+  for (const auto& [name, i] : h.index) {
+    bool known = false;
+    for (const char* k : kKnown) known = known || name == k;
+    if (name.size() > 1 && name[0] == 'q' && name.find_first_not_of("0123456789", 1) == std::string::npos) {
+      const int j = std::stoi(name.substr(1));
+      if (j < 1 || j > h.joints)
+        fail(source, number, "header: column '" + name + "' but no q" + std::to_string(h.joints + 1));
+      known = true;
+    }
+    if (!known) fail(source, number, "header: unknown column '" + name + "'");
+  }
+  for (const char* k : {"x", "y", "z"})
+    if (!h.index.count(k)) fail(source, number, std::string("header: missing column '") + k + "'");
+  return h;
+}
+
+int count_of(const Header& h, std::initializer_list<const char*> names) {
+  int n = 0;
+  for (const char* k : names) n += h.index.count(k) ? 1 : 0;
+  return n;
+}
+
+std::string number_text(double v) {
+  if (v == 0.0) v = 0.0;
+  char buffer[64];
+  const auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, v);
+  return ec == std::errc() ? std::string(buffer, end) : std::string("nan");
+}
+
+}  // namespace
+
+Dataset parse_dataset(std::istream& in, const std::string& source) {
+  Dataset data;
+  data.source = source;
+  std::string line;
+  int number = 0;
+  bool have_header = false;
+  Header h;
+  while (std::getline(in, line)) {
+    ++number;
+    if (skipped(line)) continue;
+    if (!have_header) {
+      h = parse_header(line, source, number, false);
+      have_header = true;
+      data.joint_count = h.joints;
+      const int quaternion = count_of(h, {"qw", "qx", "qy", "qz"});
+      if (quaternion != 0 && quaternion != 4)
+        fail(source, number, "header: an orientation needs all of qw, qx, qy, qz");
+      data.has_orientation = quaternion == 4;
+      const int covariance = count_of(h, {"cxx", "cxy", "cxz", "cyy", "cyz", "czz"});
+      if (covariance != 0 && covariance != 6)
+        fail(source, number, "header: a covariance needs all of cxx, cxy, cxz, cyy, cyz, czz");
+      if (covariance == 6 && h.index.count("sigma"))
+        fail(source, number, "header: give a covariance or sigma, not both");
+      data.noise = covariance == 6          ? NoiseColumns::covariance
+                   : h.index.count("sigma") ? NoiseColumns::sigma
+                                            : NoiseColumns::none;
+      continue;
+    }
+    const std::vector<std::string> fields = split(line);
+    if (fields.size() != h.fields)
+      fail(source, number,
+           "expected " + std::to_string(h.fields) + " fields as in the header, found " + std::to_string(fields.size()));
+    const auto value = [&](const std::string& column) {
+      return parse_number(fields[h.index.at(column)], column, source, number);
+    };
+    Measurement m;
+    m.line = number;
+    for (int j = 1; j <= h.joints; ++j) m.q.push_back(value("q" + std::to_string(j)));
+    m.position = Vector3(value("x"), value("y"), value("z"));
+    if (data.has_orientation) {
+      Eigen::Quaterniond q(value("qw"), value("qx"), value("qy"), value("qz"));
+      if (std::abs(q.norm() - 1.0) > 1e-3)
+        fail(source, number,
+             "the quaternion (qw, qx, qy, qz) is not a unit quaternion (norm " + number_text(q.norm()) + ")");
+      m.orientation = q.normalized();
+    }
+    if (data.noise == NoiseColumns::covariance) {
+      Matrix3 c;
+      c << value("cxx"), value("cxy"), value("cxz"), value("cxy"), value("cyy"), value("cyz"), value("cxz"),
+          value("cyz"), value("czz");
+      Eigen::LLT<Matrix3> llt(c);
+      if (llt.info() != Eigen::Success || c.diagonal().minCoeff() <= 0.0)
+        fail(source, number, "the covariance (cxx..czz) is not positive definite");
+      m.covariance = c;
+    } else if (data.noise == NoiseColumns::sigma) {
+      const double s = value("sigma");
+      if (!(s > 0.0)) fail(source, number, "sigma must be positive");
+      m.covariance = Matrix3::Identity() * (s * s);
+    }
+    data.rows.push_back(std::move(m));
+  }
+  if (!have_header) fail(source, number, "no header row (expected q1,...,qN,x,y,z)");
+  return data;
+}
+
+Dataset read_dataset(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open the data file");
+  return parse_dataset(in, path);
+}
+
+std::vector<std::vector<double>> parse_joints(std::istream& in, const std::string& source) {
+  std::vector<std::vector<double>> rows;
+  std::string line;
+  int number = 0;
+  bool have_header = false;
+  Header h;
+  while (std::getline(in, line)) {
+    ++number;
+    if (skipped(line)) continue;
+    if (!have_header) {
+      h = parse_header(line, source, number, true);
+      have_header = true;
+      continue;
+    }
+    const std::vector<std::string> fields = split(line);
+    if (fields.size() != h.fields)
+      fail(source, number,
+           "expected " + std::to_string(h.fields) + " fields as in the header, found " + std::to_string(fields.size()));
+    std::vector<double> q;
+    for (int j = 1; j <= h.joints; ++j) {
+      const std::string column = "q" + std::to_string(j);
+      q.push_back(parse_number(fields[h.index.at(column)], column, source, number));
+    }
+    rows.push_back(std::move(q));
+  }
+  if (!have_header) fail(source, number, "no header row (expected q1,...,qN)");
+  return rows;
+}
+
+std::vector<std::vector<double>> read_joints(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open the joints file");
+  return parse_joints(in, path);
+}
+
+void check_joint_count(const RobotModel& model, int data_joints, const std::string& source) {
+  if (data_joints != model.joint_count())
+    throw InputError(source + ": the data has " + std::to_string(data_joints) + " joint columns but the model '" +
+                     model.name + "' has " + std::to_string(model.joint_count()) + " joints");
+}
+
+void write_dataset(std::ostream& out, const Dataset& data) {
+  bool covariance = !data.rows.empty();
+  for (const Measurement& m : data.rows) covariance = covariance && m.covariance.has_value();
+  for (int j = 1; j <= data.joint_count; ++j) out << 'q' << j << ',';
+  out << "x,y,z";
+  if (data.has_orientation) out << ",qw,qx,qy,qz";
+  if (covariance) out << ",cxx,cxy,cxz,cyy,cyz,czz";
+  out << '\n';
+  for (const Measurement& m : data.rows) {
+    for (double q : m.q) out << number_text(q) << ',';
+    out << number_text(m.position.x()) << ',' << number_text(m.position.y()) << ',' << number_text(m.position.z());
+    if (data.has_orientation) {
+      const Eigen::Quaterniond q = m.orientation.value_or(Eigen::Quaterniond::Identity());
+      out << ',' << number_text(q.w()) << ',' << number_text(q.x()) << ',' << number_text(q.y()) << ','
+          << number_text(q.z());
+    }
+    if (covariance) {
+      const Matrix3& c = *m.covariance;
+      out << ',' << number_text(c(0, 0)) << ',' << number_text(c(0, 1)) << ',' << number_text(c(0, 2)) << ','
+          << number_text(c(1, 1)) << ',' << number_text(c(1, 2)) << ',' << number_text(c(2, 2));
+    }
+    out << '\n';
+  }
+}
+
+}  // namespace kincal::model

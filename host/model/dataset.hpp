@@ -1,0 +1,67 @@
+// Measurement datasets (CSV): joint readings and what the measuring device saw, in the
+// device's frame.
+//
+//   q1,q2,...,qN,x,y,z[,qw,qx,qy,qz][,cxx,cxy,cxz,cyy,cyz,czz | ,sigma]
+//
+// One header row naming the columns (any order; q1..qN contiguous from q1), then one row per
+// measurement: joint readings (rad or m), the tool point (m), optionally the tool orientation
+// as a unit quaternion (device_R_tool), optionally the point's covariance (m^2, upper triangle)
+// or a scalar standard deviation per axis (m). Blank lines and lines starting with '#' are
+// skipped. Numbers are plain decimal (std::from_chars).
+//
+// Why a small reader of our own: the format is numbers only (no quoting, no embedded commas),
+// and every error must carry its line number and the column at fault. Debian's C++ CSV
+// parsers do not fit: fast-cpp-csv-parser (libfccp-dev) fixes the column count at compile time;
+// libcsv is a C tokenizer with callbacks that would still leave number parsing and the line
+// bookkeeping to us.
+//
+// Errors (InputError "FILE:LINE: what"): missing/unknown/duplicate columns, a row with the wrong
+// number of fields, a field that is not a finite number, a quaternion whose norm is not 1
+// within 1e-3, a covariance that is not positive definite, sigma <= 0.
+#pragma once
+
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "host/model/robot_model.hpp"
+
+namespace kincal::model {
+
+struct Measurement {
+  std::vector<double> q;
+  Vector3 position = Vector3::Zero();
+  std::optional<Eigen::Quaterniond> orientation;  // device_R_tool
+  std::optional<Matrix3> covariance;              // of position, m^2
+  int line = 0;                                   // 1-based line in the source
+};
+
+enum class NoiseColumns { none, sigma, covariance };
+
+struct Dataset {
+  std::string source;
+  int joint_count = 0;
+  bool has_orientation = false;
+  NoiseColumns noise = NoiseColumns::none;
+  std::vector<Measurement> rows;
+};
+
+Dataset read_dataset(const std::string& path);
+Dataset parse_dataset(std::istream& in, const std::string& source);
+
+// Joint readings only (`kincal predict --joints`): header q1..qN; extra columns are ignored, so a
+// dataset file is also a joints file.
+std::vector<std::vector<double>> read_joints(const std::string& path);
+std::vector<std::vector<double>> parse_joints(std::istream& in, const std::string& source);
+
+// Throws InputError when the data's joint count differs from the model's.
+void check_joint_count(const RobotModel& model, int data_joints, const std::string& source);
+
+// Writes a dataset in the format above (orientation if the rows have it; covariance if every
+// row has one). Numbers in their shortest exact form.
+void write_dataset(std::ostream& out, const Dataset& data);
+
+}  // namespace kincal::model

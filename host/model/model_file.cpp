@@ -1,0 +1,351 @@
+#include "host/model/model_file.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <initializer_list>
+#include <numbers>
+#include <sstream>
+
+namespace kincal::model {
+
+namespace {
+
+constexpr double kDegPerRad = 180.0 / std::numbers::pi;
+
+class Reader {
+ public:
+  explicit Reader(std::string source) : source_(std::move(source)) {}
+
+  [[noreturn]] void fail(const YAML::Node& node, const std::string& what) const {
+    const YAML::Mark mark = node.Mark();
+    std::ostringstream out;
+    out << source_;
+    if (!mark.is_null()) out << ':' << mark.line + 1 << ':' << mark.column + 1;
+    out << ": " << what;
+    throw InputError(out.str());
+  }
+
+  void only_keys(const YAML::Node& map, const std::string& what, std::initializer_list<const char*> keys) const {
+    if (!map.IsMap()) fail(map, what + " must be a mapping");
+    for (const auto& entry : map) {
+      const std::string key = entry.first.as<std::string>();
+      bool known = false;
+      for (const char* k : keys) known = known || key == k;
+      if (!known) {
+        std::string list;
+        for (const char* k : keys) list += std::string(list.empty() ? "" : ", ") + k;
+        fail(entry.first, "unknown key '" + key + "' in " + what + " (expected " + list + ")");
+      }
+    }
+  }
+
+  double number(const YAML::Node& node, const std::string& what) const {
+    if (!node.IsScalar()) fail(node, what + " must be a number");
+    const std::string text = node.Scalar();
+    double value = 0.0;
+    const char* first = text.data();
+    const char* last = text.data() + text.size();
+    if (first != last && *first == '+') ++first;
+    const auto [end, ec] = std::from_chars(first, last, value);
+    if (ec != std::errc() || end != last) fail(node, what + ": '" + text + "' is not a number");
+    if (!std::isfinite(value)) fail(node, what + " must be finite");
+    return value;
+  }
+
+  double angle(const YAML::Node& node, const std::string& what, AngleUnit unit) const {
+    const double v = number(node, what);
+    return unit == AngleUnit::deg ? v / kDegPerRad : v;
+  }
+
+  Vector3 vector3(const YAML::Node& node, const std::string& what, double scale = 1.0) const {
+    if (!node.IsSequence() || node.size() != 3) fail(node, what + " must be a list of 3 numbers");
+    return Vector3(number(node[0], what) * scale, number(node[1], what) * scale, number(node[2], what) * scale);
+  }
+
+  std::string text(const YAML::Node& node, const std::string& what) const {
+    if (!node.IsScalar()) fail(node, what + " must be a string");
+    return node.Scalar();
+  }
+
+  // translation + rpy or quaternion (both optional: identity).
+  Transform transform(const YAML::Node& node, const std::string& what, AngleUnit unit) const {
+    Transform t;
+    if (node["translation"]) t.translation = vector3(node["translation"], what + " translation");
+    if (node["rpy"] && node["quaternion"]) fail(node, what + ": give rpy or quaternion, not both");
+    if (node["rpy"]) {
+      const double s = unit == AngleUnit::deg ? 1.0 / kDegPerRad : 1.0;
+      t.rotation = rotation_from_rpy(vector3(node["rpy"], what + " rpy", s));
+    }
+    if (node["quaternion"]) {
+      const YAML::Node& qn = node["quaternion"];
+      if (!qn.IsSequence() || qn.size() != 4) fail(qn, what + " quaternion must be a list of 4 numbers [w, x, y, z]");
+      Eigen::Quaterniond q(number(qn[0], what), number(qn[1], what), number(qn[2], what), number(qn[3], what));
+      const double norm = q.norm();
+      if (std::abs(norm - 1.0) > 1e-6)
+        fail(qn, what + " quaternion is not a unit quaternion (norm " + std::to_string(norm) + ")");
+      t.rotation = q.normalized().toRotationMatrix();
+    }
+    return t;
+  }
+
+ private:
+  std::string source_;
+};
+
+CalibrationRecord read_calibration(const Reader& r, const YAML::Node& node) {
+  r.only_keys(node, "calibration",
+              {"method", "data", "measurements", "rms_residual_m", "validation_rms_m", "held_fixed", "parameters"});
+  CalibrationRecord c;
+  if (node["method"]) c.method = r.text(node["method"], "calibration method");
+  if (node["data"]) c.data = r.text(node["data"], "calibration data");
+  if (node["measurements"]) c.measurements = static_cast<int>(r.number(node["measurements"], "measurements"));
+  if (node["rms_residual_m"]) c.rms_residual_m = r.number(node["rms_residual_m"], "rms_residual_m");
+  if (node["validation_rms_m"]) c.validation_rms_m = r.number(node["validation_rms_m"], "validation_rms_m");
+  if (node["held_fixed"]) {
+    if (!node["held_fixed"].IsSequence()) r.fail(node["held_fixed"], "held_fixed must be a list");
+    for (const auto& n : node["held_fixed"]) c.held_fixed.push_back(r.text(n, "held_fixed entry"));
+  }
+  if (node["parameters"]) {
+    if (!node["parameters"].IsSequence()) r.fail(node["parameters"], "calibration parameters must be a list");
+    for (const auto& n : node["parameters"]) {
+      r.only_keys(n, "calibration parameter", {"name", "change", "stddev"});
+      ParameterReport p;
+      p.name = r.text(n["name"], "parameter name");
+      if (n["change"]) p.value = r.number(n["change"], "change");
+      if (n["stddev"]) p.stddev = r.number(n["stddev"], "stddev");
+      c.parameters.push_back(p);
+    }
+  }
+  return c;
+}
+
+RobotModel read_model(const YAML::Node& root, const Reader& r) {
+  if (!root || root.IsNull()) r.fail(root, "empty model file");
+  r.only_keys(root, "the model", {"name", "angles", "base", "joints", "tool", "calibration"});
+  RobotModel model;
+  model.name = root["name"] ? r.text(root["name"], "name") : "robot";
+  if (root["angles"]) {
+    const std::string unit = r.text(root["angles"], "angles");
+    if (unit == "deg" || unit == "degrees") {
+      model.file_angles = AngleUnit::deg;
+    } else if (unit != "rad" && unit != "radians") {
+      r.fail(root["angles"], "angles: unknown unit '" + unit + "' (expected rad or deg)");
+    }
+  }
+  const AngleUnit unit = model.file_angles;
+  if (root["base"]) {
+    r.only_keys(root["base"], "base", {"translation", "rpy", "quaternion"});
+    model.base_T_frame0 = r.transform(root["base"], "base", unit);
+  }
+  const YAML::Node joints = root["joints"];
+  if (!joints) r.fail(root, "the model has no 'joints' list");
+  if (!joints.IsSequence() || joints.size() == 0) r.fail(joints, "joints must be a non-empty list");
+  if (joints.size() > static_cast<std::size_t>(core::kMaxJoints))
+    r.fail(joints, "the model has " + std::to_string(joints.size()) + " joints; at most " +
+                       std::to_string(core::kMaxJoints) + " are supported");
+  int index = 0;
+  for (const auto& jn : joints) {
+    ++index;
+    const std::string what = "joint " + std::to_string(index);
+    r.only_keys(jn, what, {"name", "type", "convention", "d", "theta", "a", "alpha", "beta", "offset", "limits"});
+    Joint j;
+    j.name = jn["name"] ? r.text(jn["name"], what + " name") : "j" + std::to_string(index);
+    if (!jn["type"]) r.fail(jn, what + ": missing 'type' (revolute or prismatic)");
+    const std::string type = r.text(jn["type"], what + " type");
+    if (type == "revolute") {
+      j.type = core::JointType::revolute;
+    } else if (type == "prismatic") {
+      j.type = core::JointType::prismatic;
+    } else {
+      r.fail(jn["type"], what + ": unknown joint type '" + type + "' (expected revolute or prismatic)");
+    }
+    if (!jn["convention"]) r.fail(jn, what + ": missing 'convention' (dh, mdh or doty)");
+    const std::string convention = r.text(jn["convention"], what + " convention");
+    if (convention == "dh") {
+      j.convention = core::LinkConvention::standard_dh;
+    } else if (convention == "mdh") {
+      j.convention = core::LinkConvention::modified_dh;
+    } else if (convention == "doty") {
+      j.convention = core::LinkConvention::doty;
+    } else {
+      r.fail(jn["convention"], what + ": unknown convention '" + convention + "' (expected dh, mdh or doty)");
+    }
+    for (const char* key : {"d", "theta", "a", "alpha"})
+      if (!jn[key]) r.fail(jn, what + ": missing parameter '" + key + "'");
+    if (jn["beta"] && j.convention != core::LinkConvention::doty)
+      r.fail(jn["beta"], what + ": beta belongs to the doty convention only");
+    j.parameters.d_m = r.number(jn["d"], what + " d");
+    j.parameters.a_m = r.number(jn["a"], what + " a");
+    j.parameters.theta_rad = r.angle(jn["theta"], what + " theta", unit);
+    j.parameters.alpha_rad = r.angle(jn["alpha"], what + " alpha", unit);
+    if (jn["beta"]) j.parameters.beta_rad = r.angle(jn["beta"], what + " beta", unit);
+    const bool revolute = j.type == core::JointType::revolute;
+    if (jn["offset"])
+      j.offset = revolute ? r.angle(jn["offset"], what + " offset", unit) : r.number(jn["offset"], what + " offset");
+    if (jn["limits"]) {
+      const YAML::Node& l = jn["limits"];
+      if (!l.IsSequence() || l.size() != 2) r.fail(l, what + ": limits must be [lower, upper]");
+      j.lower = revolute ? r.angle(l[0], what + " lower limit", unit) : r.number(l[0], what + " lower limit");
+      j.upper = revolute ? r.angle(l[1], what + " upper limit", unit) : r.number(l[1], what + " upper limit");
+      if (!(j.lower < j.upper)) r.fail(l, what + ": lower limit must be below the upper limit");
+    }
+    model.joints.push_back(j);
+  }
+  if (root["tool"]) {
+    const YAML::Node& t = root["tool"];
+    r.only_keys(t, "tool", {"point", "translation", "rpy", "quaternion"});
+    if (t["point"]) {
+      if (t["translation"] || t["rpy"] || t["quaternion"])
+        r.fail(t, "tool: give either point or a frame (translation with rpy or quaternion), not both");
+      model.tool = ToolKind::point;
+      model.flange_T_tool.translation = r.vector3(t["point"], "tool point");
+    } else {
+      model.tool = ToolKind::frame;
+      model.flange_T_tool = r.transform(t, "tool", unit);
+    }
+  }
+  if (root["calibration"]) model.calibration = read_calibration(r, root["calibration"]);
+  return model;
+}
+
+std::string number_text(double v) {
+  if (v == 0.0) v = 0.0;  // no "-0"
+  char buffer[64];
+  const auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, v);
+  return ec == std::errc() ? std::string(buffer, end) : std::string("nan");
+}
+
+// Angles converted to degrees: 15 significant digits, so 30 deg does not come out as
+// 29.999999999999996 (the conversion's rounding); radians keep the exact shortest form.
+std::string angle_text(double v, double scale) {
+  if (scale == 1.0) return number_text(v);
+  v *= scale;
+  if (v == 0.0) v = 0.0;
+  char buffer[64];
+  const auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, v, std::chars_format::general, 15);
+  return ec == std::errc() ? std::string(buffer, end) : std::string("nan");
+}
+
+void emit_vector(YAML::Emitter& out, const Vector3& v, double scale = 1.0) {
+  out << YAML::Flow << YAML::BeginSeq;
+  for (int i = 0; i < 3; ++i) out << angle_text(v(i), scale);
+  out << YAML::EndSeq;
+}
+
+void emit_transform(YAML::Emitter& out, const Transform& t, double angle_scale) {
+  out << YAML::BeginMap;
+  out << YAML::Key << "translation" << YAML::Value;
+  emit_vector(out, t.translation);
+  out << YAML::Key << "rpy" << YAML::Value;
+  emit_vector(out, rpy_from_rotation(t.rotation), angle_scale);
+  out << YAML::EndMap;
+}
+
+}  // namespace
+
+RobotModel parse_model(const std::string& text, const std::string& source) {
+  const Reader r(source);
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw InputError(source + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) +
+                     ": YAML syntax: " + e.msg);
+  }
+  try {
+    return read_model(root, r);
+  } catch (const YAML::Exception& e) {  // a conversion deep inside yaml-cpp
+    throw InputError(source + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+}
+
+RobotModel load_model(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open the model file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_model(text.str(), path);
+}
+
+std::string write_model(const RobotModel& model) {
+  const bool deg = model.file_angles == AngleUnit::deg;
+  const double a = deg ? kDegPerRad : 1.0;
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  out << YAML::Key << "name" << YAML::Value << model.name;
+  out << YAML::Key << "angles" << YAML::Value << (deg ? "deg" : "rad");
+  out << YAML::Key << "base" << YAML::Value;
+  emit_transform(out, model.base_T_frame0, a);
+  out << YAML::Key << "joints" << YAML::Value << YAML::BeginSeq;
+  for (const Joint& j : model.joints) {
+    const bool revolute = j.type == core::JointType::revolute;
+    out << YAML::BeginMap;
+    out << YAML::Key << "name" << YAML::Value << j.name;
+    out << YAML::Key << "type" << YAML::Value << (revolute ? "revolute" : "prismatic");
+    const char* convention = j.convention == core::LinkConvention::standard_dh   ? "dh"
+                             : j.convention == core::LinkConvention::modified_dh ? "mdh"
+                                                                                 : "doty";
+    out << YAML::Key << "convention" << YAML::Value << convention;
+    out << YAML::Key << "d" << YAML::Value << number_text(j.parameters.d_m);
+    out << YAML::Key << "theta" << YAML::Value << angle_text(j.parameters.theta_rad, a);
+    out << YAML::Key << "a" << YAML::Value << number_text(j.parameters.a_m);
+    out << YAML::Key << "alpha" << YAML::Value << angle_text(j.parameters.alpha_rad, a);
+    if (j.convention == core::LinkConvention::doty)
+      out << YAML::Key << "beta" << YAML::Value << angle_text(j.parameters.beta_rad, a);
+    out << YAML::Key << "offset" << YAML::Value << angle_text(j.offset, revolute ? a : 1.0);
+    if (std::isfinite(j.lower) && std::isfinite(j.upper)) {
+      const double s = revolute ? a : 1.0;
+      out << YAML::Key << "limits" << YAML::Value << YAML::Flow << YAML::BeginSeq << angle_text(j.lower, s)
+          << angle_text(j.upper, s) << YAML::EndSeq;
+    }
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  out << YAML::Key << "tool" << YAML::Value;
+  if (model.tool == ToolKind::point) {
+    out << YAML::BeginMap << YAML::Key << "point" << YAML::Value;
+    emit_vector(out, model.flange_T_tool.translation);
+    out << YAML::EndMap;
+  } else {
+    emit_transform(out, model.flange_T_tool, a);
+  }
+  if (model.calibration) {
+    const CalibrationRecord& c = *model.calibration;
+    out << YAML::Key << "calibration" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "method" << YAML::Value << c.method;
+    out << YAML::Key << "data" << YAML::Value << c.data;
+    out << YAML::Key << "measurements" << YAML::Value << c.measurements;
+    out << YAML::Key << "rms_residual_m" << YAML::Value << number_text(c.rms_residual_m);
+    if (c.validation_rms_m) out << YAML::Key << "validation_rms_m" << YAML::Value << number_text(*c.validation_rms_m);
+    out << YAML::Key << "held_fixed" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    for (const std::string& name : c.held_fixed) out << name;
+    out << YAML::EndSeq;
+    out << YAML::Key << "parameters" << YAML::Value << YAML::BeginSeq;
+    for (const ParameterReport& p : c.parameters) {
+      out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << p.name;
+      out << YAML::Key << "change" << YAML::Value << number_text(p.value);
+      out << YAML::Key << "stddev" << YAML::Value << number_text(p.stddev) << YAML::EndMap;
+    }
+    out << YAML::EndSeq << YAML::EndMap;
+  }
+  out << YAML::EndMap;
+  std::string text =
+      "# kincal robot model: SI units (m; angles as 'angles' says). Frames: base = frame 0 in the\n"
+      "# measuring device's frame; tool in the flange frame. calibration: changes and stddevs in SI "
+      "(m, rad).\n";
+  text += out.c_str();
+  text += "\n";
+  return text;
+}
+
+void save_model(const RobotModel& model, const std::string& path) {
+  std::ofstream out(path);
+  if (!out) throw InputError(path + ": cannot write the model file");
+  out << write_model(model);
+  if (!out) throw InputError(path + ": write failed");
+}
+
+}  // namespace kincal::model

@@ -1,0 +1,47 @@
+// Robot model files (YAML, yaml-cpp): what people read and write, and what `kincal identify`
+// writes back with the calibrated geometry.
+//
+//   name: stanford-rrp
+//   angles: deg                  # angles in this file are degrees (default: rad); lengths are m
+//   base:                        # frame 0 of the chain in the measuring device's frame
+//     translation: [0, 0, 0]     # m
+//     rpy: [0, 0, 0]             # roll, pitch, yaw (R = Rz(yaw) Ry(pitch) Rx(roll)), or
+//                                # quaternion: [w, x, y, z]
+//   joints:
+//     - name: waist              # optional (default j<i>)
+//       type: revolute           # revolute | prismatic
+//       convention: dh           # dh (standard DH) | mdh (modified DH, Craig) | doty (Doty/Hayati, beta)
+//       d: 1.27                  # link_model.hpp says what each parameter does in each convention
+//       theta: 0
+//       a: 0
+//       alpha: 90
+//       beta: 0                  # doty only
+//       offset: 0                # joint offset: added to the reading (optional, default 0)
+//       limits: [-170, 170]      # reading limits (optional)
+//   tool:
+//     point: [0, 0, 0.1]         # a tool point in the flange frame, or a frame:
+//                                # translation: [...] and rpy: [...] (or quaternion)
+//   calibration: ...             # written by `kincal identify`; read back as a record, not used
+//
+// Reading is strict: unknown keys, missing parameters, wrong types, an unknown convention or
+// joint type, more than core::kMaxJoints joints, non-finite numbers, lower > upper: InputError
+// with "FILE:LINE:COLUMN: what". Writing keeps the file's angle unit and prints numbers in their
+// shortest exact form, so a model written in radians reads back bit for bit.
+#pragma once
+
+#include <string>
+
+#include "host/model/robot_model.hpp"
+
+namespace kincal::model {
+
+// Throws InputError (file missing, YAML syntax, schema).
+RobotModel load_model(const std::string& path);
+// `source` names the text in messages.
+RobotModel parse_model(const std::string& text, const std::string& source);
+
+std::string write_model(const RobotModel& model);
+// Throws InputError when the file cannot be written.
+void save_model(const RobotModel& model, const std::string& path);
+
+}  // namespace kincal::model

@@ -1,0 +1,127 @@
+// A serial robot's kinematic model on the host: the firmware core's chain (link_model.hpp, one
+// definition of every link transform) plus what a person needs around it -- names, joint
+// offsets and limits, whether the tool is a point or a frame -- and the named parameters the
+// identification works on.
+//
+// Frames (rigid_transform.hpp conventions):
+//   device    the measuring device's frame (tracker, stereo pair); measurements are in it.
+//   frame 0   the chain's first frame; base_T_frame0 places it in the device frame (so the
+//             "base" transform is the device-to-robot registration, identified with the rest).
+//   flange    frame n after the last link; flange_T_tool places the tool point or frame.
+//
+// Joint readings: q_i as the controller reports it (rad or m). The chain's variable is
+// q_i + offset_i, added to theta (revolute) or d (prismatic). The offset is where calibrated
+// zero-reference errors go; theta/d keep the nominal geometry, so both are visible in the file.
+//
+// Everything is double, SI (m, rad). Functions here do not throw unless they say so.
+#pragma once
+
+#include <limits>
+#include <optional>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "firmware/core/error_model.hpp"
+#include "firmware/core/link_model.hpp"
+#include "firmware/core/rigid_transform.hpp"
+
+namespace kincal::model {
+
+using Transform = core::RigidTransform<double>;
+using Vector3 = Eigen::Vector3d;
+using Matrix3 = Eigen::Matrix3d;
+
+// Bad model or bad data: the message names the file, the line and what is wrong.
+class InputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct Joint {
+  std::string name;
+  core::JointType type = core::JointType::revolute;
+  core::LinkConvention convention = core::LinkConvention::standard_dh;
+  core::LinkParameters<double> parameters{};  // theta and d without the offset
+  double offset = 0.0;                        // rad (revolute) or m (prismatic)
+  double lower = -std::numeric_limits<double>::infinity();
+  double upper = std::numeric_limits<double>::infinity();
+};
+
+enum class ToolKind { point, frame };
+enum class AngleUnit { rad, deg };
+
+// One identified parameter as the identification reports it (written to the output file).
+struct ParameterReport {
+  std::string name;
+  double value = 0.0;   // its change from the starting model, in SI units
+  double stddev = 0.0;  // 1-sigma, SI units
+};
+
+// What `kincal identify` records about how a model was obtained; free text plus numbers.
+struct CalibrationRecord {
+  std::string method;
+  std::string data;
+  int measurements = 0;
+  double rms_residual_m = 0.0;
+  std::vector<ParameterReport> parameters;
+  std::vector<std::string> held_fixed;
+  std::optional<double> validation_rms_m;
+};
+
+struct RobotModel {
+  std::string name;
+  std::vector<Joint> joints;
+  Transform base_T_frame0{};
+  Transform flange_T_tool{};
+  ToolKind tool = ToolKind::point;
+  AngleUnit file_angles = AngleUnit::rad;  // how the file wrote angles; writing keeps it
+  std::optional<CalibrationRecord> calibration;
+
+  int joint_count() const { return static_cast<int>(joints.size()); }
+};
+
+// The core chain with offsets folded into theta/d. Requires joint_count() <= core::kMaxJoints
+// (load_model checks it).
+core::ChainModel<double> to_chain(const RobotModel& model);
+
+// The inverse: a copy of `like` whose geometry is `chain`. theta (revolute) and d (prismatic)
+// keep `like`'s value; the difference goes into the joint offset.
+RobotModel from_chain(const RobotModel& like, const core::ChainModel<double>& chain);
+
+core::JointVector<double> joint_vector(std::span<const double> q);
+
+// device_T_tool at joint readings q (q.size() == joint_count()).
+Transform forward_kinematics(const RobotModel& model, std::span<const double> q);
+
+// d(tool pose)/dq as a twist [dp; dphi] per joint, in the device frame: 6 x n.
+Eigen::MatrixXd joint_jacobian(const RobotModel& model, std::span<const double> q);
+
+// ---- Named parameters ---------------------------------------------------------------------
+// Names: d1 theta1 a1 alpha1 beta1 (1-based joint), base_x base_y base_z base_rx base_ry base_rz
+// (small motions of frame 0 along/about its own axes), tool_x ... tool_rz (along/about the
+// tool's own axes). Their errors act as core::apply_parameter_errors says.
+std::string parameter_name(core::ParameterId id);
+// Throws InputError naming the bad entry.
+core::ParameterId parse_parameter_name(const std::string& name, int joint_count);
+
+// Every parameter the model's conventions have: links (theta, d, a, alpha, and beta for Doty
+// links), then the base's six motions, then the tool's six (three if the tool is a point).
+std::vector<core::ParameterId> all_parameters(const RobotModel& model);
+
+// The twist columns of the tool pose w.r.t. parameter errors at zero error: 6 x ids.size().
+Eigen::MatrixXd parameter_jacobian(const RobotModel& model, std::span<const double> q,
+                                   std::span<const core::ParameterId> ids);
+
+// The model with the given parameter errors applied exactly (link sums, base/tool composed).
+RobotModel apply_parameter_errors(const RobotModel& model, std::span<const core::ParameterId> ids,
+                                  const Eigen::VectorXd& errors);
+
+// Rotation helpers for files: URDF's roll-pitch-yaw (R = Rz(yaw) Ry(pitch) Rx(roll)).
+Matrix3 rotation_from_rpy(const Vector3& rpy);
+Vector3 rpy_from_rotation(const Matrix3& r);
+
+}  // namespace kincal::model

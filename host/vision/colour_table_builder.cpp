@@ -1,0 +1,64 @@
+#include "host/vision/colour_table_builder.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "host/vision/image_labeling.hpp"
+
+namespace kincal::vision {
+
+void colour_cell(const cv::Vec3b& bgr, core::ColourSpace space, int cell[3]) {
+  std::size_t index = 0;
+  if (space == core::ColourSpace::kRgb565) {
+    index = core::rgb565_cell(bgr_to_rgb565(bgr[0], bgr[1], bgr[2]));
+  } else {
+    std::uint8_t y, u, v;
+    bgr_to_yuv(bgr[0], bgr[1], bgr[2], y, u, v);
+    index = core::yuv_cell(y, u, v);
+  }
+  cell[0] = static_cast<int>(index >> 8);
+  cell[1] = static_cast<int>((index >> 4) & 0xF);
+  cell[2] = static_cast<int>(index & 0xF);
+}
+
+core::ColourClassTable build_colour_table(const ColourTableSamples& samples, core::ColourSpace space,
+                                          double max_distance) {
+  if (samples.positive_bgr.size() < 8) throw std::runtime_error("colour table: fewer than 8 positive samples");
+  std::vector<int> positives(core::kColourCells, 0), negatives(core::kColourCells, 0);
+  cv::Matx31d mean = cv::Matx31d::zeros();
+  std::vector<cv::Matx31d> points;
+  for (const cv::Vec3b& p : samples.positive_bgr) {
+    int c[3];
+    colour_cell(p, space, c);
+    ++positives[static_cast<std::size_t>(c[0] << 8 | c[1] << 4 | c[2])];
+    points.emplace_back(c[0] + 0.5, c[1] + 0.5, c[2] + 0.5);
+    mean += points.back();
+  }
+  mean *= 1.0 / static_cast<double>(points.size());
+  cv::Matx33d cov = cv::Matx33d::eye() * (0.25 * 0.25);
+  for (const cv::Matx31d& q : points) cov += (q - mean) * (q - mean).t() * (1.0 / static_cast<double>(points.size()));
+  for (const cv::Vec3b& p : samples.negative_bgr) {
+    int c[3];
+    colour_cell(p, space, c);
+    ++negatives[static_cast<std::size_t>(c[0] << 8 | c[1] << 4 | c[2])];
+  }
+  const cv::Matx33d inverse = cov.inv(cv::DECOMP_CHOLESKY);
+  core::ColourClassTable table;
+  table.space = space;
+  table.threshold = static_cast<std::uint8_t>(std::lround(255.0 * std::exp(-0.5 * max_distance * max_distance)));
+  for (int c0 = 0; c0 < 16; ++c0)
+    for (int c1 = 0; c1 < 16; ++c1)
+      for (int c2 = 0; c2 < 16; ++c2) {
+        const auto index = static_cast<std::size_t>(c0 << 8 | c1 << 4 | c2);
+        const cv::Matx31d d = cv::Matx31d(c0 + 0.5, c1 + 0.5, c2 + 0.5) - mean;
+        const double d2 = (d.t() * inverse * d)(0, 0);
+        double score = d2 < max_distance * max_distance ? 255.0 * std::exp(-0.5 * d2) : 0.0;
+        if (negatives[index] > 0 && negatives[index] >= positives[index]) score = 0;
+        // Inside the ellipsoid every cell is above the threshold, however small its weight.
+        table.score[index] =
+            static_cast<std::uint8_t>(score > 0 ? std::max<long>(std::lround(score), table.threshold + 1L) : 0);
+      }
+  return table;
+}
+
+}  // namespace kincal::vision

@@ -1,0 +1,129 @@
+// ISO-TP messages of the protocol (payloads on can_id::kIsoTpRequest / kIsoTpResponse): the
+// MessageType byte every one starts with, and the measurement report.
+//
+// Measurement report layout (bit-packed, Intel order, no padding between fields; the message is
+// ceil(bits / 8) bytes and any other length is rejected):
+//   type 8 (0x81) | sequence 8 (the trigger's) | timestamp_us 32 | sections 6 | status 4
+//   then each present section, in bit order of section:::
+//   ranges     4 x u16, LSB 2^-16 m (15.3 um), range [0, 1) m, 0xFFFF = no echo. The rangers read
+//              tens of um of noise at 0.05-0.5 m; 15 um is below that, and 1 m is beyond any
+//              working distance of the platform.
+//   plane      in the camera frame, normal pointing at the camera (n_z < 0, n_z is implied):
+//              n_x, n_y i16 LSB 2^-15 (30.5 urad of tilt), distance u16 LSB 2^-16 m, [0, 1) m.
+//   fiducials  count 4 (0..8), then per fiducial: id 4 | x 16 | y 16, pixel centre as uq10.6
+//              (LSB 1/64 px, range [0, 1024) px): the camera rows of the STM32F407 are at most
+//              1024 px (VGA in practice), and 1/64 px rounding (RMS 0.0045 px) is below the
+//              centroid's noise floor (about 0.01 px for a bright spot, DESIGN.md).
+//   pose       square_T_camera: translation 3 x i20 LSB 2^-18 m (3.8 um, +-2 m), rotation vector
+//              (axis * angle) 3 x i18 LSB 2^-15 rad (30.5 urad, +-4 rad >= pi). A pose from four
+//              fiducials is good to ~10 um / ~0.1 mrad, so neither LSB limits it.
+//   blobs      count 7 (0..64), then per blob: x 16 | y 16 (uq10.6 px) | area 16 (px, saturating) |
+//              colour class 4 (the LUT's 16 classes) | peak 8 (DN, 8-bit camera).
+//   point      triangulated beacon, stereo rig frame: 3 x i20 LSB 2^-16 m (15 um, +-8 m); stereo
+//              errors are mm at 1 m and cm at 4.5 m, so 15 um is far below them.
+//   timestamp_us: platform clock at mid-exposure, 1 us (at 1 rad/s one us is 1 urad, below the
+//   joint LSB); wraps after 71.6 min, which the host unwraps with the reports' arrival times.
+//   A section asked for but not produced is absent, and status says why.
+//
+// Cost: O(bytes) bit copies, no heap. Thread/ISR safety: pure. Failure modes: decode returns a
+// DecodeStatus (wrong type, wrong length, count or enumeration out of range); encode fails only
+// with a too-small output buffer (returns 0).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "shared/protocol.hpp"
+
+namespace kincal::shared {
+
+enum class MessageType : std::uint8_t {
+  kParameterWrite = 0x01,     // host -> platform (parameters.hpp)
+  kParameterRead = 0x02,      // host -> platform (parameters.hpp)
+  kMeasurementReport = 0x81,  // platform -> host
+  kParameterData = 0x82,      // platform -> host (parameters.hpp)
+};
+
+enum class MeasureStatus : std::uint8_t {
+  kOk = 0,            // every section asked for is present
+  kNotAvailable = 1,  // this build's measurement step cannot produce some asked-for section
+  kNoParameters = 2,  // a needed parameter block is missing
+  kCameraFailure = 3,
+  kRangerFailure = 4,
+  kNoTarget = 5,  // nothing usable in view (too few fiducials, no plane)
+};
+inline constexpr std::uint8_t kMaxMeasureStatus = 5;
+
+inline constexpr std::size_t kRangers = 4;
+inline constexpr std::size_t kMaxFiducials = 8;
+inline constexpr std::size_t kMaxBlobs = 64;
+inline constexpr std::uint16_t kNoEcho = 0xFFFF;
+
+struct Fiducial {
+  std::uint8_t id = 0;     // 4 bits
+  std::uint16_t x_q6 = 0;  // uq10.6 px
+  std::uint16_t y_q6 = 0;  // uq10.6 px
+};
+
+struct Blob {
+  std::uint16_t x_q6 = 0;
+  std::uint16_t y_q6 = 0;
+  std::uint16_t area_px = 0;
+  std::uint8_t colour_class = 0;  // 4 bits
+  std::uint8_t peak_dn = 0;
+};
+
+struct MeasurementReport {
+  std::uint8_t sequence = 0;
+  std::uint32_t timestamp_us = 0;
+  std::uint8_t sections = 0;  // section:: bits present
+  MeasureStatus status = MeasureStatus::kOk;
+
+  std::array<std::uint16_t, kRangers> range_raw{};  // LSB 2^-16 m, kNoEcho
+  std::int16_t plane_normal_x_raw = 0;              // LSB 2^-15
+  std::int16_t plane_normal_y_raw = 0;              // LSB 2^-15
+  std::uint16_t plane_distance_raw = 0;             // LSB 2^-16 m
+  std::uint8_t fiducial_count = 0;
+  std::array<Fiducial, kMaxFiducials> fiducials{};
+  std::array<std::int32_t, 3> translation_raw{};  // i20, LSB 2^-18 m
+  std::array<std::int32_t, 3> rotation_raw{};     // i18, LSB 2^-15 rad
+  std::uint8_t blob_count = 0;
+  std::array<Blob, kMaxBlobs> blobs{};
+  std::array<std::int32_t, 3> point_raw{};  // i20, LSB 2^-16 m
+};
+
+// Bits of each part, and the largest report: the platform's ISO-TP buffers are sized from it.
+namespace report_bits {
+inline constexpr std::size_t kHeader = 8 + 8 + 32 + 6 + 4;
+inline constexpr std::size_t kRanges = kRangers * 16;
+inline constexpr std::size_t kPlane = 16 + 16 + 16;
+inline constexpr std::size_t kFiducial = 4 + 16 + 16;
+inline constexpr std::size_t kFiducialsHeader = 4;
+inline constexpr std::size_t kPose = 3 * 20 + 3 * 18;
+inline constexpr std::size_t kBlob = 16 + 16 + 16 + 4 + 8;
+inline constexpr std::size_t kBlobsHeader = 7;
+inline constexpr std::size_t kPoint = 3 * 20;
+inline constexpr std::size_t kMax = kHeader + kRanges + kPlane + kFiducialsHeader + kMaxFiducials * kFiducial + kPose +
+                                    kBlobsHeader + kMaxBlobs * kBlob + kPoint;
+}  // namespace report_bits
+inline constexpr std::size_t kMaxReportBytes = (report_bits::kMax + 7) / 8;
+static_assert(kMaxFiducials < (1u << report_bits::kFiducialsHeader), "fiducial count field too narrow");
+static_assert(kMaxBlobs < (1u << report_bits::kBlobsHeader), "blob count field too narrow");
+
+// Bytes of the encoded report (depends on the sections present and the counts).
+std::size_t report_size(const MeasurementReport& report);
+// Returns the bytes written, or 0 if `out` is too small. Counts above the maxima are clamped.
+std::size_t encode(const MeasurementReport& report, std::span<std::uint8_t> out);
+DecodeStatus decode(std::span<const std::uint8_t> message, MeasurementReport& report);
+
+// Physical conversions (host side and tests; the firmware works in raw units).
+inline constexpr double kRangeLsbM = 1.0 / 65536.0;
+inline constexpr double kPlaneNormalLsb = 1.0 / 32768.0;
+inline constexpr double kPixelLsbPx = 1.0 / 64.0;
+inline constexpr double kTranslationLsbM = 1.0 / 262144.0;
+inline constexpr double kRotationLsbRad = 1.0 / 32768.0;
+inline constexpr double kPointLsbM = 1.0 / 65536.0;
+
+}  // namespace kincal::shared

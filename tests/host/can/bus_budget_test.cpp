@@ -1,0 +1,34 @@
+// The bus budget's frame model against values worked out by hand from ISO 11898-1.
+#include "host/can/bus_budget.hpp"
+
+#include <doctest.h>
+
+using namespace kincal::can;
+
+TEST_CASE("classic frames: 55 bits empty, 135 bits with 8 bytes (worst-case stuffing, 3-bit IFS)") {
+  const BusConfig bus{1e6, 1e6, false};
+  CHECK(classic_frame_time(0, bus).nominal_bits == 55);
+  CHECK(classic_frame_time(8, bus).nominal_bits == 135);
+  CHECK(classic_frame_time(8, bus).seconds == doctest::Approx(135e-6));
+}
+
+TEST_CASE("CAN FD frames: 16 bytes at 1/2 Mbit/s") {
+  const BusConfig bus{1e6, 2e6, true};
+  const FrameTime t = fd_frame_time(16, bus);
+  // 17 arbitration bits + 4 stuff + 13 (CRC delimiter, ACK, EOF, IFS) at the nominal rate;
+  // 5 + 128 data + 33 dynamic stuff + 4 stuff count + 17 CRC + 6 fixed stuff at the data rate.
+  CHECK(t.nominal_bits == 34);
+  CHECK(t.data_bits == 193);
+  CHECK(t.seconds == doctest::Approx(34e-6 + 96.5e-6));
+  CHECK(fd_frame_time(20, bus).data_bits > fd_frame_time(16, bus).data_bits + 32);  // CRC-21 from 20 bytes on
+}
+
+TEST_CASE("budget: correction rate from the load left by measurements and heartbeat") {
+  const Budget b = compute_budget({1e6, 1e6, false}, 0.5, 30.0);
+  CHECK(arid_report_bytes() == 54);
+  // 30 x 1290 us of measurement traffic and 10 x 135 us of heartbeat leave 459.95 ms per second
+  // for 540-us cycles.
+  CHECK(b.max_correction_hz == doctest::Approx((0.5 - 30 * 1290e-6 - 10 * 135e-6) / 540e-6));
+  CHECK(b.max_correction_hz >= 500);
+  CHECK(compute_budget({1e6, 2e6, true}, 0.5, 30.0).max_correction_hz >= 1500);
+}

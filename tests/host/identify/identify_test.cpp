@@ -1,0 +1,263 @@
+// host/identify: statistics, the exact Jacobian, identifiability, recovery of known errors by
+// every method, and the errors for bad requests and degenerate data.
+#include <doctest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <string>
+
+#include "host/identify/cpa.hpp"
+#include "host/identify/identify.hpp"
+#include "host/identify/plan.hpp"
+#include "host/identify/statistics.hpp"
+#include "host/model/model_file.hpp"
+#include "tests/host/identify/simulation.hpp"
+
+namespace {
+
+using namespace kincal;
+using model::RobotModel;
+
+RobotModel robot(const char* name) { return model::load_model(std::string(KINCAL_ROBOTS_DIR) + "/" + name); }
+
+std::string error_of(const RobotModel& m, const model::Dataset& d, const identify::IdentifyOptions& o) {
+  try {
+    (void)identify::identify(m, d, o);
+  } catch (const model::InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// Single-joint sweeps around a home configuration: `per_joint` readings of each joint in turn.
+std::vector<std::vector<double>> sweeps(const RobotModel& m, const std::vector<double>& home, int per_joint,
+                                        double fraction) {
+  std::vector<std::vector<double>> qs;
+  for (std::size_t j = 0; j < m.joints.size(); ++j) {
+    const double lo = m.joints[j].lower, hi = m.joints[j].upper;
+    const double span = fraction * (hi - lo);
+    for (int k = 0; k < per_joint; ++k) {
+      std::vector<double> q = home;
+      q[j] = home[j] - 0.5 * span + span * k / (per_joint - 1);
+      qs.push_back(q);
+    }
+  }
+  return qs;
+}
+
+}  // namespace
+
+TEST_CASE("chi-square and F distributions against tabulated values") {
+  CHECK(identify::chi_square_quantile(0.999, 3) == doctest::Approx(16.266).epsilon(1e-4));
+  CHECK(identify::chi_square_quantile(0.95, 1) == doctest::Approx(3.841).epsilon(1e-3));
+  CHECK(identify::chi_square_quantile(0.5, 6) == doctest::Approx(5.348).epsilon(1e-3));
+  CHECK(identify::chi_square_quantile(0.99, 30) == doctest::Approx(50.892).epsilon(1e-4));
+  CHECK(identify::fisher_cdf(3.708, 3, 10) == doctest::Approx(0.95).epsilon(1e-3));
+  CHECK(identify::fisher_cdf(4.938, 3, 21) == doctest::Approx(0.99).epsilon(1e-3));
+  CHECK(identify::median({3, 1, 2}) == 2.0);
+}
+
+TEST_CASE("the identification Jacobian is exact away from zero, base and tool rotations included") {
+  std::mt19937_64 rng(1);
+  const RobotModel m = robot("puma560.yaml");
+  const identify::ParameterIds ids = model::all_parameters(m);
+  identify::Parameterization p(m, ids);
+  std::vector<double> delta(ids.size());
+  std::normal_distribution<double> u(0.0, 0.2);
+  for (double& d : delta) d = u(rng);
+  p.set(delta);
+  const std::vector<double> q = simulation::random_configuration(m, rng);
+  Eigen::MatrixXd j;
+  const model::Transform t0 = p.pose(q, &j);
+  (void)t0;
+  const double h = 1e-6;
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    std::vector<double> plus = delta, minus = delta;
+    plus[k] += h;
+    minus[k] -= h;
+    p.set(plus);
+    const model::Transform a = p.pose(q, nullptr);
+    p.set(minus);
+    const model::Transform b = p.pose(q, nullptr);
+    Eigen::Matrix<double, 6, 1> numeric;
+    numeric.head<3>() = (a.translation - b.translation) / (2 * h);
+    numeric.tail<3>() = identify::so3_log(a.rotation * b.rotation.transpose()) / (2 * h);
+    INFO(model::parameter_name(ids[k]));
+    CHECK((j.col(static_cast<Eigen::Index>(k)) - numeric).norm() < 1e-7);
+  }
+}
+
+TEST_CASE("identifiability names what point data cannot give") {
+  std::mt19937_64 rng(2);
+  const RobotModel m = robot("ur5.yaml");
+  const model::Dataset d =
+      simulation::measure(m, simulation::random_configurations(m, 40, rng), rng, 1e-5, false, 0.0, true);
+  const identify::IdentifyResult r = identify::identify(m, d, {});
+  // 4 per revolute joint + 3 for the tool point + 6 base - (theta1, d1 to the base) ...: 4R + 3 = 27.
+  CHECK(r.identifiability.identified.size() == 27);
+  CHECK(r.identifiability.rank == 27);
+  std::string held;
+  for (const auto& h : r.identifiability.held_fixed) held += model::parameter_name(h.id) + " ";
+  CHECK(has(held, "theta1 "));
+  CHECK(has(held, "d1 "));
+  bool doty = false;
+  for (const auto& note : r.notes) doty = doty || has(note, "Doty");
+  CHECK(doty);
+}
+
+TEST_CASE("identifiable parameter counts: 4R + 2P + 6 with poses, 4R + 2P + 3 with points") {
+  std::mt19937_64 rng(12);
+  struct Case {
+    const char* file;
+    bool pose;
+    std::size_t expected;
+  };
+  for (const Case& c : {Case{"stanford_rrp.yaml", false, 13}, Case{"arid_prrr.yaml", true, 20},
+                        Case{"puma560.yaml", true, 30}, Case{"puma560.yaml", false, 27}}) {
+    INFO(c.file, c.pose ? " poses" : " points");
+    const RobotModel m = robot(c.file);
+    const model::Dataset d =
+        simulation::measure(m, simulation::random_configurations(m, 50, rng), rng, 1e-5, c.pose, 1e-5, true);
+    identify::IdentifyOptions o;
+    o.orientation_sigma_rad = 1e-5;
+    const identify::IdentifyResult r = identify::identify(m, d, o);
+    CHECK(r.identifiability.identified.size() == c.expected);
+    CHECK(r.stddev.minCoeff() > 0.0);
+  }
+}
+
+TEST_CASE("full, first-order and cpa recover known errors from noise-free data") {
+  std::mt19937_64 rng(3);
+  for (const char* name : {"puma560.yaml", "ur5.yaml", "stanford_rrp.yaml", "arid_prrr.yaml"}) {
+    INFO(name);
+    const RobotModel nominal = robot(name);
+    const RobotModel truth = simulation::perturbed(nominal, rng);
+    const bool pose = nominal.tool == model::ToolKind::frame;
+    const auto qs = simulation::random_configurations(nominal, 60, rng);
+    const model::Dataset d = simulation::measure(truth, qs, rng, 0.0, pose, 0.0, false);
+    identify::IdentifyOptions o;
+    o.sigma_m = 1e-4;
+    o.orientation_sigma_rad = 1e-4;
+    const auto held_out = simulation::random_configurations(nominal, 50, rng);
+    const identify::IdentifyResult full = identify::identify(nominal, d, o);
+    CHECK(simulation::prediction_rms(full.model, truth, held_out) < 1e-9);
+    CHECK(full.outlier_lines.empty());
+    if (pose) {
+      for (const auto& q : held_out) {
+        const model::Transform a = model::forward_kinematics(full.model, q), b = model::forward_kinematics(truth, q);
+        CHECK((a.rotation - b.rotation).norm() < 1e-9);
+      }
+    }
+    // First order: one linear step, so the error is second order in the parameter errors.
+    o.method = identify::Method::first_order;
+    const identify::IdentifyResult first = identify::identify(nominal, d, o);
+    const double before = simulation::prediction_rms(nominal, truth, held_out);
+    CHECK(simulation::prediction_rms(first.model, truth, held_out) < 0.05 * before);
+  }
+}
+
+TEST_CASE("cpa on single-joint sweeps finds the axes; full from cpa converges") {
+  std::mt19937_64 rng(4);
+  for (const char* name : {"stanford_rrp.yaml", "puma560.yaml", "ur5.yaml"}) {
+    INFO(name);
+    const RobotModel nominal = robot(name);
+    const RobotModel truth = simulation::perturbed(nominal, rng);
+    std::vector<double> home;
+    for (const auto& j : nominal.joints) home.push_back(0.5 * (j.lower + j.upper) + 0.1);
+    const model::Dataset d = simulation::measure(truth, sweeps(nominal, home, 10, 0.5), rng, 0.0, false, 0.0, false);
+    identify::IdentifyOptions o;
+    o.method = identify::Method::cpa;
+    const identify::IdentifyResult cpa = identify::identify(nominal, d, o);
+    const auto held_out = simulation::random_configurations(nominal, 50, rng);
+    CHECK(simulation::prediction_rms(cpa.model, truth, held_out) < 1e-7);
+    CHECK(cpa.cpa_sweeps.size() == nominal.joints.size());
+  }
+}
+
+TEST_CASE("cpa rejects an outlier in a sweep and reports its line") {
+  std::mt19937_64 rng(5);
+  const RobotModel nominal = robot("stanford_rrp.yaml");
+  const RobotModel truth = simulation::perturbed(nominal, rng);
+  const std::vector<double> home = {0.1, 1.6, 0.8};
+  model::Dataset d = simulation::measure(truth, sweeps(nominal, home, 12, 0.5), rng, 2e-4, false, 0.0, true);
+  d.rows[15].position.x() += 0.02;  // a 2 cm blunder in the sweep of joint 2
+  const identify::CpaResult r = identify::circle_point_analysis(nominal, d, {});
+  REQUIRE(r.fits.size() == 3);
+  CHECK(r.fits[1].rejected_lines == std::vector<int>{d.rows[15].line});
+  CHECK(r.fits[0].rejected_lines.empty());
+  CHECK(r.fits[0].curved);
+  CHECK(!r.fits[2].curved);
+}
+
+TEST_CASE("full identification with noise: outliers rejected by line, noise estimated") {
+  std::mt19937_64 rng(6);
+  const RobotModel nominal = robot("puma560.yaml");
+  const RobotModel truth = simulation::perturbed(nominal, rng);
+  model::Dataset d =
+      simulation::measure(truth, simulation::random_configurations(nominal, 80, rng), rng, 5e-5, true, 1e-4, false);
+  d.rows[10].position.z() += 0.01;
+  const identify::IdentifyResult r = identify::identify(nominal, d, {});
+  CHECK(r.outlier_lines == std::vector<int>{d.rows[10].line});
+  CHECK(r.sigma_estimated);
+  CHECK(r.sigma_m == doctest::Approx(5e-5).epsilon(0.15));
+  CHECK(r.orientation_sigma_rad == doctest::Approx(1e-4).epsilon(0.15));
+  const auto held_out = simulation::random_configurations(nominal, 100, rng);
+  CHECK(simulation::prediction_rms(r.model, truth, held_out) < 1e-4);
+  // The standard deviations describe the errors: the tool point error is within a few sigma.
+  CHECK(r.stddev.size() == static_cast<Eigen::Index>(r.identifiability.identified.size()));
+  CHECK(r.stddev.maxCoeff() < 1e-2);
+  CHECK(r.model.calibration.has_value());
+  CHECK(!identify::format_report(r).empty());
+}
+
+TEST_CASE("errors: joint count, a joint never moved, too few poses, unidentifiable requests") {
+  std::mt19937_64 rng(7);
+  const RobotModel puma = robot("puma560.yaml");
+  const RobotModel rrp = robot("stanford_rrp.yaml");
+  const model::Dataset d =
+      simulation::measure(rrp, simulation::random_configurations(rrp, 30, rng), rng, 1e-4, false, 0.0, true);
+  CHECK(has(error_of(puma, d, {}), "the data has 3 joint columns but the model 'puma560' has 6 joints"));
+
+  model::Dataset still = d;
+  for (auto& row : still.rows) row.q[1] = 0.7;
+  CHECK(has(error_of(rrp, still, {}), "joint 2 (shoulder) never moved: every row has q2 = 0.7"));
+
+  model::Dataset few = d;
+  few.rows.resize(3);
+  CHECK(has(error_of(rrp, few, {}), "too few measurements: 3 give 9 equations for"));
+
+  identify::IdentifyOptions o;
+  o.requested = {"theta1", "base_rz", "a2"};
+  const std::string request = error_of(rrp, d, o);
+  CHECK(has(request, "cannot identify the requested parameters"));
+  CHECK(has(request, "base_rz: not separable from theta1"));
+
+  o.requested = {"theta9"};
+  CHECK(has(error_of(rrp, d, o), "parameter 'theta9': joint 9 does not exist"));
+  o.requested = {"gamma1"};
+  CHECK(has(error_of(rrp, d, o), "unknown parameter name 'gamma1'"));
+
+  o = {};
+  o.method = identify::Method::cpa;
+  CHECK(has(error_of(rrp, d, o), "cpa needs a single-joint sweep of every joint"));
+}
+
+TEST_CASE("plan beats random configurations on the observability index") {
+  const RobotModel m = robot("stanford_rrp.yaml");
+  identify::PlanOptions o;
+  o.count = 12;
+  o.pool = 300;
+  o.random_sets = 20;
+  const identify::PlanResult r = identify::plan_configurations(m, o);
+  CHECK(r.configurations.size() == 12);
+  CHECK(r.index > r.random_index_best);
+  CHECK(r.prediction_rms < r.random_prediction_rms);
+  for (const auto& q : r.configurations)
+    for (std::size_t j = 0; j < q.size(); ++j) {
+      CHECK(q[j] >= m.joints[j].lower);
+      CHECK(q[j] <= m.joints[j].upper);
+    }
+}

@@ -1,0 +1,170 @@
+// The firmware core's streaming labeler, run on image files by host/vision, against OpenCV on
+// real photographs (OpenCV's sample data): the same components as threshold +
+// connectedComponentsWithStats over the same foreground, the same binary centroids to 1e-3 px,
+// the same Otsu threshold; and the colour-class path and the file errors.
+#include <doctest.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "host/vision/colour_table_builder.hpp"
+#include "host/vision/image_labeling.hpp"
+
+using namespace kincal;
+
+namespace {
+
+const char* const kPhotographs[] = {"left01.jpg", "fruits.jpg",   "baboon.jpg",    "detect_blob.png",
+                                    "board.jpg",  "building.jpg", "chessboard.png"};
+
+std::string sample(const char* name) { return std::string(KINCAL_OPENCV_SAMPLES) + "/" + name; }
+
+// Compares one labeling with OpenCV's on the same foreground; returns the number of components.
+int compare_with_opencv(const cv::Mat& grey, const vision::LabelOptions& options, const std::string& what) {
+  const vision::LabelResult ours = vision::label_grey(grey, options);
+  const int t = ours.threshold;
+  cv::Mat binary, labels, stats, centroids;
+  if (options.polarity == core::Polarity::kBright) {
+    cv::threshold(grey, binary, t, 255, cv::THRESH_BINARY);  // I > t
+  } else {
+    cv::threshold(grey, binary, t - 1, 255, cv::THRESH_BINARY_INV);  // I <= t - 1, i.e. I < t
+  }
+  const int connectivity = options.connectivity == core::Connectivity::kEight ? 8 : 4;
+  const int n = cv::connectedComponentsWithStats(binary, labels, stats, centroids, connectivity, CV_32S) - 1;
+  // OpenCV's components keyed by their first pixel in raster order, as ours are.
+  std::vector<std::pair<int, int>> first_of_label(static_cast<std::size_t>(n + 1), {-1, -1});
+  std::map<std::pair<int, int>, int> first;
+  for (int y = 0; y < labels.rows; ++y)
+    for (int x = 0; x < labels.cols; ++x) {
+      const int l = labels.at<int>(y, x);
+      auto& f = first_of_label[static_cast<std::size_t>(l)];
+      if (l > 0 && f.first < 0) {
+        f = {y, x};
+        first.emplace(f, l);
+      }
+    }
+
+  CHECK_MESSAGE(ours.summary.runs_untracked == 0, what);
+  CHECK_MESSAGE(ours.blobs.size() == static_cast<std::size_t>(n), what, ": ", ours.blobs.size(), " vs ", n);
+  int mismatches = 0;
+  double worst = 0;
+  for (const core::Blob& b : ours.blobs) {
+    auto it = first.find({b.y_min_px, b.first_x_px});
+    bool same = it != first.end();
+    if (same) {
+      const int l = it->second;
+      same = first_of_label[static_cast<std::size_t>(l)] ==
+                 std::make_pair(static_cast<int>(b.y_min_px), static_cast<int>(b.first_x_px)) &&
+             stats.at<int>(l, cv::CC_STAT_AREA) == static_cast<int>(b.area_px) &&
+             stats.at<int>(l, cv::CC_STAT_LEFT) == b.x_min_px && stats.at<int>(l, cv::CC_STAT_TOP) == b.y_min_px &&
+             stats.at<int>(l, cv::CC_STAT_WIDTH) == b.x_max_px - b.x_min_px + 1 &&
+             stats.at<int>(l, cv::CC_STAT_HEIGHT) == b.y_max_px - b.y_min_px + 1;
+      const double ex = std::fabs(centroids.at<double>(l, 0) - b.binary_x_px.to_double());
+      const double ey = std::fabs(centroids.at<double>(l, 1) - b.binary_y_px.to_double());
+      worst = std::fmax(worst, std::fmax(ex, ey));
+    }
+    if (!same && ++mismatches <= 3) MESSAGE(what, ": component at (", b.first_x_px, ", ", b.y_min_px, ") differs");
+  }
+  CHECK_MESSAGE(mismatches == 0, what);
+  CHECK_MESSAGE(worst < 1e-3, what, ": worst binary centroid difference ", worst, " px");
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("labeler vs OpenCV connectedComponentsWithStats on photographs: same components and centroids") {
+  int total = 0;
+  for (const char* name : kPhotographs) {
+    const std::string path = sample(name);
+    REQUIRE_MESSAGE(std::filesystem::exists(path), path, " missing: install opencv-doc (toolchain/setup-debian.sh)");
+    const cv::Mat grey = vision::read_image(path, true);
+    for (const auto polarity : {core::Polarity::kBright, core::Polarity::kDark}) {
+      for (const auto connectivity : {core::Connectivity::kEight, core::Connectivity::kFour}) {
+        vision::LabelOptions options;
+        options.polarity = polarity;
+        options.connectivity = connectivity;
+        total += compare_with_opencv(grey, options, std::string(name));
+        options.threshold = 200;
+        total += compare_with_opencv(grey, options, std::string(name) + " t=200");
+      }
+    }
+  }
+  MESSAGE("components compared with OpenCV: ", total);
+  CHECK(total > 10000);
+}
+
+TEST_CASE("automatic threshold: Otsu as OpenCV's THRESH_OTSU computes it") {
+  for (const char* name : kPhotographs) {
+    const cv::Mat grey = vision::read_image(sample(name), true);
+    cv::Mat ignored;
+    const double theirs = cv::threshold(grey, ignored, 0, 255, cv::THRESH_BINARY | cv::THRESH_OTSU);
+    const vision::LabelResult ours = vision::label_grey(grey, vision::LabelOptions{});
+    CHECK(ours.threshold_automatic);
+    CHECK_MESSAGE(ours.threshold == theirs, name, ": ours ", int{ours.threshold}, ", OpenCV ", theirs);
+  }
+}
+
+TEST_CASE("colour classes: a table built from beacon samples finds the beacon, not the clutter") {
+  vision::ColourTableSamples samples;
+  for (int i = 0; i < 200; ++i) {
+    const double light = 0.6 + 0.4 * i / 199.0;
+    samples.positive_bgr.emplace_back(static_cast<std::uint8_t>(40 * light), static_cast<std::uint8_t>(20 * light),
+                                      static_cast<std::uint8_t>(200 * light));
+  }
+  samples.negative_bgr = {cv::Vec3b(90, 90, 90), cv::Vec3b(250, 250, 250), cv::Vec3b(30, 140, 240)};
+  for (const auto space : {core::ColourSpace::kRgb565, core::ColourSpace::kYuv422}) {
+    const core::ColourClassTable table = vision::build_colour_table(samples, space);
+    cv::Mat scene(80, 120, CV_8UC3, cv::Scalar(90, 90, 90));
+    cv::rectangle(scene, cv::Rect(5, 5, 20, 20), cv::Scalar(250, 250, 250), cv::FILLED);
+    cv::rectangle(scene, cv::Rect(10, 55, 25, 15), cv::Scalar(30, 140, 240), cv::FILLED);
+    cv::circle(scene, cv::Point(60, 40), 8, cv::Scalar(36, 18, 180), cv::FILLED);
+    vision::LabelOptions options;
+    options.colour = table;
+    const vision::LabelResult r = vision::label_colour(scene, options);
+    REQUIRE(r.blobs.size() == 1);
+    CHECK(std::fabs(r.blobs[0].x_px.to_double() - 60) < 0.5);
+    CHECK(std::fabs(r.blobs[0].y_px.to_double() - 40) < 0.05);
+    cv::Mat disc_mask;
+    cv::inRange(scene, cv::Scalar(36, 18, 180), cv::Scalar(36, 18, 180), disc_mask);
+    const int disc = cv::countNonZero(disc_mask);
+    if (space == core::ColourSpace::kRgb565) {
+      CHECK(r.blobs[0].area_px == static_cast<std::uint32_t>(disc));  // every disc pixel, nothing else
+    } else {
+      // YUYV shares chroma between pixel pairs: rim pixels paired with grey may drop out.
+      CHECK(r.blobs[0].area_px <= static_cast<std::uint32_t>(disc));
+      CHECK(r.blobs[0].area_px >= static_cast<std::uint32_t>(disc * 85 / 100));
+    }
+  }
+  CHECK_THROWS_AS(vision::build_colour_table(vision::ColourTableSamples{}, core::ColourSpace::kRgb565),
+                  std::runtime_error);
+}
+
+TEST_CASE("image files: errors name the file") {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "kincal_vision_test";
+  std::filesystem::create_directories(dir);
+  const std::string text = (dir / "text.png").string();
+  std::ofstream(text) << "not an image";
+  try {
+    (void)vision::read_image(text, true);
+    FAIL("no error for a text file");
+  } catch (const std::runtime_error& e) {
+    CHECK(std::string(e.what()).find(text) != std::string::npos);
+    CHECK(std::string(e.what()).find("not an image") != std::string::npos);
+  }
+  CHECK_THROWS_WITH_AS(vision::read_image((dir / "missing.png").string(), true), doctest::Contains("no such file"),
+                       std::runtime_error);
+  CHECK_THROWS_AS(vision::read_image(dir.string(), true), std::runtime_error);  // a directory
+  cv::Mat wide(2, 5000, CV_8UC1, cv::Scalar(0));
+  CHECK_THROWS_WITH_AS(vision::label_grey(wide, vision::LabelOptions{}), doctest::Contains("4096"), std::runtime_error);
+  std::filesystem::remove_all(dir);
+}

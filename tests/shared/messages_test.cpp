@@ -1,0 +1,238 @@
+// The ISO-TP payloads of the protocol: measurement reports at their largest and smallest,
+// parameter blocks and their messages, and every rejection the decoders promise.
+#include <doctest.h>
+
+#include <array>
+#include <cstdint>
+#include <limits>
+
+#include "shared/crc32.hpp"
+#include "shared/measurement_report.hpp"
+#include "shared/parameters.hpp"
+
+using namespace kincal::shared;
+
+namespace {
+
+MeasurementReport full_report() {
+  MeasurementReport r;
+  r.sequence = 0xA5;
+  r.timestamp_us = 0xDEADBEEFu;
+  r.sections = section::kAll;
+  r.status = MeasureStatus::kNoTarget;
+  r.range_raw = {0, 1, 0x8000, kNoEcho};
+  r.plane_normal_x_raw = -32768;
+  r.plane_normal_y_raw = 32767;
+  r.plane_distance_raw = 0xFFFF;
+  r.fiducial_count = kMaxFiducials;
+  for (std::size_t i = 0; i < kMaxFiducials; ++i)
+    r.fiducials[i] = {static_cast<std::uint8_t>(15 - i), static_cast<std::uint16_t>(i * 8191u),
+                      static_cast<std::uint16_t>(65535u - i)};
+  r.translation_raw = {-524288, 524287, 1};
+  r.rotation_raw = {-131072, 131071, -1};
+  r.blob_count = kMaxBlobs;
+  for (std::size_t i = 0; i < kMaxBlobs; ++i)
+    r.blobs[i] = {static_cast<std::uint16_t>(i * 1000u), static_cast<std::uint16_t>(65535u - i * 3u),
+                  static_cast<std::uint16_t>(i * 97u), static_cast<std::uint8_t>(i & 0xF),
+                  static_cast<std::uint8_t>(255 - i)};
+  r.point_raw = {524287, -524288, 0};
+  return r;
+}
+
+void check_equal(const MeasurementReport& a, const MeasurementReport& b) {
+  CHECK(a.sequence == b.sequence);
+  CHECK(a.timestamp_us == b.timestamp_us);
+  CHECK(a.sections == b.sections);
+  CHECK(a.status == b.status);
+  CHECK(a.range_raw == b.range_raw);
+  CHECK(a.plane_normal_x_raw == b.plane_normal_x_raw);
+  CHECK(a.plane_normal_y_raw == b.plane_normal_y_raw);
+  CHECK(a.plane_distance_raw == b.plane_distance_raw);
+  REQUIRE(a.fiducial_count == b.fiducial_count);
+  for (std::size_t i = 0; i < a.fiducial_count; ++i) {
+    CHECK(a.fiducials[i].id == b.fiducials[i].id);
+    CHECK(a.fiducials[i].x_q6 == b.fiducials[i].x_q6);
+    CHECK(a.fiducials[i].y_q6 == b.fiducials[i].y_q6);
+  }
+  CHECK(a.translation_raw == b.translation_raw);
+  CHECK(a.rotation_raw == b.rotation_raw);
+  REQUIRE(a.blob_count == b.blob_count);
+  for (std::size_t i = 0; i < a.blob_count; ++i) {
+    CHECK(a.blobs[i].x_q6 == b.blobs[i].x_q6);
+    CHECK(a.blobs[i].y_q6 == b.blobs[i].y_q6);
+    CHECK(a.blobs[i].area_px == b.blobs[i].area_px);
+    CHECK(a.blobs[i].colour_class == b.blobs[i].colour_class);
+    CHECK(a.blobs[i].peak_dn == b.blobs[i].peak_dn);
+  }
+  CHECK(a.point_raw == b.point_raw);
+}
+
+}  // namespace
+
+TEST_CASE("measurement report: largest report is kMaxReportBytes and round-trips") {
+  const MeasurementReport r = full_report();
+  std::array<std::uint8_t, kMaxReportBytes> buf{};
+  REQUIRE(encode(r, buf) == kMaxReportBytes);
+  CHECK(buf[0] == 0x81);
+  CHECK(buf[1] == 0xA5);
+  MeasurementReport back;
+  REQUIRE(decode(buf, back) == DecodeStatus::kOk);
+  check_equal(r, back);
+  // One byte short: the encoder refuses rather than truncating.
+  CHECK(encode(r, std::span<std::uint8_t>(buf).first(kMaxReportBytes - 1)) == 0);
+}
+
+TEST_CASE("measurement report: header-only and ranges-only sizes, golden header") {
+  MeasurementReport r;
+  r.sequence = 1;
+  r.timestamp_us = 0x01020304;
+  r.sections = section::kRanges;
+  r.range_raw = {0x1111, 0x2222, 0x3333, 0x4444};
+  // 58 header bits + 64 range bits = 122 bits -> 16 bytes.
+  CHECK(report_size(r) == 16);
+  std::array<std::uint8_t, 16> buf{};
+  REQUIRE(encode(r, buf) == 16);
+  CHECK(buf[0] == 0x81);
+  CHECK(buf[1] == 0x01);
+  CHECK(buf[2] == 0x04);  // timestamp, little-endian
+  CHECK(buf[5] == 0x01);
+  CHECK(buf[6] == 0x01);  // sections (6 bits) then status 0
+  MeasurementReport back;
+  REQUIRE(decode(buf, back) == DecodeStatus::kOk);
+  CHECK(back.range_raw == r.range_raw);
+  r.sections = 0;
+  CHECK(report_size(r) == 8);
+}
+
+TEST_CASE("measurement report: rejections") {
+  const MeasurementReport r = full_report();
+  std::array<std::uint8_t, kMaxReportBytes + 1> buf{};
+  const std::size_t n = encode(r, buf);
+  REQUIRE(n == kMaxReportBytes);
+  MeasurementReport back;
+  CHECK(decode(std::span<const std::uint8_t>(buf).first(n - 1), back) == DecodeStatus::kWrongLength);
+  CHECK(decode(std::span<const std::uint8_t>(buf).first(n + 1), back) == DecodeStatus::kWrongLength);
+  CHECK(decode(std::span<const std::uint8_t>(buf).first(3), back) == DecodeStatus::kWrongLength);
+  CHECK(decode(std::span<const std::uint8_t>(), back) == DecodeStatus::kWrongId);
+  auto bad = buf;
+  bad[0] = 0x82;
+  CHECK(decode(std::span<const std::uint8_t>(bad).first(n), back) == DecodeStatus::kWrongId);
+  // Status 15 is out of range (bits 54..57 of the header).
+  bad = buf;
+  bad[6] = static_cast<std::uint8_t>(bad[6] | 0xC0);
+  bad[7] = static_cast<std::uint8_t>(bad[7] | 0x03);
+  CHECK(decode(std::span<const std::uint8_t>(bad).first(n), back) == DecodeStatus::kBadValue);
+  // A fiducial count of 9..15.
+  MeasurementReport f;
+  f.sections = section::kFiducials;
+  f.fiducial_count = 1;
+  std::array<std::uint8_t, 32> small{};
+  const std::size_t m = encode(f, small);
+  REQUIRE(m == 13);                                                     // 58 + 4 + 36 = 98 bits
+  small[7] = static_cast<std::uint8_t>((small[7] & 0x03) | (9u << 2));  // count field at bits 58..61
+  CHECK(decode(std::span<const std::uint8_t>(small).first(m), back) == DecodeStatus::kBadValue);
+  // Non-zero padding bits in the last byte.
+  small = {};
+  REQUIRE(encode(f, small) == m);
+  small[m - 1] = static_cast<std::uint8_t>(small[m - 1] | 0x80);
+  CHECK(decode(std::span<const std::uint8_t>(small).first(m), back) == DecodeStatus::kBadValue);
+}
+
+TEST_CASE("parameter blocks round-trip and reject bad values") {
+  CorrectionParameters c;
+  c.joint_count = 6;
+  for (std::size_t j = 0; j < kJoints; ++j) {
+    c.joints[j].nominal = {0.1f * static_cast<float>(j), 1.5707964f, 0.2f, 0.0f, 0.0f};
+    c.joints[j].error = {1e-4f, -2e-4f, 3e-5f, 1e-3f * static_cast<float>(j), 0.0f};
+  }
+  c.tool_offset = {0.0f, 0.0f, 0.1f, 0.0f, 0.0f, 3.1415927f};
+  std::array<std::uint8_t, kCorrectionBytes> image{};
+  REQUIRE(encode_block(c, image) == kCorrectionBytes);
+  CorrectionParameters back;
+  REQUIRE(decode_block(image, back) == DecodeStatus::kOk);
+  CHECK(back.joint_count == 6);
+  CHECK(back.joints[5].error.theta_rad == c.joints[5].error.theta_rad);
+  CHECK(back.tool_offset[5] == c.tool_offset[5]);
+  // NaN in a float, a joint count of 7, a short image.
+  auto bad = image;
+  bad[5] = 0xFF;
+  bad[6] = 0xFF;
+  bad[7] = 0xFF;
+  bad[8] = 0xFF;
+  CHECK(decode_block(bad, back) == DecodeStatus::kBadValue);
+  bad = image;
+  bad[0] = 7;
+  CHECK(decode_block(bad, back) == DecodeStatus::kBadValue);
+  CHECK(decode_block(std::span<const std::uint8_t>(image).first(10), back) == DecodeStatus::kWrongLength);
+
+  CameraIntrinsics k{800.0f, 801.0f, 319.5f, 239.5f, -0.1f, 0.01f, 0.0f, 0.0f, 0.0f, 640, 480};
+  std::array<std::uint8_t, kIntrinsicsBytes> ki{};
+  REQUIRE(encode_block(k, ki) == kIntrinsicsBytes);
+  CameraIntrinsics kb;
+  REQUIRE(decode_block(ki, kb) == DecodeStatus::kOk);
+  CHECK(kb.cx_px == 319.5f);
+  CHECK(kb.height_px == 480);
+
+  PlatformGeometry g;
+  g.fiducial_count = 4;
+  g.rangers[2].direction = {0.0f, 0.0f, 1.0f};
+  std::array<std::uint8_t, kGeometryBytes> gi{};
+  REQUIRE(encode_block(g, gi) == kGeometryBytes);
+  PlatformGeometry gb;
+  REQUIRE(decode_block(gi, gb) == DecodeStatus::kOk);
+  CHECK(gb.fiducial_count == 4);
+  CHECK(gb.rangers[2].direction[2] == 1.0f);
+
+  ColourLut lut;
+  lut.packed[0x123 / 2] = 0x70;  // cell 0x123 (odd): class 7
+  CHECK(lut.colour_class(1, 2, 3) == 7);
+  CHECK(lut.colour_class(1, 2, 2) == 0);
+}
+
+TEST_CASE("parameter messages: framing, CRC, version, block") {
+  CameraIntrinsics k{800.0f, 800.0f, 320.0f, 240.0f, 0, 0, 0, 0, 0, 640, 480};
+  std::array<std::uint8_t, kIntrinsicsBytes> image{};
+  REQUIRE(encode_block(k, image) == kIntrinsicsBytes);
+  std::array<std::uint8_t, kMaxParameterMessageBytes> msg{};
+  const std::size_t n = encode_parameter_message(MessageType::kParameterWrite, ParameterBlock::kIntrinsics, image, msg);
+  REQUIRE(n == kParameterHeaderBytes + kIntrinsicsBytes);
+  CHECK(msg[0] == 0x01);
+  CHECK(msg[1] == 1);
+  CHECK(msg[2] == 1);  // version 1, little-endian
+  CHECK(msg[4] == kIntrinsicsBytes);
+  const std::uint32_t crc = crc32(image);
+  CHECK(msg[6] == static_cast<std::uint8_t>(crc));
+  CHECK(msg[9] == static_cast<std::uint8_t>(crc >> 24));
+
+  ParameterHeader h;
+  std::span<const std::uint8_t> payload;
+  const auto message = std::span<const std::uint8_t>(msg).first(n);
+  REQUIRE(decode_parameter_message(message, h, payload) == DecodeStatus::kOk);
+  CHECK(payload.size() == kIntrinsicsBytes);
+  CHECK(check_parameter_payload(h, payload) == AckStatus::kOk);
+  CHECK(decode_parameter_message(message.first(n - 1), h, payload) == DecodeStatus::kWrongLength);
+
+  auto bad = msg;
+  bad[kParameterHeaderBytes + 3] ^= 0x01;  // payload bit flip
+  REQUIRE(decode_parameter_message(std::span<const std::uint8_t>(bad).first(n), h, payload) == DecodeStatus::kOk);
+  CHECK(check_parameter_payload(h, payload) == AckStatus::kCrcMismatch);
+  bad = msg;
+  bad[2] = 2;
+  REQUIRE(decode_parameter_message(std::span<const std::uint8_t>(bad).first(n), h, payload) == DecodeStatus::kOk);
+  CHECK(check_parameter_payload(h, payload) == AckStatus::kBadVersion);
+  bad = msg;
+  bad[1] = 9;
+  REQUIRE(decode_parameter_message(std::span<const std::uint8_t>(bad).first(n), h, payload) == DecodeStatus::kOk);
+  CHECK(check_parameter_payload(h, payload) == AckStatus::kUnknownBlock);
+  bad = msg;
+  bad[1] = 2;  // colour LUT: 2048 bytes expected
+  REQUIRE(decode_parameter_message(std::span<const std::uint8_t>(bad).first(n), h, payload) == DecodeStatus::kOk);
+  CHECK(check_parameter_payload(h, payload) == AckStatus::kBadLength);
+
+  std::array<std::uint8_t, 2> read{};
+  REQUIRE(encode_parameter_read(ParameterBlock::kColourLut, read) == 2);
+  std::uint8_t block = 0;
+  REQUIRE(decode_parameter_read(read, block) == DecodeStatus::kOk);
+  CHECK(block == 2);
+  CHECK(decode_parameter_read(std::span<const std::uint8_t>(read).first(1), block) == DecodeStatus::kWrongLength);
+}

@@ -1,0 +1,111 @@
+#!/bin/busybox sh
+# /init of the test VM (tests/vm/vm_test.sh): loads the CAN modules, makes vcan0, and runs the
+# native firmware, our host client and can-utils against each other. Prints one
+# "VMTEST ok|FAIL <name>" line per check, then "VMTEST DONE", then powers off.
+/bin/busybox --install -s /bin
+export PATH=/bin:/usr/bin
+mount -t proc proc /proc
+mount -t sysfs sys /sys
+mount -t devtmpfs dev /dev
+mount -t tmpfs tmp /tmp
+export ASAN_OPTIONS=detect_leaks=0  # leaks are checked by the native test run; LSan needs ptrace here
+ok() { echo "VMTEST ok $1"; }
+bad() { echo "VMTEST FAIL $1"; }
+show() { echo "---- $1"; cat "$1"; echo "----"; }
+
+for m in can can-raw can-isotp can-dev vcan; do insmod /modules/$m.ko || bad "insmod_$m"; done
+ip link add dev vcan0 type vcan && ip link set vcan0 mtu 72 && ip link set up vcan0 && ok vcan0_up || bad vcan0_up
+
+platform() {  # starts the native firmware; $@ = extra options
+  kincal_platform --can vcan0 --storage /tmp/store "$@" 2>/tmp/platform.err &
+  PLATFORM=$!
+  sleep 0.5
+}
+stop_platform() {
+  kill "$PLATFORM"
+  wait "$PLATFORM" && grep -q "stopped" /tmp/platform.err && ok "$1" || { show /tmp/platform.err; bad "$1"; }
+}
+# expect_frame NAME CANDUMP_FILTER PATTERN COMMAND...: runs COMMAND and checks that candump sees
+# a frame matching PATTERN (candump -L format) within 3 s.
+expect_frame() {
+  name=$1 filter=$2 pattern=$3
+  shift 3
+  candump -L -n 1 -T 3000 "vcan0,$filter" >/tmp/expect.txt &
+  C=$!
+  sleep 0.3
+  "$@"
+  wait $C
+  grep -q "$pattern" /tmp/expect.txt && ok "$name" || { show /tmp/expect.txt; bad "$name"; }
+}
+
+# 1. Our platform and our client through the whole scenario, classic CAN then CAN FD; candump logs.
+candump -L vcan0 >/tmp/session.log &
+CANDUMP=$!
+platform
+kincal exercise --can vcan0 --measurements 10 --corrections 200 >/tmp/ex1.txt 2>&1 && ok scenario_classic ||
+  { show /tmp/ex1.txt; bad scenario_classic; }
+stop_platform platform_stops_cleanly
+platform --fd
+kincal exercise --can vcan0 --fd --measurements 10 --corrections 200 >/tmp/ex2.txt 2>&1 && ok scenario_fd ||
+  { show /tmp/ex2.txt; bad scenario_fd; }
+# The parameters uploaded in round 1 were loaded from storage by the restarted platform:
+# only the colour LUT and geometry flags (0x6) remain in its first heartbeat.
+grep -q "heartbeat state=idle protocol 1.0 error_flags=0x6" /tmp/ex2.txt && ok parameters_survive_restart ||
+  bad parameters_survive_restart
+stop_platform platform_stops_cleanly_fd
+kill $CANDUMP
+sleep 0.2
+head -3 /tmp/ex1.txt
+grep "median round trip" /tmp/ex1.txt /tmp/ex2.txt
+
+# 2. candump's log decodes with our reader and monitor, completely.
+kincal monitor --replay /tmp/session.log >/tmp/monitor.txt 2>&1 && tail -1 /tmp/monitor.txt | grep -q " 0 malformed" &&
+  [ "$(wc -l </tmp/session.log)" -gt 800 ] && ok candump_log_decodes || { tail -5 /tmp/monitor.txt; bad candump_log_decodes; }
+grep -q "MeasurementReport seq=" /tmp/monitor.txt && grep -q "ParameterWrite block=4" /tmp/monitor.txt &&
+  grep -q "CorrectedFd" /tmp/monitor.txt && ok monitor_decodes_messages || bad monitor_decodes_messages
+echo "candump log: $(wc -l </tmp/session.log) frames; $(tail -1 /tmp/monitor.txt)"
+
+# 3. can-utils as independent ISO-TP peers of the firmware's ISO-TP (padding 0xCC).
+platform
+expect_frame isotpsend_to_platform 130:7FF "130#01" sh -c "isotpsend -s 150 -d 158 -p CC vcan0 </vm/intrinsics_write.hex"
+timeout 5 isotprecv -s 150 -d 158 -p CC vcan0 >/tmp/recv.txt &
+R=$!
+sleep 0.3
+echo "02 01" | isotpsend -s 150 -d 158 -p CC vcan0
+wait $R
+grep -q "^82 01 01 00 28 00" /tmp/recv.txt && ok platform_to_isotprecv || { show /tmp/recv.txt; bad platform_to_isotprecv; }
+cmp -s /tmp/recv.txt /vm/intrinsics_data.txt && ok isotprecv_bytes_exact || { show /tmp/recv.txt; bad isotprecv_bytes_exact; }
+
+# 4. Injected frames get defined responses (ErrorReport 0x140, reason in the first byte).
+expect_frame wrong_length 140:7FF "140#02" cansend vcan0 100#0100
+expect_frame unknown_id 140:7FF "140#01" cansend vcan0 17E#00
+expect_frame reserved_bits 140:7FF "140#04" cansend vcan0 100#80
+expect_frame isotp_out_of_sequence 140:7FF "140#09" sh -c "cansend vcan0 150#1020010203040506; cansend vcan0 150#2301020304050607"
+expect_frame unknown_message 140:7FF "140#0C" cansend vcan0 150#017E
+expect_frame joint_not_in_mode 140:7FF "140#06" cansend vcan0 110#0000000000000000
+candump -L -T 1000 vcan0,140:7FF >/tmp/other.txt &
+C=$!
+sleep 0.3
+cansend vcan0 7FF#00  # another node's traffic: no response at all
+cansend vcan0 050#0102
+wait $C
+grep -q "140#" /tmp/other.txt && bad foreign_ids_ignored || ok foreign_ids_ignored
+
+# 5. A flood of 20,000 malformed frames: reports stay rate-limited, the platform keeps working.
+candump -L vcan0,140:7FF >/tmp/flood.txt &
+C=$!
+start=$(date +%s)
+cangen vcan0 -I 110 -L 3 -g 0 -i -n 20000
+end=$(date +%s)
+sleep 0.5
+kill $C
+reports=$(grep -c "140#" /tmp/flood.txt)
+echo "flood: 20000 frames in $((end - start + 1)) s or less, $reports error reports"
+[ "$reports" -ge 1 ] && [ "$reports" -le $(((end - start + 2) * 100 + 5)) ] && ok flood_reports_rate_limited ||
+  bad flood_reports_rate_limited
+kincal exercise --can vcan0 --measurements 2 --corrections 20 >/tmp/ex3.txt 2>&1 && ok platform_alive_after_flood ||
+  { show /tmp/ex3.txt; bad platform_alive_after_flood; }
+stop_platform platform_stops_cleanly_after_flood
+
+echo "VMTEST DONE"
+poweroff -f

@@ -1,0 +1,72 @@
+#!/bin/bash
+# The real-kernel SocketCAN test: boots Debian's linux-image-amd64 under qemu-system-x86_64 with
+# software emulation (TCG) and a small initramfs (busybox-static, can-utils and their shared
+# libraries, the CAN modules, our binaries and tests/vm/init.sh as /init), then reads the
+# VMTEST lines init.sh prints on the serial console.
+#   vm_test.sh PLATFORM_BINARY KINCAL_BINARY WORK_DIR
+# Exit 0 when every check passed; otherwise 1 and the console log. Bounded by KINCAL_VM_TIMEOUT
+# (seconds, default 100).
+set -euo pipefail
+platform=$1 kincal=$2 work=$3
+here=$(cd "$(dirname "$0")" && pwd)
+die() { echo "vm_test: $*" >&2; exit 1; }
+
+kernel=$(ls -1 /boot/vmlinuz-*-amd64 2>/dev/null | sort -V | tail -1 || true)
+[ -n "$kernel" ] || die "no /boot/vmlinuz-*-amd64: install linux-image-amd64 (toolchain/setup-debian.sh)"
+version=${kernel#/boot/vmlinuz-}
+modules=/lib/modules/$version/kernel
+[ -d "$modules" ] || die "no $modules for kernel $version"
+for tool in qemu-system-x86_64 cpio busybox candump cansend cangen isotpsend isotprecv; do
+  command -v "$tool" >/dev/null || die "$tool not found (toolchain/setup-debian.sh installs it)"
+done
+busybox_bin=$(command -v busybox)
+if ldd "$busybox_bin" >/dev/null 2>&1; then die "$busybox_bin is not static: install busybox-static"; fi
+
+root=$work/root
+rm -rf "$work"
+mkdir -p "$root"/{bin,usr/bin,modules,proc,sys,dev,tmp,vm}
+cp "$busybox_bin" "$root/bin/busybox"
+# Binaries (without debug info: the sanitized kincal carries ~200 MB of it) and every shared
+# library they load, at the same paths.
+copy_with_libs() {
+  cp "$1" "$root/usr/bin/"
+  strip --strip-debug "$root/usr/bin/$(basename "$1")"
+  ldd "$1" | grep -o '/[^ ]*' | while read -r lib; do
+    mkdir -p "$root$(dirname "$lib")"
+    cp -L "$lib" "$root$lib"
+  done
+}
+for tool in candump cansend cangen isotpsend isotprecv; do copy_with_libs "$(command -v $tool)"; done
+copy_with_libs "$platform"
+copy_with_libs "$kincal"
+cp "$modules/net/can/can.ko" "$modules/net/can/can-raw.ko" "$modules/net/can/can-isotp.ko" \
+   "$modules/drivers/net/can/dev/can-dev.ko" "$modules/drivers/net/can/vcan.ko" "$root/modules/"
+cp "$here/init.sh" "$root/init"
+chmod +x "$root/init"
+
+# A ParameterWrite of camera intrinsics for isotpsend, and the ParameterData isotprecv must print.
+python3 - "$root/vm" <<'PY'
+import struct, sys, zlib
+payload = struct.pack("<9f2H", 810.5, 811.25, 319.5, 239.5, -0.12, 0.03, 1e-4, -2e-4, 0.0, 640, 480)
+header = lambda t: struct.pack("<BBHHI", t, 1, 1, len(payload), zlib.crc32(payload))
+hexline = lambda b: " ".join("%02X" % x for x in b)
+open(sys.argv[1] + "/intrinsics_write.hex", "w").write(hexline(header(0x01) + payload) + "\n")
+open(sys.argv[1] + "/intrinsics_data.txt", "w").write(hexline(header(0x82) + payload) + " \n")
+PY
+
+(cd "$root" && find . | cpio -o -H newc --quiet | gzip -1) >"$work/initramfs.gz"
+log=$work/console.log
+set +e
+timeout --kill-after=5 "${KINCAL_VM_TIMEOUT:-100}" qemu-system-x86_64 -accel tcg -m 2048 -smp 1 -nographic \
+  -no-reboot -kernel "$kernel" -initrd "$work/initramfs.gz" \
+  -append "console=ttyS0 quiet loglevel=3 panic=-1 rdinit=/init" >"$log" 2>&1
+qemu_status=$?
+set -e
+tr -d '\r' <"$log" >"$log.txt"
+grep -E "^(VMTEST|flood:|candump log:|scenario:|/tmp/ex)" "$log.txt" || true
+if [ $qemu_status -ne 0 ] || ! grep -q "^VMTEST DONE" "$log.txt" || grep -q "^VMTEST FAIL" "$log.txt"; then
+  echo "vm_test: FAILED (qemu exit $qemu_status); console log $log.txt:"
+  cat "$log.txt"
+  exit 1
+fi
+echo "vm_test: $(grep -c '^VMTEST ok' "$log.txt") checks passed"
