@@ -563,11 +563,18 @@ bool BlobLabeler::refine(const PendingRefinement& p, Blob& blob) noexcept {
     syy >>= shift;
     if (s0 <= 0) return false;
     const std::int64_t mx = ratio_q16(sx, s0), my = ratio_q16(sy, s0);  // weighted mean, from the centre
+    // Weights below the background can nearly cancel s0: a mean outside the window, or second
+    // moments beyond its extent, mean this window gives no centroid (and would overflow below).
+    const std::int64_t extent_q16 = std::int64_t{size} << 16;
+    if (mx > extent_q16 || mx < -extent_q16 || my > extent_q16 || my < -extent_q16) return false;
+    const std::int64_t mxx = ratio_q16(sxx, s0), myy = ratio_q16(syy, s0);
+    if (mxx > size * extent_q16 || mxx < -size * extent_q16 || myy > size * extent_q16 || myy < -size * extent_q16)
+      return false;
     const std::int64_t cx = std::int64_t{p.centre_x} << 16, cy = std::int64_t{p.centre_y} << 16;
     // Weighted variance about the weighted mean, averaged over both axes: for a Gaussian spot of
     // variance s^2 under a Gaussian window of variance w^2 it is s^2 w^2 / (s^2 + w^2).
-    const std::int64_t vx = ratio_q16(sxx, s0) - fixed_detail::round_shift_right(mx * mx, 16);
-    const std::int64_t vy = ratio_q16(syy, s0) - fixed_detail::round_shift_right(my * my, 16);
+    const std::int64_t vx = mxx - fixed_detail::round_shift_right(mx * mx, 16);
+    const std::int64_t vy = myy - fixed_detail::round_shift_right(my * my, 16);
     const std::int64_t vp = (vx + vy) / 2;
     std::int64_t spot = s2_max;
     if (vp > 0 && s2 - vp > s2 / 8) spot = fixed_detail::round_div(vp * s2, s2 - vp);
