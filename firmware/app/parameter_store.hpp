@@ -112,7 +112,7 @@ class ParameterStore {
     return best;
   }
 
-  // Saves a new copy; on success `sequence` is its sequence number.
+  // Saves a fresh copy; on success `sequence` is its sequence number.
   StoreStatus save(shared::ParameterBlock block, std::uint16_t version, std::span<const std::uint8_t> payload,
                    std::uint32_t& sequence) {
     if (payload.size() + slot_format::kHeaderBytes > Storage::kSlotBytes) return StoreStatus::kTooLarge;

@@ -187,8 +187,8 @@ void solve_step(const Twist<float>& e, int n, const CorrectionOptions& options, 
   ws.target = nominal_joint_target;
   for (int step = 0; step <= model.options.refinement_steps; ++step) {
     if (step > 0) {
-      // Chord refinement: the pose error at the new target, the same factored Jacobian.
-      // sin and cos of the new target: from the old ones and the (small) step where it allows.
+      // Chord refinement: the pose error at the next target, the same factored Jacobian.
+      // sin and cos of the next target: from the old ones and the (small) step where it allows.
       bool small = true;
       for (int i = 0; i < n; ++i) small = small && std::fabs(ws.step(i)) <= kSmallAngleMaxRad;
       if (small) {

@@ -17,14 +17,14 @@
 //
 // Memory: the two buffers are the owner's (IsoTpBuffers<kRx, kTx>, sizes fixed at compile time);
 // the endpoint itself is ~100 bytes. No heap. A received message stays in message() until the
-// next on_frame() call that starts a new reception.
+// next on_frame() call that starts another reception.
 // Cost: on_frame/next_frame copy at most one frame's payload (<= 64 bytes); everything else O(1).
 // Thread/ISR safety: not reentrant; one owner (e.g. the main loop) calls every member. Feed it
 // from an ISR-filled queue, not from the ISR itself.
 // Failure modes (IsoTpEvent, each also counted in stats()): malformed PCI or length (frame
 // dropped), wrong sequence number (reception aborted), message longer than the receive buffer
 // (FC OVERFLOW sent, reception aborted), N_Cr/N_Bs timeout, peer's FC OVERFLOW, more FC WAITs
-// than max_wait_frames (transmission aborted). A new SF or FF during a reception restarts it, as
+// than max_wait_frames (transmission aborted). A fresh SF or FF during a reception restarts it, as
 // the standard says. No input makes it read or write outside its buffers.
 #pragma once
 

@@ -170,7 +170,7 @@ void Bxcan::on_sce_interrupt() {
   // Acknowledge first, then read: a state change after the read raises the interrupt again.
   reg(kMsr) = kMsrErri;
   const bool bus_off = (reg(kEsr) & kEsrBoff) != 0;
-  // A new bus-off always passes through error passive first (recovery resets TEC to 0), and
+  // A fresh bus-off always passes through error passive first (recovery resets TEC to 0), and
   // that entry interrupts with BOFF clear, so a transition seen here is one bus-off event.
   if (bus_off && !in_bus_off_)
     bus_off_events_.store(bus_off_events_.load(std::memory_order_relaxed) + 1u, std::memory_order_relaxed);

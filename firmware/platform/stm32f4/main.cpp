@@ -13,7 +13,7 @@
 // The check for pending work and the WFI happen with interrupts masked, so a frame arriving
 // between them still wakes the core (WFI wakes on a pending interrupt even when masked).
 //
-// Memory: the application object (about 10 KiB) is built by placement new into static storage in
+// Memory: the application object (about 10 KiB) is built by placement-construction into static storage in
 // CCM RAM, beside the stack: no heap, and no static constructor (stm32f407vg.ld forbids them).
 // The ports are in firmware_main's frame, which never returns. Failure modes: a CAN controller
 // that does not start leaves the platform mute (nothing can report it); rangers that do not start
