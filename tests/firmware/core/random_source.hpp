@@ -7,21 +7,17 @@
 #include <cmath>
 #include <cstdint>
 
+#include "tests/firmware/core/splitmix64.hpp"
+
 namespace kincal::test {
 
 class RandomSource {
  public:
-  explicit RandomSource(std::uint64_t seed) : state_(seed) {}
+  explicit RandomSource(std::uint64_t seed) : bits_(seed) {}
 
-  std::uint64_t next() {
-    state_ += 0x9E3779B97F4A7C15u;
-    std::uint64_t z = state_;
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9u;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBu;
-    return z ^ (z >> 31);
-  }
+  std::uint64_t next() { return bits_.next(); }
   // Uniform in [0, 1) with 53 random bits.
-  double unit() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
+  double unit() { return bits_.unit(); }
   double uniform(double lo, double hi) { return lo + (hi - lo) * unit(); }
   double sign() { return (next() & 1u) != 0 ? 1.0 : -1.0; }
   int index(int count) { return static_cast<int>(next() % static_cast<std::uint64_t>(count)); }
@@ -45,7 +41,7 @@ class RandomSource {
   }
 
  private:
-  std::uint64_t state_;
+  Splitmix64 bits_;
 };
 
 }  // namespace kincal::test
