@@ -9,7 +9,7 @@ packages="
   gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib libnewlib-arm-none-eabi qemu-system-arm
   libopencv-dev nlohmann-json3-dev opencv-doc clang libclang-rt-14-dev
   python3-canmatrix can-utils busybox-static cpio qemu-system-x86 linux-image-amd64
-  openocd
+  openocd chromium
   libceres-dev libyaml-cpp-dev
 "
 

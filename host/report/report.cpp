@@ -1,0 +1,429 @@
+#include "host/report/report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <fstream>
+#include <numbers>
+
+#include <Eigen/Geometry>
+
+#include "host/report/svg_plot.hpp"
+
+namespace kincal::report {
+
+namespace {
+
+constexpr const char* kBefore = "#d95f02";
+constexpr const char* kAfter = "#1b9e77";
+constexpr const char* kPalette[] = {"#d95f02", "#7570b3", "#1b9e77", "#e7298a", "#66a61e", "#e6ab02"};
+constexpr double kMm = 1e3;
+constexpr double kUm = 1e6;
+constexpr double kDeg = 180.0 / std::numbers::pi;
+
+constexpr const char* kStyle = R"(
+body{font-family:"DejaVu Sans",Helvetica,Arial,sans-serif;margin:24px auto;max-width:1200px;color:#222;
+background:#fff;line-height:1.4}
+h1{margin-bottom:0}h2{border-bottom:2px solid #1b9e77;padding-bottom:4px;margin-top:40px}
+.date{color:#666;margin-top:4px}
+table{border-collapse:collapse;margin:8px 0 16px}
+th,td{border:1px solid #ccc;padding:3px 8px;font-size:13px}
+th{background:#f0f4f3;text-align:left}td.n{text-align:right;font-variant-numeric:tabular-nums;white-space:nowrap}
+tr.group th{background:#e0ebe8}td.off{color:#c00;font-weight:bold}td.fixed{color:#888;font-style:italic}
+.plots{display:flex;flex-wrap:wrap;gap:8px}
+svg.plot{background:#fff;border:1px solid #ddd}
+svg.plot .frame{fill:none;stroke:#444}svg.plot .grid{stroke:#e4e4e4}
+svg.plot text{font-size:10px;fill:#333}svg.plot .title{font-size:12px;font-weight:bold}
+svg.plot .label{font-size:11px}svg.plot .legend{font-size:10px}svg.plot .note{font-size:10px;fill:#555}
+nav li{margin:2px 0}
+)";
+
+std::string format(const char* pattern, ...) __attribute__((format(printf, 1, 2)));
+std::string format(const char* pattern, ...) {
+  char text[128];
+  va_list args;
+  va_start(args, pattern);
+  std::vsnprintf(text, sizeof text, pattern, args);
+  va_end(args);
+  return text;
+}
+
+// A parameter's value, and a change/sigma/error of it, as the reader expects them.
+std::string value_text(Quantity q, double v) {
+  return q == Quantity::length_m ? format("%.3f mm", v * kMm) : format("%.4f&deg;", v * kDeg);
+}
+std::string delta_text(Quantity q, double v) {
+  return q == Quantity::length_m ? format("%.4f mm", v * kMm) : format("%.4f mrad", v * kMm);
+}
+
+std::string cell(const std::string& html, const char* cls = "n") {
+  return std::string("<td class=\"") + cls + "\">" + html + "</td>";
+}
+
+std::string heading(const std::string& text) { return "<th>" + escape_html(text) + "</th>"; }
+
+class RunContext {
+ public:
+  RunContext(const Run& run, std::size_t index) : run_(run), index_(index) {}
+  [[noreturn]] void fail(const std::string& what) const {
+    throw ReportError("run " + std::to_string(index_ + 1) + " '" + run_.title + "': " + what);
+  }
+  std::string id(const std::string& part) const { return "run" + std::to_string(index_ + 1) + "-" + part; }
+  const Run& run() const { return run_; }
+
+ private:
+  const Run& run_;
+  std::size_t index_;
+};
+
+void validate(const RunContext& c) {
+  const Run& run = c.run();
+  if (run.measurements < 0) c.fail("the measurement count is negative");
+  for (const ParameterRow& p : run.parameters)
+    if (p.stddev && !(*p.stddev >= 0.0)) c.fail("parameter " + p.name + ": its sigma is negative or not a number");
+  for (const Accuracy& a : run.accuracy)
+    if (a.count < 0) c.fail("accuracy '" + a.label + "': the pose count is negative");
+  for (std::size_t i = 0; i < run.validation.size(); ++i)
+    if (run.validation[i].q.size() != run.joints.size())
+      c.fail("validation pose " + std::to_string(i + 1) + ": " + std::to_string(run.validation[i].q.size()) +
+             " joint readings, the run names " + std::to_string(run.joints.size()) + " joints");
+  for (std::size_t i = 0; i < run.sweeps.size(); ++i) {
+    const SweepPlot& s = run.sweeps[i];
+    const std::string where = "sweep " + std::to_string(i + 1) + ": ";
+    if (s.joint < 0 || s.joint >= static_cast<int>(run.joints.size()))
+      c.fail(where + "joint index " + std::to_string(s.joint) + ", the run names " + std::to_string(run.joints.size()) +
+             " joints");
+    if (s.points_m.size() < 3) c.fail(where + "fewer than 3 points");
+    if (!(s.axis_direction.norm() > 0.0) || !s.axis_direction.allFinite() || !s.axis_point_m.allFinite())
+      c.fail(where + "the axis is not a finite line with a direction");
+  }
+  for (const Comparison& t : run.comparisons)
+    for (const ComparisonRow& row : t.rows)
+      if (row.values.size() != t.columns.size())
+        c.fail("comparison '" + t.title + "', row " + row.name + ": " + std::to_string(row.values.size()) +
+               " values for " + std::to_string(t.columns.size()) + " columns");
+}
+
+std::string facts(const Run& run) {
+  std::string html = "<table class=\"facts\">";
+  const auto row = [&html](const char* name, const std::string& value) {
+    if (!value.empty()) html += "<tr><th>" + std::string(name) + "</th><td>" + escape_html(value) + "</td></tr>";
+  };
+  row("robot", run.robot);
+  row("method", run.method);
+  row("data", run.data);
+  if (run.measurements > 0) row("measurements", std::to_string(run.measurements));
+  row("measurements are", run.simulated ? "simulated (true values known)" : "measured");
+  return html + "</table>";
+}
+
+std::string model_table(const RunContext& c) {
+  const Run& run = c.run();
+  const bool truth = std::any_of(run.parameters.begin(), run.parameters.end(),
+                                 [](const ParameterRow& p) { return p.truth.has_value(); });
+  std::string html = "<section class=\"model\" id=\"" + c.id("model") +
+                     "\"><h3>Identified model</h3><table class=\"model\"><tr>" + heading("parameter") +
+                     heading("nominal") + heading("identified") + heading("change") + heading("1-sigma");
+  if (truth) html += heading("true") + heading("error (identified - true)");
+  html += "</tr>";
+  const int columns = truth ? 7 : 5;
+  std::string group;
+  bool first = true;
+  for (const ParameterRow& p : run.parameters) {
+    if (first || p.group != group)
+      html +=
+          "<tr class=\"group\"><th colspan=\"" + std::to_string(columns) + "\">" + escape_html(p.group) + "</th></tr>";
+    first = false;
+    group = p.group;
+    html += "<tr><td>" + escape_html(p.name) + "</td>" + cell(value_text(p.quantity, p.nominal)) +
+            cell(value_text(p.quantity, p.identified)) + cell(delta_text(p.quantity, p.identified - p.nominal)) +
+            (p.stddev ? cell(delta_text(p.quantity, *p.stddev)) : cell("held fixed", "fixed"));
+    if (truth) {
+      if (p.truth) {
+        const double error = p.identified - *p.truth;
+        const bool off = p.stddev && std::abs(error) > 3.0 * *p.stddev;
+        html += cell(value_text(p.quantity, *p.truth)) + cell(delta_text(p.quantity, error), off ? "n off" : "n");
+      } else {
+        html += cell("") + cell("");
+      }
+    }
+    html += "</tr>";
+  }
+  return html + "</table></section>";
+}
+
+std::string identifiability(const RunContext& c) {
+  const Run& run = c.run();
+  std::string html =
+      "<section class=\"identifiability\" id=\"" + c.id("identifiability") + "\"><h3>Identifiability and notes</h3>";
+  if (!run.held_fixed.empty()) {
+    html += "<table class=\"held-fixed\"><tr>" + heading("held fixed") + heading("why") + "</tr>";
+    for (const HeldFixed& h : run.held_fixed)
+      html += "<tr><td>" + escape_html(h.parameter) + "</td><td>" + escape_html(h.reason) + "</td></tr>";
+    html += "</table>";
+  }
+  if (!run.notes.empty()) {
+    html += "<ul class=\"notes\">";
+    for (const std::string& note : run.notes) html += "<li>" + escape_html(note) + "</li>";
+    html += "</ul>";
+  }
+  return html + "</section>";
+}
+
+std::string accuracy(const RunContext& c) {
+  const Run& run = c.run();
+  const bool orientation =
+      std::any_of(run.accuracy.begin(), run.accuracy.end(), [](const Accuracy& a) { return a.mean_rad.has_value(); });
+  std::string html = "<section class=\"accuracy\" id=\"" + c.id("accuracy") +
+                     "\"><h3>Accuracy on validation poses</h3><table class=\"accuracy\"><tr>" + heading("model") +
+                     heading("poses") + heading("position mean") + heading("RMS") + heading("max");
+  if (orientation) html += heading("orientation mean") + heading("RMS") + heading("max");
+  html += "</tr>";
+  PlotSpec plot;
+  plot.title = "Position error on the validation poses";
+  plot.width_px = 560;
+  plot.height_px = 90 + 30 * static_cast<int>(run.accuracy.size());
+  plot.x = {"position error (mm)", true, {}, {}, {}};
+  plot.series = {
+      {"mean", kPalette[0], {}, {}, false}, {"RMS", kPalette[1], {}, {}, false}, {"max", kPalette[2], {}, {}, false}};
+  for (std::size_t i = 0; i < run.accuracy.size(); ++i) {
+    const Accuracy& a = run.accuracy[i];
+    html += "<tr><td>" + escape_html(a.label) + "</td>" + cell(std::to_string(a.count)) +
+            cell(format("%.4f mm", a.mean_m * kMm)) + cell(format("%.4f mm", a.rms_m * kMm)) +
+            cell(format("%.4f mm", a.max_m * kMm));
+    if (orientation) {
+      for (const std::optional<double>& v : {a.mean_rad, a.rms_rad, a.max_rad})
+        html += cell(v ? format("%.4f mrad", *v * kMm) : "");
+    }
+    html += "</tr>";
+    plot.y.categories.push_back(a.label);
+    const double values[] = {a.mean_m, a.rms_m, a.max_m};
+    for (std::size_t k = 0; k < 3; ++k) {
+      plot.series[k].x.push_back(values[k] * kMm);
+      plot.series[k].y.push_back(static_cast<double>(i));
+    }
+  }
+  return html + "</table><div class=\"plots\">" + svg_plot(plot) + "</div></section>";
+}
+
+std::string residuals(const RunContext& c) {
+  const Run& run = c.run();
+  std::string html = "<section class=\"residuals\" id=\"" + c.id("residuals") +
+                     "\"><h3>Residuals</h3><p>Position error of the nominal model (before) and of the identified "
+                     "model (after) on each validation pose.</p><div class=\"plots\">";
+  PlotSpec per_pose;
+  per_pose.title = "Position error per validation pose";
+  per_pose.width_px = 760;
+  per_pose.x = {"validation pose", false, {}, 0.5, static_cast<double>(run.validation.size()) + 0.5};
+  per_pose.y = {"position error (mm)", true, {}, {}, {}};
+  per_pose.series = {{"before", kBefore, {}, {}, false}, {"after", kAfter, {}, {}, false}};
+  for (std::size_t i = 0; i < run.validation.size(); ++i) {
+    for (PlotSeries& s : per_pose.series) s.x.push_back(static_cast<double>(i + 1));
+    per_pose.series[0].y.push_back(run.validation[i].before_m * kMm);
+    per_pose.series[1].y.push_back(run.validation[i].after_m * kMm);
+  }
+  html += svg_plot(per_pose) + "</div><h4>Against each joint's reading</h4><div class=\"plots\">";
+  for (std::size_t j = 0; j < run.joints.size(); ++j) {
+    const JointInfo& joint = run.joints[j];
+    PlotSpec plot;
+    plot.title = "Joint " + std::to_string(j + 1) + (joint.name.empty() ? "" : " (" + joint.name + ")");
+    plot.width_px = 290;
+    plot.height_px = 220;
+    plot.x = {joint.prismatic ? "reading (mm)" : "reading (deg)", false, {}, {}, {}};
+    plot.y = {"position error (mm)", true, {}, {}, {}};
+    plot.series = {{"before", kBefore, {}, {}, false}, {"after", kAfter, {}, {}, false}};
+    for (const ValidationPose& pose : run.validation) {
+      const double reading = pose.q[j] * (joint.prismatic ? kMm : kDeg);
+      for (PlotSeries& s : plot.series) s.x.push_back(reading);
+      plot.series[0].y.push_back(pose.before_m * kMm);
+      plot.series[1].y.push_back(pose.after_m * kMm);
+    }
+    html += svg_plot(plot);
+  }
+  return html + "</div></section>";
+}
+
+// Two unit vectors that make a right-handed frame with `axis`.
+std::pair<Eigen::Vector3d, Eigen::Vector3d> plane_basis(const Eigen::Vector3d& axis) {
+  Eigen::Index least = 0;
+  axis.cwiseAbs().minCoeff(&least);
+  const Eigen::Vector3d u = axis.cross(Eigen::Vector3d::Unit(least)).normalized();
+  return {u, axis.cross(u)};
+}
+
+std::string sweep_plots(const RunContext& c, const SweepPlot& s) {
+  const JointInfo& joint = c.run().joints[static_cast<std::size_t>(s.joint)];
+  const std::string name = "Joint " + std::to_string(s.joint + 1) + (joint.name.empty() ? "" : " (" + joint.name + ")");
+  const Eigen::Vector3d d = s.axis_direction.normalized();
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& p : s.points_m) mean += p;
+  mean /= static_cast<double>(s.points_m.size());
+  const Eigen::Vector3d centre = s.axis_point_m + d * d.dot(mean - s.axis_point_m);
+  // In-plane x towards the middle of the arc, so that angles about the axis do not wrap.
+  const Eigen::Vector3d towards_arc = (mean - centre) - d * d.dot(mean - centre);
+  const auto [u, v] =
+      s.circle && towards_arc.norm() > 0.0
+          ? std::pair<Eigen::Vector3d, Eigen::Vector3d>(towards_arc.normalized(), d.cross(towards_arc.normalized()))
+          : plane_basis(d);
+  const std::vector<std::string> notes = {
+      s.circle ? format("radius %.3f mm", s.radius_m * kMm) : std::string("line"), format("RMS %.1f um", s.rms_m * kUm),
+      std::to_string(s.points_m.size()) + " points" +
+          (s.rejected > 0 ? ", " + std::to_string(s.rejected) + " rejected" : std::string())};
+  PlotSpec fit;
+  fit.width_px = 300;
+  fit.height_px = 320;
+  fit.notes = notes;
+  if (s.circle) {
+    fit.title = name + ": circle fit";
+    fit.equal_aspect = true;
+    fit.x = {"in-plane x (mm)", false, {}, {}, {}};
+    fit.y = {"in-plane y (mm)", false, {}, {}, {}};
+    PlotSeries circle{"fitted circle", kAfter, {}, {}, true}, points{"measured", kBefore, {}, {}, false};
+    for (int k = 0; k <= 120; ++k) {
+      const double angle = 2.0 * std::numbers::pi * k / 120.0;
+      circle.x.push_back(s.radius_m * std::cos(angle) * kMm);
+      circle.y.push_back(s.radius_m * std::sin(angle) * kMm);
+    }
+    PlotSpec residual;
+    residual.title = name + ": residuals";
+    residual.width_px = 300;
+    residual.height_px = 320;
+    residual.x = {"angle about the axis from mid-arc (deg)", false, {}, {}, {}};
+    residual.y = {"residual (um)", false, {}, {}, {}};
+    PlotSeries radial{"radial", kPalette[1], {}, {}, false}, axial{"along the axis", kPalette[3], {}, {}, false};
+    for (const Eigen::Vector3d& p : s.points_m) {
+      const Eigen::Vector3d r = p - centre;
+      const double x = u.dot(r), y = v.dot(r);
+      points.x.push_back(x * kMm);
+      points.y.push_back(y * kMm);
+      radial.x.push_back(std::atan2(y, x) * kDeg);
+      radial.y.push_back((std::hypot(x, y) - s.radius_m) * kUm);
+      axial.x.push_back(radial.x.back());
+      axial.y.push_back(d.dot(r) * kUm);
+    }
+    double radial_ss = 0.0, axial_ss = 0.0;
+    for (std::size_t k = 0; k < radial.y.size(); ++k) {
+      radial_ss += radial.y[k] * radial.y[k];
+      axial_ss += axial.y[k] * axial.y[k];
+    }
+    const double n = static_cast<double>(radial.y.size());
+    residual.notes = {
+        "radial: distance from the axis - radius", "along the axis: distance from the circle's plane",
+        format("RMS radial %.1f um, along the axis %.1f um", std::sqrt(radial_ss / n), std::sqrt(axial_ss / n))};
+    fit.series = {circle, points};
+    residual.series = {radial, axial};
+    return svg_plot(fit) + svg_plot(residual);
+  }
+  fit.title = name + ": line fit";
+  fit.width_px = 420;
+  fit.x = {"travel along the line (mm)", false, {}, {}, {}};
+  fit.y = {"off the line (um)", false, {}, {}, {}};
+  PlotSeries line{"fitted line", kAfter, {}, {}, true}, across_u{"across, x", kBefore, {}, {}, false},
+      across_v{"across, y", kPalette[1], {}, {}, false};
+  for (const Eigen::Vector3d& p : s.points_m) {
+    const Eigen::Vector3d r = p - s.axis_point_m;
+    const double travel = d.dot(r) * kMm;
+    across_u.x.push_back(travel);
+    across_u.y.push_back(u.dot(r) * kUm);
+    across_v.x.push_back(travel);
+    across_v.y.push_back(v.dot(r) * kUm);
+  }
+  const auto [lo, hi] = std::minmax_element(across_u.x.begin(), across_u.x.end());
+  line.x = {*lo, *hi};
+  line.y = {0.0, 0.0};
+  fit.series = {line, across_u, across_v};
+  return svg_plot(fit);
+}
+
+std::string sweeps(const RunContext& c) {
+  std::string html = "<section class=\"sweeps\" id=\"" + c.id("sweeps") +
+                     "\"><h3>Single-joint sweeps</h3><p>Measured points projected into each fit's plane "
+                     "(circle: centred on the fitted centre; line: distance off the fitted line).</p>"
+                     "<div class=\"plots\">";
+  for (const SweepPlot& s : c.run().sweeps) html += sweep_plots(c, s);
+  return html + "</div></section>";
+}
+
+std::string bus(const RunContext& c, const BusStatistics& b) {
+  std::string html = "<section class=\"bus\" id=\"" + c.id("bus") + "\"><h3>CAN bus</h3><table class=\"bus\">";
+  const auto row = [&html](const char* name, const std::string& value) {
+    html += "<tr><th>" + std::string(name) + "</th>" + cell(value) + "</tr>";
+  };
+  if (!b.bus.empty()) html += "<tr><th>bus</th><td>" + escape_html(b.bus) + "</td></tr>";
+  row("duration", format("%.3f s", b.seconds));
+  row("frames", std::to_string(b.frames));
+  row("payload bytes", std::to_string(b.bytes));
+  row("errors", std::to_string(b.errors));
+  row("load", format("%.2f %%", b.load * 100.0));
+  if (b.seconds > 0.0) row("frame rate", format("%.1f frames/s", static_cast<double>(b.frames) / b.seconds));
+  return html + "</table></section>";
+}
+
+std::string comparison(const RunContext& c, const Comparison& t, std::size_t index) {
+  std::string html = "<section class=\"comparison\" id=\"" + c.id("comparison" + std::to_string(index + 1)) +
+                     "\"><h3>" + escape_html(t.title) + "</h3><table class=\"comparison\"><tr>" + heading("parameter");
+  for (const std::string& column : t.columns) html += heading(column);
+  html += "</tr>";
+  for (const ComparisonRow& row : t.rows) {
+    html += "<tr><td>" + escape_html(row.name) + "</td>";
+    for (const std::optional<double>& v : row.values) html += cell(v ? value_text(row.quantity, *v) : "&mdash;");
+    html += "</tr>";
+  }
+  html += "</table>";
+  if (!t.note.empty()) html += "<p class=\"note\">" + escape_html(t.note) + "</p>";
+  return html + "</section>";
+}
+
+std::string run_section(const RunContext& c) {
+  const Run& run = c.run();
+  std::string html =
+      "<section class=\"run\" id=\"" + c.id("section") + "\"><h2>" + escape_html(run.title) + "</h2>" + facts(run);
+  if (!run.parameters.empty()) html += model_table(c);
+  if (!run.held_fixed.empty() || !run.notes.empty()) html += identifiability(c);
+  if (!run.accuracy.empty()) html += accuracy(c);
+  if (!run.validation.empty()) html += residuals(c);
+  if (!run.sweeps.empty()) html += sweeps(c);
+  if (run.bus) html += bus(c, *run.bus);
+  for (std::size_t i = 0; i < run.comparisons.size(); ++i) html += comparison(c, run.comparisons[i], i);
+  return html + "</section>";
+}
+
+}  // namespace
+
+std::string render_html(const Report& report) {
+  std::vector<RunContext> runs;
+  for (std::size_t i = 0; i < report.runs.size(); ++i) {
+    runs.emplace_back(report.runs[i], i);
+    validate(runs.back());
+  }
+  std::string html = "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" +
+                     escape_html(report.title) + "</title><style>" + kStyle + "</style></head><body><header><h1>" +
+                     escape_html(report.title) + "</h1>";
+  if (!report.date.empty()) html += "<p class=\"date\">" + escape_html(report.date) + "</p>";
+  html += "</header>";
+  if (runs.size() > 1) {
+    html += "<nav><ul>";
+    for (const RunContext& c : runs)
+      html += "<li><a href=\"#" + c.id("section") + "\">" + escape_html(c.run().title) + "</a></li>";
+    html += "</ul></nav>";
+  }
+  for (const RunContext& c : runs) {
+    try {
+      html += run_section(c);
+    } catch (const ReportError& e) {  // a plot's complaint, said with the run it is in
+      c.fail(e.what());
+    }
+  }
+  return html + "</body></html>\n";
+}
+
+void write_html(const Report& report, const std::string& path) {
+  const std::string html = render_html(report);
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << html;
+  out.close();
+  if (!out) throw ReportError(path + ": cannot write the report");
+}
+
+}  // namespace kincal::report
