@@ -11,6 +11,17 @@ if(CMAKE_CROSSCOMPILING)
   list(APPEND KINCAL_WARNINGS -Wno-psabi)
 endif()
 
+# The same float results, bit for bit, natively and on the Cortex-M4: no contraction of a * b + c
+# into a fused multiply-add (C++ lets GCC do it by default; the M4F has VFMA, x86-64's baseline
+# has no FMA). Everywhere, not per target: inline geometry (rigid_transform.hpp, link_model.hpp,
+# ...) is compiled into every program that includes it, and one COMDAT copy with FMAs could be
+# the one the linker keeps. Cost on the host: none, its baseline ISA cannot fuse (the objects are
+# the same bytes with and without). On the M4 the hot loops fuse explicitly (firmware/core/
+# mul_add.hpp, the same bits on both targets); the rest of the geometry costs up to 16 % more
+# instructions than fused (tests/bench/geometry_m4_bench.cpp). Checked by
+# m4.geometry_digest_matches_native.
+add_compile_options(-ffp-contract=off)
+
 if(KINCAL_SANITIZE AND NOT CMAKE_CROSSCOMPILING)
   add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
   add_link_options(-fsanitize=address,undefined)

@@ -19,6 +19,8 @@ using Square = Eigen::Matrix<float, kMaxJoints, kMaxJoints>;
 // workspace may change the Jacobian it reads, and reloads every operand. N is a compile-time
 // constant so that the loops unroll. Element (r, c) of a is a[c * kMaxJoints + r]; of the
 // Jacobian, j[c * 6 + k].
+// The sums of products are fused multiply-adds (mul_add, rigid_transform.hpp): the same bits on
+// both targets, and one instruction each on the M4F.
 constexpr int kLd = kMaxJoints;
 
 // In-place Cholesky of the leading size x size block (lower triangle, L L^T). False if it is not
@@ -29,7 +31,7 @@ bool cholesky(float* __restrict a) {
   for (int c = 0; c < N; ++c) {
     float diagonal = a[c * kLd + c];
 #pragma GCC unroll 8
-    for (int k = 0; k < c; ++k) diagonal -= a[k * kLd + c] * a[k * kLd + c];
+    for (int k = 0; k < c; ++k) diagonal = mul_add(-a[k * kLd + c], a[k * kLd + c], diagonal);
     if (!(diagonal > 0.0f)) return false;
     const float l = std::sqrt(diagonal);
     a[c * kLd + c] = l;
@@ -38,7 +40,7 @@ bool cholesky(float* __restrict a) {
     for (int r = c + 1; r < N; ++r) {
       float sum = a[c * kLd + r];
 #pragma GCC unroll 8
-      for (int k = 0; k < c; ++k) sum -= a[k * kLd + r] * a[k * kLd + c];
+      for (int k = 0; k < c; ++k) sum = mul_add(-a[k * kLd + r], a[k * kLd + c], sum);
       a[c * kLd + r] = sum * inv_l;
     }
   }
@@ -52,14 +54,14 @@ void cholesky_solve(const float* __restrict l, float* __restrict x) {
   for (int r = 0; r < N; ++r) {
     float sum = x[r];
 #pragma GCC unroll 8
-    for (int k = 0; k < r; ++k) sum -= l[k * kLd + r] * x[k];
+    for (int k = 0; k < r; ++k) sum = mul_add(-l[k * kLd + r], x[k], sum);
     x[r] = sum / l[r * kLd + r];
   }
 #pragma GCC unroll 8
   for (int r = N - 1; r >= 0; --r) {
     float sum = x[r];
 #pragma GCC unroll 8
-    for (int k = r + 1; k < N; ++k) sum -= l[r * kLd + k] * x[k];
+    for (int k = r + 1; k < N; ++k) sum = mul_add(-l[r * kLd + k], x[k], sum);
     x[r] = sum / l[r * kLd + r];
   }
 }
@@ -75,10 +77,10 @@ bool factor_fixed(const float* __restrict j, float lambda2, float* __restrict a)
       float sum = 0.0f;
       if constexpr (N <= 6) {
 #pragma GCC unroll 8
-        for (int k = 0; k < 6; ++k) sum += j[r * 6 + k] * j[c * 6 + k];
+        for (int k = 0; k < 6; ++k) sum = mul_add(j[r * 6 + k], j[c * 6 + k], sum);
       } else {
 #pragma GCC unroll 8
-        for (int k = 0; k < N; ++k) sum += j[k * 6 + r] * j[k * 6 + c];
+        for (int k = 0; k < N; ++k) sum = mul_add(j[k * 6 + r], j[k * 6 + c], sum);
       }
       a[c * kLd + r] = sum;
     }
@@ -95,7 +97,7 @@ void solve_fixed(const float* __restrict j, const float (&ew)[6], const float* _
     for (int c = 0; c < N; ++c) {
       float sum = 0.0f;
 #pragma GCC unroll 8
-      for (int k = 0; k < 6; ++k) sum += j[c * 6 + k] * ew[k];
+      for (int k = 0; k < 6; ++k) sum = mul_add(j[c * 6 + k], ew[k], sum);
       x[c] = sum;
     }
     cholesky_solve<N>(l, x);
@@ -109,7 +111,7 @@ void solve_fixed(const float* __restrict j, const float (&ew)[6], const float* _
     for (int c = 0; c < N; ++c) {
       float sum = 0.0f;
 #pragma GCC unroll 8
-      for (int k = 0; k < 6; ++k) sum += j[c * 6 + k] * x[k];
+      for (int k = 0; k < 6; ++k) sum = mul_add(j[c * 6 + k], x[k], sum);
       dq[c] = sum;
     }
   }

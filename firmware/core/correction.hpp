@@ -41,10 +41,10 @@
 // it, the Jacobian, a 6x6 normal matrix and its Cholesky factorization, and per refinement step
 // another sin_cos per joint (cheap: small_angle_sin_cos of the step where it is small), forward
 // kinematics pass and two triangular solves. Measured for a 6-joint arm (-O3, tests/bench/
-// geometry_m4_bench.cpp): 4,812 instructions with the default refinement, 3,462 for the first-
+// geometry_m4_bench.cpp): 4,833 instructions with the default refinement, 3,464 for the first-
 // order step alone -- 35 kHz and 49 kHz at 168 MHz if an instruction took a cycle. Memory:
 // CorrectionModel (constant, about 1.1 KB) and CorrectionWorkspace (about 1.4 KB) are the
-// caller's; stack 392 bytes (m4.kincal_core.stack). Reentrant: two workspaces may run at once on
+// caller's; stack 384 bytes (m4.kincal_core.stack). Reentrant: two workspaces may run at once on
 // one model.
 #pragma once
 

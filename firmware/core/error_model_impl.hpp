@@ -253,9 +253,9 @@ void joint_jacobian(const PreparedChain<S>& chain, const ChainFrames<S>& frames,
     const S wx = frame.rotation(0, 2), wy = frame.rotation(1, 2), wz = frame.rotation(2, 2);
     if (link.joint == JointType::revolute) {
       const S dx = tx - frame.translation(0), dy = ty - frame.translation(1), dz = tz - frame.translation(2);
-      out[0] = wy * dz - wz * dy;
-      out[1] = wz * dx - wx * dz;
-      out[2] = wx * dy - wy * dx;
+      out[0] = mul_add(wy, dz, -(wz * dy));
+      out[1] = mul_add(wz, dx, -(wx * dz));
+      out[2] = mul_add(wx, dy, -(wy * dx));
       out[3] = wx;
       out[4] = wy;
       out[5] = wz;

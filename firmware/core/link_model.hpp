@@ -18,7 +18,7 @@
 //
 // Conventions of rigid_transform.hpp. Link i's transform in closed form (Doty's 3-2/3-3 for his
 // model) costs about 20 multiplies; composing a link 36 multiplies and 30 adds. On the M4F
-// (-O3), joint_trig plus forward_kinematics of a 6-joint arm take 1,194 instructions
+// (-O3), joint_trig plus forward_kinematics of a 6-joint arm take 1,185 instructions
 // (geometry_m4_bench, forward_kinematics_6_joints_m4_instructions).
 //
 // For the control rate, PreparedChain holds the sines and cosines of every constant angle, so a
@@ -159,10 +159,11 @@ template <class S>
       // Doty 3-2 and 3-3.
       const S &cb = beta.cos, &sb = beta.sin;
       const S sa_sb = sa * sb, ca_sb = ca * sb;
-      r(0, 0) = cb * ct, r(0, 1) = ct * sa_sb - ca * st, r(0, 2) = ct * ca_sb + sa * st;
-      r(1, 0) = cb * st, r(1, 1) = ca * ct + sa_sb * st, r(1, 2) = st * ca_sb - ct * sa;
+      // Sums of two products fused for float (mul_add.hpp); for double the same as written plainly.
+      r(0, 0) = cb * ct, r(0, 1) = mul_add(ct, sa_sb, -(ca * st)), r(0, 2) = mul_add(ct, ca_sb, sa * st);
+      r(1, 0) = cb * st, r(1, 1) = mul_add(ca, ct, sa_sb * st), r(1, 2) = mul_add(st, ca_sb, -(ct * sa));
       r(2, 0) = -sb, r(2, 1) = cb * sa, r(2, 2) = ca * cb;
-      p(0) = a_m * r(0, 0), p(1) = a_m * r(1, 0), p(2) = d_m - a_m * sb;
+      p(0) = a_m * r(0, 0), p(1) = a_m * r(1, 0), p(2) = mul_add(-a_m, sb, d_m);
       break;
     }
   }

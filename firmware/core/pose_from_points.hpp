@@ -31,7 +31,7 @@
 // within kPoseTranslationErrorPerM per metre of distance (measured 3.9e-7 rad and 1.9e-7 per m);
 // the rotation is orthonormal within 5e-7; the RMS within 2e-7 m of the optimum's.
 //
-// Cost (M4F, 5 points, -O3): 4,489 instructions measured (tests/bench/geometry_m4_bench.cpp,
+// Cost (M4F, 5 points, -O3): 4,859 instructions measured (tests/bench/geometry_m4_bench.cpp,
 // pose_from_points_m4_instructions), most of it the Jacobi sweeps. Stack: m4.kincal_core.stack.
 #pragma once
 

@@ -171,7 +171,10 @@ PlaneStatus fit_range_plane(const RangePlaneModel& model, const std::array<float
 
   result.sensors_used = static_cast<std::uint8_t>(bad_count == 0 ? 0xFu : (0xFu & ~(1u << bad_sensor)));
   if (bad_count == 0) {
-    const float along_null = model.null_vector.dot(values);
+    // Summed in a fixed order, not by Eigen's dot(): a 4-float dot is one SSE packet natively,
+    // reduced as (0 + 2) + (1 + 3), against (0 + 1) + (2 + 3) on the M4 -- not the same bits.
+    float along_null = 0.0f;
+    for (int i = 0; i < kRangeSensorCount; ++i) along_null += model.null_vector(i) * values(i);
     result.flatness_residual_m = model.null_vector.cwiseAbs().maxCoeff() * std::fabs(along_null);
     if (!(result.flatness_residual_m <= model.flatness_tolerance_m)) {
       plane = result;

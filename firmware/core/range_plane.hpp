@@ -34,7 +34,7 @@
 // spacing) rad and the distance within kPlaneDistanceErrorPerRange * max range * (1 + max range /
 // spacing) of the exact plane (the tilt error moves the along-beam distance too).
 //
-// Cost: fit_range_plane is about 40 multiply-adds and one square root, 187 instructions on the
+// Cost: fit_range_plane is about 40 multiply-adds and one square root, 198 instructions on the
 // M4F (-O3, geometry_m4_bench); no loops beyond the four sensors. prepare_range_plane runs once
 // per configuration (five 3x3 inversions).
 #pragma once

@@ -19,6 +19,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "firmware/core/mul_add.hpp"
+
 namespace kincal::core {
 
 template <class S>
@@ -57,10 +59,11 @@ struct RigidTransform {
     for (int i = 0; i < 3; ++i) {
       const S a0 = a_T_b.rotation(i, 0), a1 = a_T_b.rotation(i, 1), a2 = a_T_b.rotation(i, 2);
       const S ta = a_T_b.translation(i);
-      a_T_c.rotation(i, 0) = a0 * b00 + a1 * b10 + a2 * b20;
-      a_T_c.rotation(i, 1) = a0 * b01 + a1 * b11 + a2 * b21;
-      a_T_c.rotation(i, 2) = a0 * b02 + a1 * b12 + a2 * b22;
-      a_T_c.translation(i) = a0 * t0 + a1 * t1 + a2 * t2 + ta;
+      // (a0 b0j + a1 b1j) + a2 b2j: for double the same sums as written plainly.
+      a_T_c.rotation(i, 0) = mul_add(a2, b20, mul_add(a1, b10, a0 * b00));
+      a_T_c.rotation(i, 1) = mul_add(a2, b21, mul_add(a1, b11, a0 * b01));
+      a_T_c.rotation(i, 2) = mul_add(a2, b22, mul_add(a1, b12, a0 * b02));
+      a_T_c.translation(i) = mul_add(a2, t2, mul_add(a1, t1, a0 * t0)) + ta;
     }
   }
 

@@ -15,14 +15,17 @@ constexpr float kPio2Lo = 7.54978995489188216e-8f;
 constexpr float kTwoOverPi = 0.636619772367581343f;
 
 // Cephes sinf/cosf minimax coefficients for |r| <= pi/4.
+// Horner's scheme in fused multiply-adds (mul_add.hpp): the same bits on both targets.
 float sin_kernel(float r) {
   const float z = r * r;
-  return ((-1.9515295891e-4f * z + 8.3321608736e-3f) * z - 1.6666654611e-1f) * z * r + r;
+  const float p = mul_add(mul_add(-1.9515295891e-4f, z, 8.3321608736e-3f), z, -1.6666654611e-1f);
+  return mul_add(p * z, r, r);
 }
 
 float cos_kernel(float r) {
   const float z = r * r;
-  return ((2.443315711809948e-5f * z - 1.388731625493765e-3f) * z + 4.166664568298827e-2f) * z * z - 0.5f * z + 1.0f;
+  const float p = mul_add(mul_add(2.443315711809948e-5f, z, -1.388731625493765e-3f), z, 4.166664568298827e-2f);
+  return mul_add(p * z, z, -0.5f * z) + 1.0f;
 }
 
 }  // namespace
@@ -35,7 +38,8 @@ SinCos<float> sin_cos(float angle_rad) noexcept {
   const float scaled = angle_rad * kTwoOverPi;
   const auto k = static_cast<std::int32_t>(scaled + (scaled >= 0.0f ? 0.5f : -0.5f));
   const auto kf = static_cast<float>(k);
-  const float r = ((angle_rad - kf * kPio2Hi) - kf * kPio2Mid) - kf * kPio2Lo;
+  // The first two products are exact, so fusing them changes nothing; the third gains a rounding.
+  const float r = mul_add(-kf, kPio2Lo, mul_add(-kf, kPio2Mid, mul_add(-kf, kPio2Hi, angle_rad)));
   const float s = sin_kernel(r);
   const float c = cos_kernel(r);
   switch (static_cast<std::uint32_t>(k) & 3u) {

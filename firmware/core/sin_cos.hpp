@@ -3,8 +3,8 @@
 // Why our own: newlib's sinf/cosf on the Cortex-M4 go through double precision, which the M4F
 // computes in software (hundreds of instructions per call); the correction runs a sine and a
 // cosine per revolute joint at the control rate. sin_cos(float) below is float only, has no
-// table and no library call. (On the M4 GCC contracts a*b+c into the FPU's fused multiply-add,
-// natively on x86-64 it cannot: the two runs differ by rounding, within the bound below.)
+// table and no library call. Its multiply-adds are fused explicitly (mul_add.hpp), so it gives
+// the same bits natively and on the M4 (tests/firmware/core/geometry_digest.cpp).
 //
 // sin_cos(float angle_rad), |angle_rad| <= kSinCosMaxArgumentRad:
 //   error   |sin - sin_exact| and |cos - cos_exact| <= kSinCosMaxAbsError (= 1.2e-7, about one
@@ -23,6 +23,8 @@
 #pragma once
 
 #include <cmath>
+
+#include "firmware/core/mul_add.hpp"
 
 namespace kincal::core {
 
@@ -62,7 +64,7 @@ SinCos<S> small_angle_sin_cos(const S& angle_rad) noexcept {
 // sin_cos call.
 template <class S>
 SinCos<S> angle_sum(const SinCos<S>& a, const SinCos<S>& b) noexcept {
-  return {a.sin * b.cos + a.cos * b.sin, a.cos * b.cos - a.sin * b.sin};
+  return {mul_add(a.sin, b.cos, a.cos * b.sin), mul_add(a.cos, b.cos, -(a.sin * b.sin))};
 }
 
 }  // namespace kincal::core
