@@ -155,10 +155,13 @@ std::size_t encode_block(const CorrectionParameters& b, std::span<std::uint8_t> 
   Out o(out);
   o.u8(b.joint_count);
   for (const JointModel& j : b.joints) {
+    o.u8(static_cast<std::uint8_t>(j.type));
+    o.u8(static_cast<std::uint8_t>(j.convention));
     put_dh(o, j.nominal);
     put_dh(o, j.error);
   }
   for (const float v : b.tool_offset) o.f32(v);
+  for (const float v : b.tool_error) o.f32(v);
   return o.position();
 }
 
@@ -167,12 +170,18 @@ DecodeStatus decode_block(std::span<const std::uint8_t> image, CorrectionParamet
   In in(image);
   CorrectionParameters v;
   v.joint_count = in.u8();
+  bool kinds_known = true;
   for (JointModel& j : v.joints) {
+    const std::uint8_t type = in.u8(), convention = in.u8();
+    kinds_known = kinds_known && type <= 1 && convention <= 2;
+    j.type = static_cast<JointKind>(type & 1u);
+    j.convention = static_cast<LinkKind>(convention <= 2 ? convention : 0);
     get_dh(in, j.nominal);
     get_dh(in, j.error);
   }
   for (float& f : v.tool_offset) f = in.f32();
-  if (!in.finite() || v.joint_count > kJoints) return DecodeStatus::kBadValue;
+  for (float& f : v.tool_error) f = in.f32();
+  if (!in.finite() || !kinds_known || v.joint_count > kJoints) return DecodeStatus::kBadValue;
   b = v;
   return DecodeStatus::kOk;
 }

@@ -10,9 +10,15 @@
 //                    two cells per byte, even cell in the low nibble; class 0 is background.
 //   kGeometry    v1  193 bytes: four ranger beams in the camera frame, each origin (m) and unit
 //                    direction; fiducial count (u8, <= 8) and their positions in the square frame (m).
-//   kCorrection  v1  265 bytes: joint count (u8, <= 6), per joint the nominal modified-DH values and
-//                    their identified errors (a m, alpha rad, d m, theta rad, beta rad; 2 x 5 float32),
-//                    then tool offset x y z (m) rx ry rz (rad) (6 float32).
+//   kCorrection  v2  301 bytes: joint count (u8, <= 6); per joint its type (u8: 0 revolute, 1
+//                    prismatic), its link convention (u8: 0 standard DH, 1 modified DH, 2 Doty's
+//                    (d, theta, beta, a, alpha); link_model.hpp), the nominal values and their
+//                    identified errors (a m, alpha rad, d m, theta rad, beta rad; 2 x 5 float32);
+//                    then the nominal tool offset flange_T_tool, x y z (m) rx ry rz (rotation
+//                    vector, rad), and its identified error, a small motion of the tool frame
+//                    along and about its own axes (error_model.hpp's tool_x..tool_rz), 2 x 6 float32.
+//   Format version 2 (all blocks): v1's correction block had no joint type or convention (every
+//   joint revolute, modified DH), which cannot describe a prismatic axis or Doty's links.
 //
 // Messages (ISO-TP payloads, little-endian):
 //   ParameterWrite  host -> platform: type 0x01 | block u8 | version u16 | length u16 | crc32 u32 | payload
@@ -35,7 +41,7 @@
 
 namespace kincal::shared {
 
-inline constexpr std::uint16_t kBlockFormatVersion = 1;
+inline constexpr std::uint16_t kBlockFormatVersion = 2;
 
 struct CameraIntrinsics {
   float fx_px = 0, fy_px = 0, cx_px = 0, cy_px = 0;
@@ -70,7 +76,11 @@ inline constexpr std::size_t kGeometryBytes = kRangers * 6 * 4 + 1 + kMaxFiducia
 struct DhValues {
   float a_m = 0, alpha_rad = 0, d_m = 0, theta_rad = 0, beta_rad = 0;
 };
+enum class JointKind : std::uint8_t { kRevolute = 0, kPrismatic = 1 };
+enum class LinkKind : std::uint8_t { kStandardDh = 0, kModifiedDh = 1, kDoty = 2 };
 struct JointModel {
+  JointKind type = JointKind::kRevolute;
+  LinkKind convention = LinkKind::kModifiedDh;
   DhValues nominal;
   DhValues error;  // identified deviation: true = nominal + error
 };
@@ -78,8 +88,9 @@ struct CorrectionParameters {
   std::uint8_t joint_count = 0;
   std::array<JointModel, kJoints> joints{};
   std::array<float, 6> tool_offset{};  // x y z (m), rx ry rz (rad)
+  std::array<float, 6> tool_error{};   // along x y z (m), about x y z (rad), in the tool frame
 };
-inline constexpr std::size_t kCorrectionBytes = 1 + kJoints * 10 * 4 + 6 * 4;
+inline constexpr std::size_t kCorrectionBytes = 1 + kJoints * (2 + 10 * 4) + 12 * 4;
 
 inline constexpr std::size_t kParameterHeaderBytes = 10;
 inline constexpr std::size_t kMaxBlockBytes = kColourLutBytes;

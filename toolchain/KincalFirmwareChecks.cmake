@@ -28,8 +28,14 @@ endfunction()
 # A firmware library: its objects must not refer to the heap, and each global function's
 # worst stack must fit STACK_BUDGET.
 function(kincal_firmware_library_checks target)
-  cmake_parse_arguments(ARG "" "STACK_BUDGET" "" ${ARGN})
+  cmake_parse_arguments(ARG "" "STACK_BUDGET" "CALLEES" ${ARGN})
   kincal_callgraph_files(${target} ci_files)
+  # CALLEES: firmware libraries the target calls into; their call graphs bound those calls (their
+  # functions are not entry points of this check: they have their own).
+  foreach(t ${ARG_CALLEES})
+    kincal_callgraph_files(${t} files)
+    list(APPEND ci_files ${files})
+  endforeach()
   add_test(NAME m4.${target}.no_heap
     COMMAND ${Python3_EXECUTABLE} ${PROJECT_SOURCE_DIR}/toolchain/check_no_heap.py
             --nm ${CMAKE_NM} --archive $<TARGET_FILE:${target}>)

@@ -17,6 +17,10 @@ shared::ErrorReason reason_for(shared::DecodeStatus status) {
   return shared::ErrorReason::kBadValue;
 }
 
+shared::ErrorReason reason_for(CorrectStatus status) {
+  return status == CorrectStatus::kNotCorrectable ? shared::ErrorReason::kBadValue : shared::ErrorReason::kNoParameters;
+}
+
 std::uint8_t reason_for(core::IsoTpEvent event) {
   switch (event) {
     case core::IsoTpEvent::kBadFrame:

@@ -14,7 +14,8 @@
 //   MeasureTrigger   starts a measurement if measuring is enabled and none is in flight (else
 //                    ErrorReport kNotInMode / kBusy); its report goes out by ISO-TP
 //   JointState A+B / Fd   corrected by the CorrectionStep and answered with Corrected A+B / Fd
-//                    carrying the same sequence number (kNotInMode, kNoParameters, kSequence)
+//                    carrying the same sequence number (kNotInMode, kNoParameters, kSequence;
+//                    kBadValue for a target the correction cannot serve)
 //   ISO-TP request   ParameterWrite (answered by ParameterAck), ParameterRead (ParameterData)
 //   anything else in the block, or a malformed frame: ErrorReport with the reason. Reports are
 //   sent at most once per error_report_interval_us; rejections in between are counted in it.
@@ -57,6 +58,9 @@ struct AppConfig {
 };
 
 shared::ErrorReason reason_for(shared::DecodeStatus status);
+// kNoParameters -> kNoParameters; kNotCorrectable -> kBadValue (the joint target is outside what
+// the correction can serve).
+shared::ErrorReason reason_for(CorrectStatus status);
 // The reason an ISO-TP event is reported with, or 0 if the event is not an error.
 std::uint8_t reason_for(core::IsoTpEvent event);
 core::IsoTpConfig isotp_config(const AppConfig& config);
@@ -260,8 +264,8 @@ class PlatformApp {
       in[j] = half_a_.angle_raw[j];
       in[j + shared::kJointsPerClassicFrame] = half.angle_raw[j];
     }
-    if (correct_.correct(parameters_.correction, in, out) != CorrectStatus::kOk)
-      return reject(shared::ErrorReason::kNoParameters, frame.id);
+    const CorrectStatus corrected = correct_.correct(parameters_.correction, in, out);
+    if (corrected != CorrectStatus::kOk) return reject(reason_for(corrected), frame.id);
     shared::JointHalf a, b;
     a.sequence = b.sequence = half.sequence;
     for (std::size_t j = 0; j < shared::kJointsPerClassicFrame; ++j) {
@@ -283,8 +287,8 @@ class PlatformApp {
     if (!correction_ready(frame.id)) return;
     shared::JointFull out;
     out.sequence = full.sequence;
-    if (correct_.correct(parameters_.correction, full.angle_raw, out.angle_raw) != CorrectStatus::kOk)
-      return reject(shared::ErrorReason::kNoParameters, frame.id);
+    const CorrectStatus corrected = correct_.correct(parameters_.correction, full.angle_raw, out.angle_raw);
+    if (corrected != CorrectStatus::kOk) return reject(reason_for(corrected), frame.id);
     CanFrame f;
     shared::encode_joint_full(shared::can_id::kCorrectedFd, out, f);
     queue(f);

@@ -4,19 +4,87 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <stdexcept>
+
+#include <Eigen/Cholesky>
+
+#include "firmware/app/correction_chain.hpp"
+#include "firmware/core/correction.hpp"
 
 namespace kincal::can {
 
 shared::CorrectionParameters scenario_correction_parameters() {
   shared::CorrectionParameters c;
   c.joint_count = 6;
-  const float offsets_rad[6] = {5.0e-4f, -3.0e-4f, 2.0e-4f, -1.0e-4f, 5.0e-5f, 4.0e-4f};
+  const float half_pi = 1.5707964f;
+  // {a_m, alpha_rad, d_m, theta_rad, beta_rad}; link i holds Craig's alpha_{i-1}, a_{i-1}.
+  const shared::DhValues puma[6] = {
+      {0, 0, 0, 0, 0},       {0, -half_pi, 0, 0, 0}, {0.4318f, 0, 0.15005f, 0, 0}, {0.0203f, -half_pi, 0.4318f, 0, 0},
+      {0, half_pi, 0, 0, 0}, {0, -half_pi, 0, 0, 0}};
+  const shared::DhValues errors[6] = {{0, 0, 0, 5.0e-4f, 0},
+                                      {2.0e-4f, 3.0e-4f, -1.0e-4f, -3.0e-4f, 0},
+                                      {-3.0e-4f, -2.0e-4f, 2.0e-4f, 2.0e-4f, 0},
+                                      {1.0e-4f, 1.5e-4f, -2.0e-4f, -1.0e-4f, 0},
+                                      {-1.0e-4f, -2.5e-4f, 1.0e-4f, 5.0e-5f, 0},
+                                      {5.0e-5f, 1.0e-4f, 3.0e-4f, 4.0e-4f, 0}};
   for (std::size_t j = 0; j < shared::kJoints; ++j) {
-    c.joints[j].nominal = {0.1f * static_cast<float>(j), 1.5707964f, 0.15f, 0.0f, 0.0f};
-    c.joints[j].error.theta_rad = offsets_rad[j];
+    c.joints[j].nominal = puma[j];
+    c.joints[j].error = errors[j];
   }
   c.tool_offset = {0.0f, 0.0f, 0.12f, 0.0f, 0.0f, 0.0f};
+  c.tool_error = {1.0e-4f, -1.0e-4f, 2.0e-4f, 1.0e-4f, 2.0e-4f, -1.0e-4f};
   return c;
+}
+
+std::array<double, shared::kJoints> reference_correction(const shared::CorrectionParameters& parameters,
+                                                         const std::array<std::int32_t, shared::kJoints>& joints) {
+  core::ChainModel<double> nominal, calibrated;
+  core::ParameterSet ids;
+  core::ErrorVector<double> errors;
+  if (app::correction_chain(parameters, nominal, ids, errors) != app::ChainStatus::kOk ||
+      core::apply_parameter_errors(nominal, ids, errors, calibrated) != core::ErrorModelStatus::ok)
+    throw std::invalid_argument("reference_correction: the correction block does not describe a chain");
+  core::PreparedChain<double> nominal_chain, calibrated_chain;
+  core::prepare_chain(nominal, nominal_chain);
+  core::prepare_chain(calibrated, calibrated_chain);
+  const int n = nominal.joint_count;
+  core::JointVector<double> q = core::JointVector<double>::Zero();
+  for (int i = 0; i < n; ++i) q(i) = shared::joint_angle_rad<double>(joints[static_cast<std::size_t>(i)]);
+
+  std::array<core::SinCos<double>, core::kMaxJoints> trig;
+  core::joint_trig(nominal_chain, q, trig);
+  core::RigidTransform<double> base_T_target, base_T_tool;
+  core::tool_pose(nominal_chain, q, trig, base_T_target);
+  core::ChainFrames<double> frames;
+  core::forward_kinematics(calibrated_chain, q, trig, frames);
+  core::JointJacobian<double> jacobian;
+  core::joint_jacobian(calibrated_chain, frames, jacobian);
+
+  // The damped step of correction.hpp: (J^T W J + lambda^2 I) dq = J^T W e, then chord steps
+  // with the same matrix.
+  const core::CorrectionOptions options;
+  const double weight = static_cast<double>(options.rotation_weight_m), weight2 = weight * weight;
+  const double damping = static_cast<double>(options.damping_m);
+  const Eigen::Matrix<double, 6, 1> w(1, 1, 1, weight2, weight2, weight2);
+  const Eigen::MatrixXd j = jacobian.leftCols(n);
+  const Eigen::MatrixXd normal =
+      j.transpose() * w.asDiagonal() * j + Eigen::MatrixXd::Identity(n, n) * (damping * damping);
+  const Eigen::LLT<Eigen::MatrixXd> factor(normal);
+  core::JointVector<double> target = q;
+  core::Twist<double> error = core::small_pose_difference(base_T_target, frames.base_T_tool);
+  for (int step = 0; step <= options.refinement_steps; ++step) {
+    if (step > 0) {
+      core::joint_trig(calibrated_chain, target, trig);
+      core::tool_pose(calibrated_chain, target, trig, base_T_tool);
+      error = core::small_pose_difference(base_T_target, base_T_tool);
+    }
+    const Eigen::VectorXd rhs = j.transpose() * w.asDiagonal() * error;
+    target.head(n) += factor.solve(rhs);
+  }
+  std::array<double, shared::kJoints> out{};
+  for (std::size_t i = 0; i < shared::kJoints; ++i)
+    out[i] = static_cast<int>(i) < n ? target(static_cast<int>(i)) : shared::joint_angle_rad<double>(joints[i]);
+  return out;
 }
 
 namespace {
@@ -81,19 +149,20 @@ ScenarioResult run_platform_scenario(PlatformClient& client, const ScenarioOptio
   const shared::CorrectionParameters params = scenario_correction_parameters();
   std::vector<double> round_trips_us;
   for (int i = 0; i < options.corrections; ++i) {
+    // Around a posture clear of the PUMA's singularities (elbow at tan q3 = d4 / a3, i.e. q3 =
+    // 1.524 or -1.618 rad; wrist at q5 = 0 or pi), +-0.5 rad on every joint.
+    const double home_rad[shared::kJoints] = {0.0, -0.6, -0.3, 0.3, 1.0, 0.2};
     std::array<std::int32_t, shared::kJoints> joints{};
     for (std::size_t j = 0; j < shared::kJoints; ++j)
-      joints[j] = shared::quantize_joint_angle(std::sin(0.01 * i + static_cast<double>(j)) * 3.0);
+      joints[j] = shared::quantize_joint_angle(home_rad[j] + 0.5 * std::sin(0.01 * i + static_cast<double>(j)));
     const auto t0 = std::chrono::steady_clock::now();
     const auto out = client.correct(joints, options.fd);
     round_trips_us.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+    const std::array<double, shared::kJoints> expected = reference_correction(params, joints);
     bool exact = true;
-    for (std::size_t j = 0; j < shared::kJoints; ++j) {
-      const double expected =
-          shared::joint_angle_rad<double>(joints[j]) - static_cast<double>(params.joints[j].error.theta_rad);
-      exact &= std::abs(out[j] - shared::quantize_joint_angle(expected)) <= 1;  // float vs double: 1 LSB
-    }
-    if (!check(exact, "corrected joint state differs from the expected joint-offset correction")) break;
+    for (std::size_t j = 0; j < shared::kJoints; ++j)
+      exact &= std::abs(out[j] - shared::quantize_joint_angle(expected[j])) <= 1;  // float vs double: 1 LSB
+    if (!check(exact, "corrected joint state differs from the double-precision kinematic correction")) break;
     ++result.corrections_done;
   }
   if (!round_trips_us.empty()) {

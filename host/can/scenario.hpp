@@ -2,9 +2,15 @@
 // run, real kernel SocketCAN in the VM test) and `kincal exercise` runs against any platform:
 // heartbeat and protocol version, parameter upload and read-back (correction parameters and
 // camera intrinsics), a series of measurements, and a stream of corrections whose results are
-// checked against the joint-offset correction computed here in double precision.
+// checked against the platform's kinematic correction (firmware/app/kinematic_correction.hpp)
+// computed here in double precision: the same reading of the block (correction_chain.hpp) and
+// the same damped first-order step and chord refinement, with firmware/core's link and error
+// models instantiated for double. A corrected joint may differ from the double result by one
+// LSB (2^-16 rad: the float result and the double one round to neighbouring values).
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -27,8 +33,14 @@ struct ScenarioResult {
   bool ok() const { return failures.empty(); }
 };
 
-// The correction parameters the scenario uploads (joint zero offsets of a few tenths of a mrad).
+// The correction parameters the scenario uploads: a PUMA 560 (Craig's modified DH) with
+// identified errors of a few tenths of a mrad and of a mm, and a 12 cm tool, itself off by as much.
 shared::CorrectionParameters scenario_correction_parameters();
+
+// The corrected joint targets the platform should return for `joints`, in double precision
+// (before quantization). Throws std::invalid_argument if the block cannot be read as a chain.
+std::array<double, shared::kJoints> reference_correction(const shared::CorrectionParameters& parameters,
+                                                         const std::array<std::int32_t, shared::kJoints>& joints);
 
 // Runs the scenario; prints one line per step to `log`. Transport failures propagate as exceptions.
 ScenarioResult run_platform_scenario(PlatformClient& client, const ScenarioOptions& options, std::ostream& log);

@@ -145,7 +145,11 @@ TEST_CASE("parameter blocks round-trip and reject bad values") {
     c.joints[j].nominal = {0.1f * static_cast<float>(j), 1.5707964f, 0.2f, 0.0f, 0.0f};
     c.joints[j].error = {1e-4f, -2e-4f, 3e-5f, 1e-3f * static_cast<float>(j), 0.0f};
   }
+  c.joints[0].type = JointKind::kPrismatic;
+  c.joints[0].convention = LinkKind::kDoty;
+  c.joints[0].nominal.beta_rad = 0.25f;
   c.tool_offset = {0.0f, 0.0f, 0.1f, 0.0f, 0.0f, 3.1415927f};
+  c.tool_error = {1e-3f, 0.0f, 0.0f, 0.0f, 2e-3f, 0.0f};
   std::array<std::uint8_t, kCorrectionBytes> image{};
   REQUIRE(encode_block(c, image) == kCorrectionBytes);
   CorrectionParameters back;
@@ -153,6 +157,19 @@ TEST_CASE("parameter blocks round-trip and reject bad values") {
   CHECK(back.joint_count == 6);
   CHECK(back.joints[5].error.theta_rad == c.joints[5].error.theta_rad);
   CHECK(back.tool_offset[5] == c.tool_offset[5]);
+  CHECK(back.joints[0].type == JointKind::kPrismatic);
+  CHECK(back.joints[0].convention == LinkKind::kDoty);
+  CHECK(back.joints[0].nominal.beta_rad == 0.25f);
+  CHECK(back.tool_error == c.tool_error);
+  CHECK(back.joints[1].type == JointKind::kRevolute);
+  CHECK(back.joints[1].convention == LinkKind::kModifiedDh);
+  // An unknown joint type or link convention.
+  auto unknown = image;
+  unknown[1] = 2;
+  CHECK(decode_block(unknown, back) == DecodeStatus::kBadValue);
+  unknown = image;
+  unknown[2] = 3;
+  CHECK(decode_block(unknown, back) == DecodeStatus::kBadValue);
   // NaN in a float, a joint count of 7, a short image.
   auto bad = image;
   bad[5] = 0xFF;

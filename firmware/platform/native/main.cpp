@@ -1,9 +1,12 @@
 // kincal_platform: the sensor platform's firmware as a Linux process on a SocketCAN interface.
 // The same firmware/app as on the STM32F407, bound to native ports (native_ports.hpp).
-//   kincal_platform --can vcan0 [--fd] [--storage DIR] [--ranges FILE|-] [--no-padding]
-//                   [--duration-s S]
-// Stops on SIGINT/SIGTERM or after --duration-s. Exit status 0, or 1 with a message naming what
-// failed (no such interface, storage directory not writable, ranges file missing).
+//   kincal_platform --can vcan0 [--fd] [--storage DIR] [--ranges FILE|-] [--frames DIR|FILE]
+//                   [--no-padding] [--duration-s S]
+// Measurement: PlatformMeasurement (firmware/app/platform_measurement.hpp) over the camera frames
+// of --frames (PGM files, native_ports.hpp) and the rangers of --ranges; correction:
+// KinematicCorrection. Stops on SIGINT/SIGTERM or after --duration-s. Exit status 0, or 1 with a
+// message naming what failed (no such interface, storage directory not writable, ranges file
+// missing, frames missing or malformed).
 #include <poll.h>
 #include <CLI/CLI.hpp>
 
@@ -12,9 +15,9 @@
 #include <iostream>
 #include <memory>
 
-#include "firmware/app/joint_offset_correction.hpp"
+#include "firmware/app/kinematic_correction.hpp"
 #include "firmware/app/platform_app.hpp"
-#include "firmware/app/ranger_measurement.hpp"
+#include "firmware/app/platform_measurement.hpp"
 #include "firmware/platform/native/native_ports.hpp"
 
 namespace {
@@ -22,21 +25,24 @@ namespace {
 volatile std::sig_atomic_t g_stop = 0;
 void on_signal(int) { g_stop = 1; }
 
+using NativeMeasurement = kincal::app::PlatformMeasurement<kincal::native::PgmFrames, kincal::native::LineRangers>;
 using NativeApp = kincal::app::PlatformApp<kincal::native::SocketCanPort, kincal::native::FileStorage,
-                                           kincal::app::RangerMeasurement<kincal::native::LineRangers>,
-                                           kincal::app::JointOffsetCorrection>;
+                                           NativeMeasurement, kincal::app::KinematicCorrection>;
 
 int run(const std::string& interface, bool fd, bool padding, const std::string& storage_dir,
-        const std::string& ranges_path, double duration_s) {
+        const std::string& ranges_path, const std::string& frames_path, double duration_s) {
+  // The inputs first: a wrong --ranges or --frames is reported before the interface is needed.
+  kincal::native::LineRangers rangers(ranges_path);
+  kincal::native::PgmFrames camera(frames_path);
   kincal::native::SocketCanPort can(interface, fd);
   kincal::native::FileStorage storage(storage_dir);
-  kincal::native::LineRangers rangers(ranges_path);
-  kincal::app::RangerMeasurement<kincal::native::LineRangers> measure(rangers);
-  kincal::app::JointOffsetCorrection correct;
+  // The steps (22 KiB and 3.5 KiB) and the application (11 KiB): off the stack.
+  auto measure = std::make_unique<NativeMeasurement>(camera, rangers);
+  auto correct = std::make_unique<kincal::app::KinematicCorrection>();
   kincal::app::AppConfig config;
   config.fd = fd;
   config.isotp_padding = padding;
-  auto app = std::make_unique<NativeApp>(config, can, storage, measure, correct);  // ~10 KiB: off the stack
+  auto app = std::make_unique<NativeApp>(config, can, storage, *measure, *correct);
 
   const std::uint64_t start_us = kincal::native::monotonic_us();
   app->start(start_us);
@@ -66,7 +72,7 @@ int run(const std::string& interface, bool fd, bool padding, const std::string& 
 
 int main(int argc, char** argv) {
   CLI::App cli{"kincal_platform: the sensor platform's firmware as a Linux process on SocketCAN", "kincal_platform"};
-  std::string interface, storage_dir = "kincal-platform-storage", ranges_path;
+  std::string interface, storage_dir = "kincal-platform-storage", ranges_path, frames_path;
   bool fd = false, no_padding = false;
   double duration_s = 0;
   cli.add_option("--can", interface, "SocketCAN interface (e.g. vcan0)")->required();
@@ -74,13 +80,16 @@ int main(int argc, char** argv) {
   cli.add_flag("--no-padding", no_padding, "do not pad ISO-TP frames to 8 bytes");
   cli.add_option("--storage", storage_dir, "directory of the parameter storage slots");
   cli.add_option("--ranges", ranges_path, "file or pipe of range lines (4 ranges in metres); '-' = stdin");
+  cli.add_option("--frames", frames_path,
+                 "camera frames: a directory of binary 8-bit PGM files (one per measurement, in name order) "
+                 "or one PGM file for every measurement");
   cli.add_option("--duration-s", duration_s, "stop after this many seconds (0 = until SIGTERM)")
       ->check(CLI::NonNegativeNumber);
   CLI11_PARSE(cli, argc, argv);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   try {
-    return run(interface, fd, !no_padding, storage_dir, ranges_path, duration_s);
+    return run(interface, fd, !no_padding, storage_dir, ranges_path, frames_path, duration_s);
   } catch (const std::exception& e) {
     std::cerr << "kincal_platform: " << e.what() << "\n";
     return 1;

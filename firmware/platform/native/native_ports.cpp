@@ -9,10 +9,13 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
@@ -171,5 +174,115 @@ app::RangerStatus LineRangers::read(std::array<std::uint32_t, shared::kRangers>&
   }
   return app::RangerStatus::kOk;
 }
+
+namespace {
+
+// The next header token of a PGM, skipping whitespace and # comments.
+std::string pgm_token(std::istream& in) {
+  std::string token;
+  char c = 0;
+  while (in.get(c)) {
+    if (c == '#') {
+      std::string comment;
+      std::getline(in, comment);
+    } else if (std::isspace(static_cast<unsigned char>(c))) {
+      if (!token.empty()) return token;
+    } else {
+      token += c;
+    }
+  }
+  return token;
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> read_pgm(const std::string& path, std::uint16_t& width_px, std::uint16_t& height_px) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot open frame " + path);
+  const auto bad = [&path](const std::string& what) { return std::runtime_error("frame " + path + ": " + what); };
+  if (pgm_token(in) != "P5") throw bad("not a binary PGM (the file must start with P5)");
+  long width = 0, height = 0, maxval = 0;
+  try {
+    width = std::stol(pgm_token(in));
+    height = std::stol(pgm_token(in));
+    maxval = std::stol(pgm_token(in));
+  } catch (const std::exception&) {
+    throw bad("malformed PGM header (width, height, maxval)");
+  }
+  if (width < 1 || width > 65535 || height < 1 || height > 65535)
+    throw bad("frame size " + std::to_string(width) + " x " + std::to_string(height) + " is outside 1..65535");
+  if (maxval < 1 || maxval > 255) throw bad("maxval " + std::to_string(maxval) + " is not 8-bit (1..255)");
+  std::vector<std::uint8_t> pixels(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  in.read(reinterpret_cast<char*>(pixels.data()), static_cast<std::streamsize>(pixels.size()));
+  if (in.gcount() != static_cast<std::streamsize>(pixels.size()))
+    throw bad("truncated: " + std::to_string(in.gcount()) + " of " + std::to_string(pixels.size()) + " pixel bytes");
+  width_px = static_cast<std::uint16_t>(width);
+  height_px = static_cast<std::uint16_t>(height);
+  return pixels;
+}
+
+PgmFrames::PgmFrames(const std::string& path) {
+  if (path.empty()) return;
+  namespace fs = std::filesystem;
+  std::error_code error;
+  if (fs::is_directory(path, error)) {
+    for (const fs::directory_entry& e : fs::directory_iterator(path))
+      if (e.is_regular_file() && e.path().extension() == ".pgm") files_.push_back(e.path().string());
+    std::sort(files_.begin(), files_.end());
+    if (files_.empty()) throw std::runtime_error("frames directory " + path + " holds no .pgm file");
+  } else {
+    files_.push_back(path);
+  }
+  pixels_ = read_pgm(files_.front(), width_px_, height_px_);  // the frame size, and an early error
+}
+
+bool PgmFrames::load(const std::string& path) {
+  try {
+    std::uint16_t width = 0, height = 0;
+    std::vector<std::uint8_t> pixels = read_pgm(path, width, height);
+    if (width != width_px_ || height != height_px_) {
+      std::cerr << "kincal_platform: frame " << path << " is " << width << " x " << height
+                << ", the camera's frames are " << width_px_ << " x " << height_px_ << "\n";
+      return false;
+    }
+    pixels_ = std::move(pixels);
+    current_ = path;
+    return true;
+  } catch (const std::exception& e) {
+    std::cerr << "kincal_platform: " << e.what() << "\n";
+    return false;
+  }
+}
+
+app::CaptureStatus PgmFrames::begin_frame(app::FrameUse use, std::uint64_t& exposure_us) {
+  exposure_us = monotonic_us();
+  row_ = 0;
+  frame_ok_ = false;
+  if (files_.empty()) {
+    std::cerr << "kincal_platform: a camera section was asked for, but no --frames were given\n";
+    return app::CaptureStatus::kFailed;
+  }
+  if (use == app::FrameUse::kMetering || current_.empty()) {
+    if (next_file_ >= files_.size()) {
+      if (files_.size() > 1) {
+        std::cerr << "kincal_platform: no more frames (all " << files_.size() << " files were used)\n";
+        return app::CaptureStatus::kFailed;
+      }
+      next_file_ = 0;  // a single file serves every measurement
+    }
+    if (!load(files_[next_file_++])) return app::CaptureStatus::kFailed;
+  }
+  frame_ok_ = true;
+  return app::CaptureStatus::kOk;
+}
+
+app::CaptureStatus PgmFrames::read_row(std::span<std::uint8_t> row) {
+  if (!frame_ok_ || row_ >= height_px_ || row.size() != width_px_) return app::CaptureStatus::kFailed;
+  std::copy_n(pixels_.begin() + static_cast<std::ptrdiff_t>(row_ * width_px_), width_px_, row.begin());
+  ++row_;
+  return app::CaptureStatus::kOk;
+}
+
+static_assert(app::CameraPort<PgmFrames>);
 
 }  // namespace kincal::native

@@ -7,6 +7,14 @@
 //   LineRangers     four ranges in metres per line ("0.200 0.210 0.190 0.205", "nan" = no echo)
 //                   from a file or a pipe, one line per measurement; without a source, a fixed
 //                   reading (0.2, 0.21, 0.19, 0.2 m), which the end-to-end tests check for.
+//   PgmFrames       the CameraPort: binary 8-bit PGM files (P5, maxval <= 255), either every
+//                   *.pgm of a directory in name order, one per measurement (the metering frame
+//                   moves to the next file, the measurement frame reads the same file again;
+//                   after the last file every frame fails), or a single file for every
+//                   measurement. All frames must have the first file's size. Without a source
+//                   the camera is absent: size 0 x 0, every frame fails (camera sections
+//                   report kCameraFailure). Rows are always ready (never kPending); the
+//                   exposure time is the clock when the frame was requested.
 // Errors at start-up (no interface, unwritable directory, unreadable file) throw
 // std::runtime_error naming what and where; at run time, ports report failure by status.
 #pragma once
@@ -15,11 +23,12 @@
 #include <cstdint>
 #include <fstream>
 #include <memory>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "firmware/app/parameter_store.hpp"
 #include "firmware/app/ports.hpp"
-#include "firmware/app/ranger_measurement.hpp"
 
 namespace kincal::native {
 
@@ -69,6 +78,31 @@ class LineRangers {
   std::ifstream file_;
   std::istream* in_ = nullptr;
 };
+
+class PgmFrames {
+ public:
+  // path empty: no camera. Throws std::runtime_error naming the path if it is neither a
+  // readable PGM file nor a directory holding at least one, or if the first file is malformed.
+  explicit PgmFrames(const std::string& path);
+  std::uint16_t width_px() const { return width_px_; }
+  std::uint16_t height_px() const { return height_px_; }
+  app::CaptureStatus begin_frame(app::FrameUse use, std::uint64_t& exposure_us);
+  app::CaptureStatus read_row(std::span<std::uint8_t> row);
+
+ private:
+  bool load(const std::string& path);  // false (with a message on stderr) if the file is unusable
+
+  std::vector<std::string> files_;
+  std::size_t next_file_ = 0;
+  std::string current_;
+  std::vector<std::uint8_t> pixels_;
+  std::uint16_t width_px_ = 0, height_px_ = 0;
+  std::size_t row_ = 0;
+  bool frame_ok_ = false;
+};
+
+// Reads a binary 8-bit PGM (P5). Throws std::runtime_error naming the file and what is wrong.
+std::vector<std::uint8_t> read_pgm(const std::string& path, std::uint16_t& width_px, std::uint16_t& height_px);
 
 std::uint64_t monotonic_us();
 

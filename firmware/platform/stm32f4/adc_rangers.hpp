@@ -1,5 +1,5 @@
 // The platform's four range sensors read through ADC1 (RM0090 section 13): the RangerPort of
-// firmware/app/ranger_measurement.hpp.
+// firmware/app/ports.hpp.
 //
 // Sensor family assumed: MaxBotix XL-MaxSonar-EZ MB1240-class ultrasonic rangers, whose analog
 // output is (Vcc / 1024) per centimetre, 20 cm to 765 cm, updated every 100 ms (the sensor's own
@@ -28,7 +28,7 @@
 #include <array>
 #include <cstdint>
 
-#include "firmware/app/ranger_measurement.hpp"
+#include "firmware/app/ports.hpp"
 #include "shared/measurement_report.hpp"
 
 namespace kincal::stm32f4 {

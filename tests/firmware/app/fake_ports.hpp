@@ -1,6 +1,7 @@
 // Test doubles of the platform's ports (firmware/app/ports.hpp), without heap, so the same
 // tests run natively and on the M4: a CAN port that records frames, RAM storage that can lose
-// power after any number of byte operations, rangers with settable readings.
+// power after any number of byte operations, rangers with settable readings, a camera serving
+// an in-memory grey image with settable failures.
 #pragma once
 
 #include <array>
@@ -9,7 +10,6 @@
 #include <span>
 
 #include "firmware/app/ports.hpp"
-#include "firmware/app/ranger_measurement.hpp"
 
 namespace kincal::test {
 
@@ -92,5 +92,47 @@ struct FakeRangers {
     return app::RangerStatus::kOk;
   }
 };
+
+// Serves `image` (width x height, row-major) for every frame, like a camera looking at a still
+// scene; counts the frames and remembers what each was for.
+struct FakeCamera {
+  std::span<const std::uint8_t> image;
+  std::uint16_t width = 0, height = 0;
+  std::uint64_t exposure_us = 0;  // reported by begin_frame
+  bool fail_begin = false;
+  int fail_at_row = -1;     // read_row of this row of the measurement frame reports kFailed
+  int pending_at_row = -1;  // from this row of the measurement frame on, rows never arrive
+  int frames = 0;
+  app::FrameUse last_use = app::FrameUse::kMetering;
+  int row = 0;
+  bool active = false;
+
+  std::uint16_t width_px() const { return width; }
+  std::uint16_t height_px() const { return height; }
+  app::CaptureStatus begin_frame(app::FrameUse use, std::uint64_t& exposure) {
+    if (fail_begin) return app::CaptureStatus::kFailed;
+    ++frames;
+    last_use = use;
+    row = 0;
+    active = true;
+    exposure = exposure_us;
+    return app::CaptureStatus::kOk;
+  }
+  app::CaptureStatus read_row(std::span<std::uint8_t> out) {
+    const bool measuring = last_use == app::FrameUse::kMeasurement;
+    if (!active || row >= height || out.size() != width || (measuring && row == fail_at_row)) {
+      active = false;
+      return app::CaptureStatus::kFailed;
+    }
+    if (measuring && pending_at_row >= 0 && row >= pending_at_row) return app::CaptureStatus::kPending;
+    const std::size_t offset = static_cast<std::size_t>(row) * width;
+    for (std::size_t x = 0; x < width; ++x) out[x] = image[offset + x];
+    ++row;
+    return app::CaptureStatus::kOk;
+  }
+};
+
+static_assert(app::CameraPort<FakeCamera>);
+static_assert(app::RangerPort<FakeRangers>);
 
 }  // namespace kincal::test

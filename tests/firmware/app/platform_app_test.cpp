@@ -9,24 +9,26 @@
 #include <array>
 #include <cstdint>
 
-#include "firmware/app/joint_offset_correction.hpp"
-#include "firmware/app/ranger_measurement.hpp"
+#include "firmware/app/kinematic_correction.hpp"
+#include "firmware/app/platform_measurement.hpp"
 #include "tests/firmware/app/fake_ports.hpp"
+#include "tests/firmware/app/puma560.hpp"
 
 using namespace kincal;
 using shared::CanFrame;
 
 namespace {
 
-using App = app::PlatformApp<test::FakeCan, test::FakeStorage, app::RangerMeasurement<test::FakeRangers>,
-                             app::JointOffsetCorrection>;
+using Measure = app::PlatformMeasurement<test::FakeCamera, test::FakeRangers>;
+using App = app::PlatformApp<test::FakeCan, test::FakeStorage, Measure, app::KinematicCorrection>;
 
 struct Harness {
   test::FakeCan can;
   test::FakeStorage& storage;
+  test::FakeCamera camera;  // no image: camera sections report kCameraFailure
   test::FakeRangers rangers;
-  app::RangerMeasurement<test::FakeRangers> measure{rangers};
-  app::JointOffsetCorrection correct;
+  Measure measure{camera, rangers};
+  app::KinematicCorrection correct;
   App app;
   core::IsoTpBuffers<4096, 4096> host_buffers;
   core::IsoTpEndpoint host;
@@ -118,11 +120,21 @@ CanFrame raw_frame(std::uint32_t id, std::initializer_list<std::uint8_t> bytes) 
   return f;
 }
 
+// A PUMA 560 in Craig's modified DH with joint zero offsets of 1..6 mrad: the corrected target
+// of a well-conditioned posture is then the target minus the offsets (to third order).
 shared::CorrectionParameters correction_parameters() {
-  shared::CorrectionParameters c;
-  c.joint_count = 6;
+  shared::CorrectionParameters c = test::puma560_block();
   for (std::size_t j = 0; j < shared::kJoints; ++j) c.joints[j].error.theta_rad = 0.001f * static_cast<float>(j + 1);
   return c;
+}
+
+// Joint j corrected by -0.001 (j + 1) rad = -65.536 (j + 1) LSB, within one LSB (rounding).
+void check_offsets_removed(const std::int32_t* in, const std::int32_t* out, std::size_t first_joint, std::size_t n) {
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto expected = in[k] - static_cast<std::int32_t>(65.536 * static_cast<double>(first_joint + k + 1) + 0.5);
+    CHECK(out[k] - expected <= 1);
+    CHECK(expected - out[k] <= 1);
+  }
 }
 
 void upload_correction(Harness& h, std::uint8_t expect_status = 0) {
@@ -179,8 +191,8 @@ TEST_CASE("measurement: trigger -> ISO-TP report with the trigger's sequence and
   CHECK(r.range_raw[0] == 13107);  // 0.2 m * 65536 = 13107.2
   CHECK(r.range_raw[1] == 13763);  // 0.21 m -> 13762.56
   CHECK(r.range_raw[3] == shared::kNoEcho);
-  // Sections this build cannot produce are absent, with a status that says so.
-  shared::encode(shared::MeasureTrigger{43, shared::section::kRanges | shared::section::kPose}, t);
+  // Sections this platform cannot produce are absent, with a status that says so.
+  shared::encode(shared::MeasureTrigger{43, shared::section::kRanges | shared::section::kPoint}, t);
   h.send(t);
   h.run(20);
   REQUIRE(shared::decode(std::span<const std::uint8_t>(h.message).first(h.message_length), r) ==
@@ -275,8 +287,8 @@ TEST_CASE("correction stream: classic A+B pairs and CAN FD frames, same sequence
   h.mode(false, true);
   shared::JointHalf a, b;
   a.sequence = b.sequence = 7;
-  a.angle_raw = {65536, 0, -65536};
-  b.angle_raw = {1000, 2000, 3000};
+  a.angle_raw = {65536, -32768, -20000};  // a posture away from the PUMA's singularities
+  b.angle_raw = {20000, 50000, 30000};
   CanFrame fa, fb;
   shared::encode_joint_half(shared::can_id::kJointStateA, a, fa);
   shared::encode_joint_half(shared::can_id::kJointStateB, b, fb);
@@ -293,16 +305,12 @@ TEST_CASE("correction stream: classic A+B pairs and CAN FD frames, same sequence
   REQUIRE(shared::decode_joint_half(shared::can_id::kCorrectedB, *cb, ob) == shared::DecodeStatus::kOk);
   CHECK(oa.sequence == 7);
   CHECK(ob.sequence == 7);
-  // joint j corrected by -0.001 (j + 1) rad = -65.536 (j + 1) LSB, rounded.
-  CHECK(oa.angle_raw[0] == 65536 - 66);
-  CHECK(oa.angle_raw[1] == -131);
-  CHECK(oa.angle_raw[2] == -65536 - 197);
-  CHECK(ob.angle_raw[0] == 1000 - 262);
-  CHECK(ob.angle_raw[2] == 3000 - 393);
+  check_offsets_removed(a.angle_raw.data(), oa.angle_raw.data(), 0, 3);
+  check_offsets_removed(b.angle_raw.data(), ob.angle_raw.data(), 3, 3);
 
   shared::JointFull full;
   full.sequence = 99;
-  full.angle_raw = {0, 0, 0, 0, 0, 524287};
+  full.angle_raw = {10000, -30000, -30000, 20000, 60000, 300000};
   CanFrame ff;
   shared::encode_joint_full(shared::can_id::kJointStateFd, full, ff);
   h.send(ff);
@@ -313,8 +321,7 @@ TEST_CASE("correction stream: classic A+B pairs and CAN FD frames, same sequence
   shared::JointFull out;
   REQUIRE(shared::decode_joint_full(shared::can_id::kCorrectedFd, *cf, out) == shared::DecodeStatus::kOk);
   CHECK(out.sequence == 99);
-  CHECK(out.angle_raw[0] == -66);
-  CHECK(out.angle_raw[5] == 524287 - 393);
+  check_offsets_removed(full.angle_raw.data(), out.angle_raw.data(), 0, 6);
   CHECK(h.heartbeat().corrections == 2);
 }
 

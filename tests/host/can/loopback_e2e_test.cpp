@@ -12,9 +12,9 @@
 #include <sstream>
 #include <thread>
 
-#include "firmware/app/joint_offset_correction.hpp"
+#include "firmware/app/kinematic_correction.hpp"
 #include "firmware/app/platform_app.hpp"
-#include "firmware/app/ranger_measurement.hpp"
+#include "firmware/app/platform_measurement.hpp"
 #include "host/can/candump_log.hpp"
 #include "host/can/loopback.hpp"
 #include "host/can/monitor.hpp"
@@ -35,8 +35,8 @@ struct LoopbackCanPort {
   app::CanHealth health() { return {}; }
 };
 
-using LoopbackApp = app::PlatformApp<LoopbackCanPort, test::FakeStorage, app::RangerMeasurement<test::FakeRangers>,
-                                     app::JointOffsetCorrection>;
+using Measure = app::PlatformMeasurement<test::FakeCamera, test::FakeRangers>;
+using LoopbackApp = app::PlatformApp<LoopbackCanPort, test::FakeStorage, Measure, app::KinematicCorrection>;
 
 std::uint64_t now_us() {
   return static_cast<std::uint64_t>(
@@ -69,9 +69,10 @@ class PlatformThread {
  private:
   LoopbackCanPort port_;
   test::FakeStorage storage_;
+  test::FakeCamera camera_;  // the scenario asks for ranges only
   test::FakeRangers rangers_;
-  app::RangerMeasurement<test::FakeRangers> measure_{rangers_};
-  app::JointOffsetCorrection correct_;
+  Measure measure_{camera_, rangers_};
+  app::KinematicCorrection correct_;
   std::unique_ptr<LoopbackApp> app_;
   std::atomic<bool> stop_{false};
   std::thread thread_;
@@ -117,7 +118,8 @@ void run(bool fd) {
     CHECK(frame->interface == "loop0");
     for (const std::string& line : monitor.feed(frame->frame, frame->time_us)) {
       saw_report |= line.find("MeasurementReport seq=") != std::string::npos;
-      saw_write |= line.find("ParameterWrite block=4 version=1 length=265 check=ok") != std::string::npos;
+      saw_write |= line.find("ParameterWrite block=4 version=" + std::to_string(shared::kBlockFormatVersion) +
+                             " length=" + std::to_string(shared::kCorrectionBytes) + " check=ok") != std::string::npos;
     }
   }
   CHECK(logged > 400);

@@ -1,0 +1,267 @@
+#include "firmware/app/platform_measurement.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "firmware/app/rotation_vector.hpp"
+
+namespace kincal::app {
+
+namespace {
+
+constexpr float kBeamAxisTolerance = 1.0e-3f;  // beam direction components off the optical axis
+constexpr float kBeamOriginZToleranceM = 1.0e-4f;
+constexpr std::uint32_t kMinBlobAreaPx = 4;  // single pixels and pairs are noise, not fiducials or a beacon
+
+// The report's one status: the most fundamental failure wins (hardware, then configuration,
+// then the scene, then what this platform cannot do).
+int rank(shared::MeasureStatus status) {
+  switch (status) {
+    case shared::MeasureStatus::kOk:
+      return 0;
+    case shared::MeasureStatus::kNotAvailable:
+      return 1;
+    case shared::MeasureStatus::kNoTarget:
+      return 2;
+    case shared::MeasureStatus::kNoParameters:
+      return 3;
+    case shared::MeasureStatus::kCameraFailure:
+      return 4;
+    case shared::MeasureStatus::kRangerFailure:
+      return 5;
+  }
+  return 0;
+}
+
+// round(value * scale) if |value * scale| <= limit.
+bool to_raw(float value, float scale, std::int32_t limit, std::int32_t& raw) {
+  const float scaled = value * scale;
+  if (!(std::fabs(scaled) <= static_cast<float>(limit))) return false;
+  raw = static_cast<std::int32_t>(scaled >= 0.0f ? scaled + 0.5f : scaled - 0.5f);
+  raw = raw > limit ? limit : (raw < -limit ? -limit : raw);
+  return true;
+}
+
+// q16_16 pixels to the report's uq10.6, rounded; negative -> 0, saturating at 65535.
+std::uint16_t pixel_q6(core::q16_16 v) {
+  if (v.raw() <= 0) return 0;
+  const std::uint32_t q6 = (static_cast<std::uint32_t>(v.raw()) + (1u << 9)) >> 10;
+  return static_cast<std::uint16_t>(q6 > 0xFFFFu ? 0xFFFFu : q6);
+}
+
+}  // namespace
+
+void MeasurementPipeline::note(shared::MeasureStatus status) noexcept {
+  if (rank(status) > rank(status_)) status_ = status;
+}
+
+void MeasurementPipeline::begin(const MeasureRequest& request, const ParameterSet& parameters) noexcept {
+  request_ = request;
+  has_geometry_ = parameters.has_geometry;
+  has_intrinsics_ = parameters.has_intrinsics;
+  geometry_ = parameters.geometry;
+  intrinsics_ = parameters.intrinsics;
+  const std::uint8_t s = request.sections;
+  const bool pose_possible = (s & shared::section::kPose) != 0 && has_geometry_ && has_intrinsics_;
+  needs_camera_ = (s & (shared::section::kFiducials | shared::section::kBlobs)) != 0 || pose_possible;
+  needs_rangers_ =
+      (s & shared::section::kRanges) != 0 || ((s & shared::section::kPlane) != 0 && has_geometry_) || pose_possible;
+  labeler_config_ = core::LabelerConfig{};
+  labeler_config_.polarity = (s & (shared::section::kFiducials | shared::section::kPose)) != 0
+                                 ? core::Polarity::kDark
+                                 : core::Polarity::kBright;
+  labeler_config_.min_area_px = kMinBlobAreaPx;
+  histogram_.clear();
+  width_px_ = height_px_ = 0;
+  have_plane_ = false;
+}
+
+bool MeasurementPipeline::accept_frame_size(std::uint16_t width_px, std::uint16_t height_px) noexcept {
+  width_px_ = width_px;
+  height_px_ = height_px;
+  return width_px >= 1 && width_px <= kMaxWidthPx && height_px >= 1 && height_px <= core::kLabelerMaxRows;
+}
+
+void MeasurementPipeline::meter_row() noexcept {
+  // Cannot fail: the step is 4, and a frame of at most 640 x 4096 pixels stays far below
+  // kMaxHistogramSamples.
+  (void)histogram_.add_row(row(), kHistogramStep);
+}
+
+bool MeasurementPipeline::begin_labelling() noexcept {
+  std::uint8_t otsu = 0;
+  if (core::otsu_threshold(histogram_, otsu) != core::ThresholdStatus::kOk) return false;
+  labeler_config_.threshold = labeler_config_.polarity == core::Polarity::kDark ? core::dark_threshold(otsu) : otsu;
+  return labeler_.begin_frame(labeler_config_, blobs_) == core::LabelStatus::kOk;
+}
+
+bool MeasurementPipeline::label_row() noexcept { return labeler_.commit_row(width_px_) == core::LabelStatus::kOk; }
+
+bool MeasurementPipeline::compute_plane(const std::array<std::uint32_t, shared::kRangers>& ranges_um) noexcept {
+  core::RangeSensorLayout layout;
+  const float z0_m = geometry_.rangers[0].origin_m[2];
+  for (std::size_t i = 0; i < shared::kRangers; ++i) {
+    const shared::RangerBeam& beam = geometry_.rangers[i];
+    if (!(std::fabs(beam.direction[0]) <= kBeamAxisTolerance && std::fabs(beam.direction[1]) <= kBeamAxisTolerance &&
+          beam.direction[2] > 0.0f && std::fabs(beam.origin_m[2] - z0_m) <= kBeamOriginZToleranceM)) {
+      note(shared::MeasureStatus::kNoParameters);
+      return false;
+    }
+    layout.position_m[i] = core::Vector2<float>(beam.origin_m[0], beam.origin_m[1]);
+  }
+  layout.origin_z_m = z0_m;
+  layout.model = core::RangeModel::along_beam;
+  layout.allow_three_point = false;
+  if (core::prepare_range_plane(layout, plane_model_) != core::PlaneStatus::ok) {
+    note(shared::MeasureStatus::kNoParameters);
+    return false;
+  }
+  std::array<float, core::kRangeSensorCount> range_m{};
+  for (std::size_t i = 0; i < shared::kRangers; ++i) {
+    range_m[i] = range_raw_from_um(ranges_um[i]) == shared::kNoEcho ? std::numeric_limits<float>::quiet_NaN()
+                                                                    : static_cast<float>(ranges_um[i]) * 1.0e-6f;
+  }
+  if (core::fit_range_plane(plane_model_, range_m, plane_) != core::PlaneStatus::ok) {
+    note(shared::MeasureStatus::kNoTarget);
+    return false;
+  }
+  have_plane_ = true;
+  return true;
+}
+
+void MeasurementPipeline::report_blobs(shared::MeasurementReport& report, std::uint32_t blob_count) const noexcept {
+  const std::size_t n = blob_count < kMaxBlobsOut ? blob_count : kMaxBlobsOut;
+  for (std::size_t i = 0; i < n; ++i) {
+    const core::Blob& b = blobs_[i];
+    shared::Blob& out = report.blobs[i];
+    out.x_q6 = pixel_q6(b.x_px);
+    out.y_q6 = pixel_q6(b.y_px);
+    out.area_px = static_cast<std::uint16_t>(b.area_px > 0xFFFFu ? 0xFFFFu : b.area_px);
+    out.colour_class = 0;
+    out.peak_dn = 0;
+  }
+  report.blob_count = static_cast<std::uint8_t>(n);
+  report.sections |= shared::section::kBlobs;
+}
+
+void MeasurementPipeline::compute_fiducials_and_pose(shared::MeasurementReport& report) noexcept {
+  if ((request_.sections & shared::section::kFiducials) != 0) {
+    for (std::size_t i = 0; i < fid_.count; ++i) {
+      const core::IdentifiedFiducial& f = fid_.fiducials[i];
+      report.fiducials[i] = {f.id, pixel_q6(f.x_px), pixel_q6(f.y_px)};
+    }
+    report.fiducial_count = fid_.count;
+    report.sections |= shared::section::kFiducials;
+  }
+  if ((request_.sections & shared::section::kPose) == 0 || !have_plane_ || !has_intrinsics_ ||
+      intrinsics_.width_px != width_px_ || intrinsics_.height_px != height_px_)
+    return;  // why not was noted by finish()
+  core::CameraIntrinsics camera;
+  camera.fx_px = intrinsics_.fx_px;
+  camera.fy_px = intrinsics_.fy_px;
+  camera.cx_px = intrinsics_.cx_px;
+  camera.cy_px = intrinsics_.cy_px;
+  camera.distortion = {intrinsics_.k1, intrinsics_.k2, intrinsics_.p1, intrinsics_.p2, intrinsics_.k3};
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < fid_.count; ++i) {
+    const core::IdentifiedFiducial& f = fid_.fiducials[i];
+    if (f.id < 1 || f.id > geometry_.fiducial_count) continue;
+    const core::Vector2<float> pixel(f.x_px.to_float(), f.y_px.to_float());
+    if (core::pixel_to_plane_point(camera, plane_, pixel, camera_points_m_[n]) != core::CameraStatus::ok) continue;
+    const auto& s = geometry_.fiducial_square_m[f.id - 1u];
+    square_points_m_[n] = core::Vector3<float>(s[0], s[1], s[2]);
+    ++n;
+  }
+  if (n < static_cast<std::size_t>(core::kMinPosePoints) ||
+      core::pose_from_points(std::span<const core::Vector3<float>>(square_points_m_.data(), n),
+                             std::span<const core::Vector3<float>>(camera_points_m_.data(), n), core::PoseOptions{},
+                             fit_) != core::PoseStatus::ok) {
+    note(shared::MeasureStatus::kNoTarget);
+    return;
+  }
+  square_T_camera_ = fit_.camera_T_square.inverse();
+  const core::Vector3<float> rotation = rotation_vector(square_T_camera_.rotation);
+  std::array<std::int32_t, 3> translation_raw{}, rotation_raw{};
+  for (int k = 0; k < 3; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    if (!to_raw(square_T_camera_.translation(k), 262144.0f, (1 << 19) - 1, translation_raw[i]) ||
+        !to_raw(rotation(k), 32768.0f, (1 << 17) - 1, rotation_raw[i])) {
+      note(shared::MeasureStatus::kNoTarget);
+      return;
+    }
+  }
+  report.translation_raw = translation_raw;
+  report.rotation_raw = rotation_raw;
+  report.sections |= shared::section::kPose;
+}
+
+void MeasurementPipeline::finish(CaptureStatus camera, bool labelled, RangerStatus rangers,
+                                 const std::array<std::uint32_t, shared::kRangers>& ranges_um,
+                                 std::uint32_t timestamp_us, shared::MeasurementReport& report) noexcept {
+  report = shared::MeasurementReport{};
+  report.sequence = request_.sequence;
+  report.timestamp_us = timestamp_us;
+  status_ = shared::MeasureStatus::kOk;
+  const std::uint8_t s = request_.sections;
+
+  bool ranges_ok = false;
+  if (needs_rangers_) {
+    if (rangers != RangerStatus::kOk) {
+      note(shared::MeasureStatus::kRangerFailure);
+    } else {
+      ranges_ok = true;
+      if ((s & shared::section::kRanges) != 0) {
+        for (std::size_t i = 0; i < shared::kRangers; ++i) report.range_raw[i] = range_raw_from_um(ranges_um[i]);
+        report.sections |= shared::section::kRanges;
+      }
+    }
+  }
+
+  if ((s & (shared::section::kPlane | shared::section::kPose)) != 0) {
+    if (!has_geometry_) {
+      note(shared::MeasureStatus::kNoParameters);
+    } else if (ranges_ok && compute_plane(ranges_um) && (s & shared::section::kPlane) != 0) {
+      // The report's normal points at the camera: range_plane's, negated.
+      std::int32_t nx = 0, ny = 0, distance = 0;
+      if (to_raw(-plane_.normal.x(), 32768.0f, 32767, nx) && to_raw(-plane_.normal.y(), 32768.0f, 32767, ny) &&
+          to_raw(plane_.distance_m, 65536.0f, 65535, distance) && distance < shared::kNoEcho) {
+        report.plane_normal_x_raw = static_cast<std::int16_t>(nx);
+        report.plane_normal_y_raw = static_cast<std::int16_t>(ny);
+        report.plane_distance_raw = static_cast<std::uint16_t>(distance);
+        report.sections |= shared::section::kPlane;
+      } else {
+        note(shared::MeasureStatus::kNoTarget);
+      }
+    }
+  }
+  // Intrinsics calibrated for another frame size do not describe this camera's pixels.
+  const bool intrinsics_fit =
+      has_intrinsics_ && intrinsics_.width_px == width_px_ && intrinsics_.height_px == height_px_;
+  if ((s & shared::section::kPose) != 0 && !intrinsics_fit) note(shared::MeasureStatus::kNoParameters);
+
+  if (needs_camera_) {
+    core::FrameSummary summary;
+    if (camera != CaptureStatus::kOk) {
+      note(shared::MeasureStatus::kCameraFailure);
+    } else if (!labelled) {
+      note(shared::MeasureStatus::kNoTarget);
+    } else if (labeler_.end_frame(summary) != core::LabelStatus::kOk) {
+      note(shared::MeasureStatus::kCameraFailure);
+    } else {
+      if ((s & shared::section::kBlobs) != 0) report_blobs(report, summary.blobs);
+      if ((s & (shared::section::kFiducials | shared::section::kPose)) != 0) {
+        const std::size_t n = summary.blobs < kMaxBlobsOut ? summary.blobs : kMaxBlobsOut;
+        if (core::identify_fiducials(core::FidModel{}, std::span<const core::Blob>(blobs_.data(), n), verdicts_,
+                                     fid_) == core::FidStatus::kOk) {
+          compute_fiducials_and_pose(report);
+        } else {
+          note(shared::MeasureStatus::kNoTarget);
+        }
+      }
+    }
+  }
+  if ((s & shared::section::kPoint) != 0) note(shared::MeasureStatus::kNotAvailable);
+  report.status = status_;
+}
+
+}  // namespace kincal::app

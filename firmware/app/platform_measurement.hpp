@@ -1,0 +1,258 @@
+// The sensor platform's measurement step (Doty's ARID platform: a camera and four rangers in a +
+// pattern around it), over a CameraPort and a RangerPort (ports.hpp): the MeasurementStep of the
+// STM32 image and of the native platform.
+//
+// Per trigger, for the sections it asks for (shared/measurement_report.hpp):
+//   ranges     the four rangers once: LSB 2^-16 m; kNoEcho for a sensor without a valid reading
+//              or one outside the report's [0, 1) m.
+//   plane      the calibration plane from the four ranges (core::fit_range_plane, least squares,
+//              along-beam model) with the PlatformGeometry block's beams, which must leave the
+//              sensors parallel to the optical axis (within 1e-3 in each direction component)
+//              from a common z (within 0.1 mm); otherwise the block counts as missing. All four
+//              readings are needed (no three-point plane: it could not be checked for
+//              flatness); a missing one, or a least-squares residual above 2 mm (not flat: the
+//              beams are not all on the square), gives kNoTarget and no plane. Reported in the
+//              report's convention: normal pointing at the camera (the negated range_plane
+//              normal), distance from the camera centre.
+//   fiducials  Doty's FID (core::identify_fiducials) on the frame's dark blobs: id = Doty's
+//              p1..p6 (fiducial_id.hpp), centre = the blob's best centroid (uq10.6 px, pixel
+//              (0, 0) the centre of the top-left pixel). Fewer than three non-collinear
+//              fiducials: kNoTarget and no section.
+//   pose       square_T_camera: the camera frame (OpenCV: x right, y down, z along the optical
+//              axis) in the square's frame (fiducial_id.hpp: x to p5, y to p2, origin at the
+//              centre fiducial p4 as the geometry block places it, z out of the printed side).
+//              Translation = the camera centre in square coordinates (LSB 2^-18 m); rotation =
+//              the rotation vector of square_R_camera (axis * angle, LSB 2^-15 rad), so that
+//              p_square = exp(rotation) p_camera + translation. How: each identified fiducial's
+//              pixel -> ray (CameraIntrinsics block, with distortion) -> point on the measured
+//              plane (core::pixel_to_plane_point), paired with its position in the square,
+//              PlatformGeometry::fiducial_square_m[k - 1] for fiducial p_k (k = 1..6; p_k with
+//              k > fiducial_count is not used), then core::pose_from_points' least-squares
+//              rigid fit, inverted. Needs the plane (so the rangers), both blocks, and three
+//              fiducials whose rays meet the plane; else kNoParameters / kNoTarget, no section.
+//              A pose beyond the report's range (+-2 m) is kNoTarget too.
+//   blobs      the labeler's blobs (at most 64, in completion order): centroid uq10.6 px, area
+//              (saturating at 65535 px), colour class 0 (grey rows: no colour classes) and
+//              peak_dn 0 (not measured: the streaming labeler keeps no per-blob extreme).
+//   point      a stereo triangulation: not this platform's (one camera): kNotAvailable.
+// Polarity, chosen by the request: dark blobs (fiducials on light vellum) when fiducials or
+// pose are asked for, bright blobs (the Kapucu & Baysec beacon) otherwise; the blob section lists
+// the blobs of that polarity.
+// Threshold, automatic: each measurement first streams a metering frame (FrameUse::kMetering)
+// into a grey-level histogram (every 4th pixel) and labels the measurement frame of the same scene
+// with Otsu's threshold of it (auto_threshold.hpp). A uniform frame (one grey level) has no
+// threshold: kNoTarget for the camera sections.
+// Time stamp: the measurement frame's mid-exposure (CameraPort), when the camera is used; else
+// the rangers' reading time. The rangers are read right after the measurement frame is
+// requested, so both see the same scene. The report's sequence is the request's.
+// Status, one per report, the first that applies in this order: kRangerFailure, kCameraFailure
+// (begin_frame or read_row failed, a row did not come within kFrameTimeoutUs, the camera's frame
+// is wider than kMaxWidthPx or taller than 4096 rows, or the labeler refused a row),
+// kNoParameters (a block a requested section needs is missing or unusable; intrinsics for
+// another frame size than the camera's count as missing), kNoTarget, kNotAvailable. Sections
+// that could be produced are present whatever the status; nothing is ever invented.
+//
+// Memory: everything inside the object, 22,400 bytes on the M4 (the VGA labeler workspace of
+// 16 KiB, 64 blobs, the histogram, the range-plane matrices, copies of the two parameter blocks):
+// construct it statically, never on the stack. Cost: poll() handles at most kRowsPerPoll rows per
+// call, a bounded slice (16 VGA rows are ~35k instructions on the M4 at the labeler's 3.4 per
+// pixel), so the correction stream keeps running between slices; the final call runs FID, the
+// plane fit and the pose (their figures: pose_from_points 4.5k instructions, pixel_to_plane_point
+// 0.5k per fiducial, fit_range_plane 0.2k plus the layout's preparation). Not measured as a whole.
+// Thread/ISR safety: main loop only. One measurement at a time (start() while one runs: kBusy).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "firmware/app/ports.hpp"
+#include "firmware/core/auto_threshold.hpp"
+#include "firmware/core/blob_labeler.hpp"
+#include "firmware/core/camera_model.hpp"
+#include "firmware/core/fiducial_id.hpp"
+#include "firmware/core/pose_from_points.hpp"
+#include "firmware/core/range_plane.hpp"
+#include "shared/measurement_report.hpp"
+
+namespace kincal::app {
+
+// Micrometres to the report's LSB of 2^-16 m, rounded to nearest; out of [0, 1) m -> kNoEcho.
+constexpr std::uint16_t range_raw_from_um(std::uint32_t range_um) {
+  if (range_um == kNoEchoUm) return shared::kNoEcho;
+  const std::uint64_t raw = (std::uint64_t{range_um} * 65536u + 500000u) / 1000000u;
+  return raw >= shared::kNoEcho ? shared::kNoEcho : static_cast<std::uint16_t>(raw);
+}
+
+// The port-independent half of the step: the pixel path and the geometry, compiled once in
+// platform_measurement.cpp (where the stack and heap checks see it). PlatformMeasurement below
+// drives it from the ports.
+class MeasurementPipeline {
+ public:
+  static constexpr std::uint16_t kMaxWidthPx = 640;
+  static constexpr std::size_t kMaxBlobsOut = shared::kMaxBlobs;
+  static constexpr std::uint32_t kHistogramStep = 4;
+
+  MeasurementPipeline() noexcept : labeler_(buffers_.memory()) {}
+
+  // A new measurement: what it needs, from the request and the blocks present.
+  void begin(const MeasureRequest& request, const ParameterSet& parameters) noexcept;
+  bool needs_camera() const noexcept { return needs_camera_; }
+  bool needs_rangers() const noexcept { return needs_rangers_; }
+  // False for a frame size the step cannot label (then kCameraFailure).
+  bool accept_frame_size(std::uint16_t width_px, std::uint16_t height_px) noexcept;
+
+  // The row the camera port writes into: the labeler's next ring slot (also the metering scratch).
+  std::span<std::uint8_t> row() noexcept { return labeler_.row_buffer().first(width_px_); }
+  void meter_row() noexcept;
+  // Otsu's threshold of the metering frame, and the labeler's frame; false: no threshold (uniform).
+  bool begin_labelling() noexcept;
+  // The row() just written; false: the labeler refused it (kCameraFailure).
+  bool label_row() noexcept;
+
+  // Fills the report from what was gathered: camera kOk when the measurement frame was read
+  // completely (kFailed: lost; ignored unless needs_camera()), labelled when it was labelled (a
+  // threshold existed), the rangers' status and reading (ignored unless needs_rangers()).
+  void finish(CaptureStatus camera, bool labelled, RangerStatus rangers,
+              const std::array<std::uint32_t, shared::kRangers>& ranges_um, std::uint32_t timestamp_us,
+              shared::MeasurementReport& report) noexcept;
+
+ private:
+  void note(shared::MeasureStatus status) noexcept;
+  bool compute_plane(const std::array<std::uint32_t, shared::kRangers>& ranges_um) noexcept;
+  void compute_fiducials_and_pose(shared::MeasurementReport& report) noexcept;
+  void report_blobs(shared::MeasurementReport& report, std::uint32_t blob_count) const noexcept;
+
+  MeasureRequest request_{};
+  bool has_geometry_ = false, has_intrinsics_ = false;
+  shared::PlatformGeometry geometry_{};
+  shared::CameraIntrinsics intrinsics_{};
+  bool needs_camera_ = false, needs_rangers_ = false;
+  std::uint16_t width_px_ = 0, height_px_ = 0;
+  shared::MeasureStatus status_ = shared::MeasureStatus::kOk;
+
+  core::VgaLabelerBuffers buffers_{};
+  core::BlobLabeler labeler_;
+  core::LabelerConfig labeler_config_{};
+  core::GreyHistogram histogram_{};
+  std::array<core::Blob, kMaxBlobsOut> blobs_{};
+  std::array<core::FidVerdict, kMaxBlobsOut> verdicts_{};
+  core::FidResult fid_{};
+  core::RangePlaneModel plane_model_{};
+  core::CalibrationPlane plane_{};
+  bool have_plane_ = false;
+  std::array<core::Vector3<float>, 6> square_points_m_{};
+  std::array<core::Vector3<float>, 6> camera_points_m_{};
+  core::PoseFit fit_{};
+  core::RigidTransform<float> square_T_camera_{};
+};
+
+template <CameraPort Camera, RangerPort Rangers>
+class PlatformMeasurement {
+ public:
+  static constexpr int kRowsPerPoll = 16;
+  static constexpr std::uint64_t kFrameTimeoutUs = 1000000;  // per frame, from begin_frame
+
+  PlatformMeasurement(Camera& camera, Rangers& rangers) noexcept : camera_(camera), rangers_(rangers) {}
+
+  MeasureStart start(const MeasureRequest& request, const ParameterSet& parameters, std::uint64_t now_us) noexcept {
+    if (phase_ != Phase::kIdle) return MeasureStart::kBusy;
+    pipeline_.begin(request, parameters);
+    phase_ = Phase::kStarting;
+    timestamp_us_ = now_us;
+    return MeasureStart::kStarted;
+  }
+
+  bool poll(std::uint64_t now_us, shared::MeasurementReport& report) noexcept {
+    switch (phase_) {
+      case Phase::kIdle:
+        return false;
+      case Phase::kStarting:
+        if (!pipeline_.needs_camera()) {
+          read_rangers();
+          return finish(report, CaptureStatus::kOk, false);
+        }
+        if (!pipeline_.accept_frame_size(camera_.width_px(), camera_.height_px()))
+          return finish(report, CaptureStatus::kFailed, false);
+        return begin(FrameUse::kMetering, now_us, report);
+      case Phase::kMetering:
+      case Phase::kLabelling:
+        return stream_rows(now_us, report);
+    }
+    return false;
+  }
+
+ private:
+  enum class Phase : std::uint8_t { kIdle, kStarting, kMetering, kLabelling };
+
+  bool begin(FrameUse use, std::uint64_t now_us, shared::MeasurementReport& report) noexcept {
+    std::uint64_t exposure_us = now_us;
+    if (camera_.begin_frame(use, exposure_us) != CaptureStatus::kOk)
+      return finish(report, CaptureStatus::kFailed, false);
+    row_ = 0;
+    deadline_us_ = now_us + kFrameTimeoutUs;
+    if (use == FrameUse::kMetering) {
+      phase_ = Phase::kMetering;
+      return false;
+    }
+    timestamp_us_ = exposure_us;
+    read_rangers();
+    // Without a threshold (a uniform metering frame) the frame is still read out, unlabelled:
+    // a port need not support abandoning a frame halfway.
+    labelled_ = pipeline_.begin_labelling();
+    phase_ = Phase::kLabelling;
+    return false;
+  }
+
+  bool stream_rows(std::uint64_t now_us, shared::MeasurementReport& report) noexcept {
+    for (int i = 0; i < kRowsPerPoll; ++i) {
+      const CaptureStatus status = camera_.read_row(pipeline_.row());
+      if (status == CaptureStatus::kFailed) return finish(report, CaptureStatus::kFailed, false);
+      if (status == CaptureStatus::kPending) {
+        if (now_us >= deadline_us_) return finish(report, CaptureStatus::kFailed, false);
+        return false;
+      }
+      if (phase_ == Phase::kMetering) {
+        pipeline_.meter_row();
+      } else if (labelled_ && !pipeline_.label_row()) {
+        return finish(report, CaptureStatus::kFailed, false);
+      }
+      if (++row_ < camera_.height_px()) continue;
+      if (phase_ == Phase::kMetering) return begin(FrameUse::kMeasurement, now_us, report);
+      return finish(report, CaptureStatus::kOk, labelled_);
+    }
+    return false;
+  }
+
+  void read_rangers() noexcept {
+    if (!pipeline_.needs_rangers() || rangers_read_) return;
+    std::uint64_t time_us = timestamp_us_;
+    ranger_status_ = rangers_.read(ranges_um_, time_us);
+    rangers_read_ = true;
+    if (!pipeline_.needs_camera()) timestamp_us_ = time_us;
+  }
+
+  // A camera that failed before the measurement frame still leaves the rangers to read.
+  bool finish(shared::MeasurementReport& report, CaptureStatus camera, bool labelled) noexcept {
+    read_rangers();
+    pipeline_.finish(camera, labelled, ranger_status_, ranges_um_, static_cast<std::uint32_t>(timestamp_us_), report);
+    phase_ = Phase::kIdle;
+    rangers_read_ = false;
+    return true;
+  }
+
+  Camera& camera_;
+  Rangers& rangers_;
+  MeasurementPipeline pipeline_;
+  Phase phase_ = Phase::kIdle;
+  std::uint16_t row_ = 0;
+  bool labelled_ = false;
+  std::uint64_t deadline_us_ = 0;
+  std::uint64_t timestamp_us_ = 0;
+  bool rangers_read_ = false;
+  RangerStatus ranger_status_ = RangerStatus::kFailed;
+  std::array<std::uint32_t, shared::kRangers> ranges_um_{};
+};
+
+}  // namespace kincal::app
