@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "host/cli/threshold_option.hpp"
 #include "host/vision/blob_json.hpp"
 #include "host/vision/image_labeling.hpp"
 
@@ -18,7 +19,7 @@ namespace {
 struct BlobsOptions {
   std::vector<std::string> images;
   std::string polarity = "bright";
-  std::string threshold = "auto";
+  std::optional<std::uint8_t> threshold;  // none: automatic
   std::string colour_table;
   int connectivity = 8;
   std::uint32_t min_area_px = 1;
@@ -51,7 +52,7 @@ core::ColourClassTable read_colour_table(const std::string& path) {
 int run_blobs(const BlobsOptions& o) {
   vision::LabelOptions options;
   options.polarity = o.polarity == "dark" ? core::Polarity::kDark : core::Polarity::kBright;
-  if (o.threshold != "auto") options.threshold = static_cast<std::uint8_t>(std::stoi(o.threshold));
+  options.threshold = o.threshold;
   options.connectivity = o.connectivity == 4 ? core::Connectivity::kFour : core::Connectivity::kEight;
   options.min_area_px = o.min_area_px;
   options.refine = !o.no_refine;
@@ -92,18 +93,7 @@ void add_blobs_command(CLI::App& app, int& status) {
   cmd->add_option("--polarity", options->polarity, "Blobs brighter or darker than the threshold")
       ->check(CLI::IsMember({"bright", "dark"}))
       ->capture_default_str();
-  cmd->add_option("--threshold", options->threshold, "Grey level N (0..255) or auto (Otsu)")
-      ->check([](const std::string& v) -> std::string {
-        if (v == "auto") return {};
-        try {
-          std::size_t used = 0;
-          const int n = std::stoi(v, &used);
-          if (used == v.size() && n >= 0 && n <= 255) return {};
-        } catch (const std::exception&) {
-        }
-        return "threshold must be auto or an integer 0..255, not '" + v + "'";
-      })
-      ->capture_default_str();
+  add_threshold_option(*cmd, options->threshold);
   cmd->add_option("--colour-table", options->colour_table,
                   "Colour-class table (kincal colour-table): label that colour class instead of a threshold");
   cmd->add_option("--connectivity", options->connectivity, "Pixel connectivity")

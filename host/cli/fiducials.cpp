@@ -2,11 +2,13 @@
 
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "firmware/core/fiducial_id.hpp"
+#include "host/cli/threshold_option.hpp"
 #include "host/vision/blob_json.hpp"
 #include "host/vision/image_labeling.hpp"
 
@@ -16,7 +18,7 @@ namespace {
 
 struct FiducialsOptions {
   std::string image;
-  std::string threshold = "auto";
+  std::optional<std::uint8_t> threshold;  // none: automatic
 };
 
 const char* status_name(core::FidStatus s) {
@@ -69,7 +71,7 @@ int run_fiducials(const FiducialsOptions& o) {
   const cv::Mat grey = vision::read_image(o.image, true);
   vision::LabelOptions options;
   options.polarity = core::Polarity::kDark;
-  if (o.threshold != "auto") options.threshold = static_cast<std::uint8_t>(std::stoi(o.threshold));
+  options.threshold = o.threshold;
   options.min_area_px = 4;
   const vision::LabelResult labels = vision::label_grey(grey, options);
   if (labels.blobs.size() > core::kFidMaxBlobs) {
@@ -113,18 +115,7 @@ void add_fiducials_command(CLI::App& app, int& status) {
   auto* cmd =
       app.add_subcommand("fiducials", "Identify a calibration square's fiducials in an image (Doty's FID, JSON)");
   cmd->add_option("image", options->image, "Image file (any format OpenCV reads)")->required();
-  cmd->add_option("--threshold", options->threshold, "Grey level N (0..255) or auto (Otsu)")
-      ->check([](const std::string& v) -> std::string {
-        if (v == "auto") return {};
-        try {
-          std::size_t used = 0;
-          const int n = std::stoi(v, &used);
-          if (used == v.size() && n >= 0 && n <= 255) return {};
-        } catch (const std::exception&) {
-        }
-        return "threshold must be auto or an integer 0..255, not '" + v + "'";
-      })
-      ->capture_default_str();
+  add_threshold_option(*cmd, options->threshold);
   cmd->callback([options, &status] {
     try {
       status = run_fiducials(*options);

@@ -8,17 +8,6 @@ namespace kincal::model {
 
 namespace {
 
-core::ChainFrames<double> frames_at(const RobotModel& model, std::span<const double> q) {
-  core::PreparedChain<double> chain;
-  core::prepare_chain(to_chain(model), chain);
-  const core::JointVector<double> qv = joint_vector(q);
-  std::array<core::SinCos<double>, core::kMaxJoints> trig{};
-  core::joint_trig(chain, qv, trig);
-  core::ChainFrames<double> frames;
-  core::forward_kinematics(chain, qv, trig, frames);
-  return frames;
-}
-
 double wrap_angle(double a) { return std::remainder(a, 2.0 * std::numbers::pi); }
 
 // `v` made perpendicular to unit `axis` and normalized; `fallback` when v is (nearly) along it.
@@ -33,6 +22,25 @@ struct Frame {
   Vector3 origin;
   Matrix3 rotation;  // columns x, y, z
 };
+
+// The frame at `origin` whose z is the unit axis direction `z` and whose x is `x` (unit, normal to z).
+Frame frame_on_axis(const Vector3& origin, const Vector3& x, const Vector3& z) {
+  Frame f;
+  f.origin = origin;
+  f.rotation.col(0) = x;
+  f.rotation.col(1) = z.cross(x);
+  f.rotation.col(2) = z;
+  return f;
+}
+
+// x_i keeps the sign of the template's x_i (x_hint): when x points against it, x and the link
+// length `a` along it change sign.
+void keep_sign_of_hint(Vector3& x, double& a, const Vector3& x_hint) {
+  if (x.dot(x_hint) < 0.0) {
+    x = -x;
+    a = -a;
+  }
+}
 
 // The geometric value of link i's joint-dependent parameter at home (theta or d), the other
 // parameters, and the next frame.
@@ -64,19 +72,13 @@ LinkResult dh_link(const Frame& f, const AxisLine& next_axis, double d_template,
     x = perpendicular(x, u, x_hint);
     a = 0.0;
   }
-  if (x.dot(x_hint) < 0.0) {
-    x = -x;
-    a = -a;
-  }
+  keep_sign_of_hint(x, a, x_hint);
   LinkResult r;
   r.parameters.d_m = s;
   r.parameters.a_m = a;
   r.parameters.theta_rad = std::atan2(x.dot(f.rotation.col(1)), x.dot(f.rotation.col(0)));
   r.parameters.alpha_rad = std::atan2(z.cross(u).dot(x), z.dot(u));
-  r.next.origin = b_point;
-  r.next.rotation.col(0) = x;
-  r.next.rotation.col(1) = u.cross(x);
-  r.next.rotation.col(2) = u;
+  r.next = frame_on_axis(b_point, x, u);
   return r;
 }
 
@@ -89,10 +91,7 @@ LinkResult doty_link(const Frame& f, const AxisLine& next_axis, double d_templat
   double a = w.norm();
   Vector3 x = a > 1e-12 ? Vector3(w / a) : perpendicular(x_hint, u, z.cross(u));
   if (a <= 1e-12) a = 0.0;
-  if (x.dot(x_hint) < 0.0) {
-    x = -x;
-    a = -a;
-  }
+  keep_sign_of_hint(x, a, x_hint);
   LinkResult r;
   r.parameters.d_m = d_template;
   r.parameters.a_m = a;
@@ -104,17 +103,14 @@ LinkResult doty_link(const Frame& f, const AxisLine& next_axis, double d_templat
   r.parameters.theta_rad = theta;
   r.parameters.beta_rad = beta;
   r.parameters.alpha_rad = std::atan2(-u.dot(y1), u.dot(z2));
-  r.next.origin = b_point;
-  r.next.rotation.col(0) = x;
-  r.next.rotation.col(1) = u.cross(x);
-  r.next.rotation.col(2) = u;
+  r.next = frame_on_axis(b_point, x, u);
   return r;
 }
 
 }  // namespace
 
 std::vector<AxisLine> joint_axes(const RobotModel& model, std::span<const double> q) {
-  const core::ChainFrames<double> frames = frames_at(model, q);
+  const core::ChainFrames<double> frames = chain_at_joints(model, q).frames;
   std::vector<AxisLine> axes;
   for (std::size_t i = 0; i < model.joints.size(); ++i) {
     const bool modified = model.joints[i].convention == core::LinkConvention::modified_dh;
@@ -129,20 +125,16 @@ RobotModel chain_from_axes(const RobotModel& template_model, std::span<const Axi
                            const AxesToChainOptions& options) {
   const std::size_t n = template_model.joints.size();
   if (axes.size() != n || q_home.size() != n) throw std::invalid_argument("chain_from_axes: joint count mismatch");
-  const core::ChainFrames<double> hints = frames_at(template_model, q_home);
+  const core::ChainFrames<double> hints = chain_at_joints(template_model, q_home).frames;
 
   RobotModel out = template_model;
   // Frame 0 on axis 1.
-  Frame f;
   const Transform& t0 = hints.base_T_frame[0];
   const Vector3 z0 = axes[0].direction.normalized();
-  f.origin = axes[0].type == core::JointType::revolute
-                 ? Vector3(axes[0].point + (t0.translation - axes[0].point).dot(z0) * z0)
-                 : t0.translation;
-  const Vector3 x0 = perpendicular(t0.rotation.col(0), z0, t0.rotation.col(1));
-  f.rotation.col(0) = x0;
-  f.rotation.col(1) = z0.cross(x0);
-  f.rotation.col(2) = z0;
+  const Vector3 origin0 = axes[0].type == core::JointType::revolute
+                              ? Vector3(axes[0].point + (t0.translation - axes[0].point).dot(z0) * z0)
+                              : t0.translation;
+  Frame f = frame_on_axis(origin0, perpendicular(t0.rotation.col(0), z0, t0.rotation.col(1)), z0);
   out.base_T_frame0.translation = f.origin;
   out.base_T_frame0.rotation = f.rotation;
 

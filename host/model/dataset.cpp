@@ -5,6 +5,7 @@
 #include <fstream>
 #include <istream>
 #include <map>
+#include <optional>
 #include <ostream>
 #include <sstream>
 
@@ -96,6 +97,51 @@ int count_of(const Header& h, std::initializer_list<const char*> names) {
   return n;
 }
 
+// One data row, its fields checked against the header's count.
+struct Row {
+  const Header& header;
+  const std::vector<std::string>& fields;
+  const std::string& source;
+  int line = 0;
+
+  double value(const std::string& column) const {
+    return parse_number(fields[header.index.at(column)], column, source, line);
+  }
+  std::vector<double> joints() const {
+    std::vector<double> q;
+    for (int j = 1; j <= header.joints; ++j) q.push_back(value("q" + std::to_string(j)));
+    return q;
+  }
+};
+
+// The one reading loop of both file kinds: skips blank and '#' lines, hands the header to
+// on_header(header, line) and every later line to on_row(row). joints_only: a joints file (the
+// header needs only q1..qN, and other columns are ignored). Fails without a header row.
+template <class OnHeader, class OnRow>
+void read_table(std::istream& in, const std::string& source, bool joints_only, OnHeader on_header, OnRow on_row) {
+  std::string line;
+  int number = 0;
+  std::optional<Header> h;
+  while (std::getline(in, line)) {
+    ++number;
+    if (skipped(line)) continue;
+    if (!h) {
+      h = parse_header(line, source, number, joints_only);
+      on_header(*h, number);
+      continue;
+    }
+    const std::vector<std::string> fields = split(line);
+    if (fields.size() != h->fields)
+      fail(
+          source, number,
+          "expected " + std::to_string(h->fields) + " fields as in the header, found " + std::to_string(fields.size()));
+    on_row(Row{*h, fields, source, number});
+  }
+  if (!h)
+    fail(source, number,
+         joints_only ? "no header row (expected q1,...,qN)" : "no header row (expected q1,...,qN,x,y,z)");
+}
+
 std::string number_text(double v) {
   if (v == 0.0) v = 0.0;
   char buffer[64];
@@ -108,46 +154,29 @@ std::string number_text(double v) {
 Dataset parse_dataset(std::istream& in, const std::string& source) {
   Dataset data;
   data.source = source;
-  std::string line;
-  int number = 0;
-  bool have_header = false;
-  Header h;
-  while (std::getline(in, line)) {
-    ++number;
-    if (skipped(line)) continue;
-    if (!have_header) {
-      h = parse_header(line, source, number, false);
-      have_header = true;
-      data.joint_count = h.joints;
-      const int quaternion = count_of(h, {"qw", "qx", "qy", "qz"});
-      if (quaternion != 0 && quaternion != 4)
-        fail(source, number, "header: an orientation needs all of qw, qx, qy, qz");
-      data.has_orientation = quaternion == 4;
-      const int covariance = count_of(h, {"cxx", "cxy", "cxz", "cyy", "cyz", "czz"});
-      if (covariance != 0 && covariance != 6)
-        fail(source, number, "header: a covariance needs all of cxx, cxy, cxz, cyy, cyz, czz");
-      if (covariance == 6 && h.index.count("sigma"))
-        fail(source, number, "header: give a covariance or sigma, not both");
-      data.noise = covariance == 6          ? NoiseColumns::covariance
-                   : h.index.count("sigma") ? NoiseColumns::sigma
-                                            : NoiseColumns::none;
-      continue;
-    }
-    const std::vector<std::string> fields = split(line);
-    if (fields.size() != h.fields)
-      fail(source, number,
-           "expected " + std::to_string(h.fields) + " fields as in the header, found " + std::to_string(fields.size()));
-    const auto value = [&](const std::string& column) {
-      return parse_number(fields[h.index.at(column)], column, source, number);
-    };
+  const auto on_header = [&](const Header& h, int number) {
+    data.joint_count = h.joints;
+    const int quaternion = count_of(h, {"qw", "qx", "qy", "qz"});
+    if (quaternion != 0 && quaternion != 4) fail(source, number, "header: an orientation needs all of qw, qx, qy, qz");
+    data.has_orientation = quaternion == 4;
+    const int covariance = count_of(h, {"cxx", "cxy", "cxz", "cyy", "cyz", "czz"});
+    if (covariance != 0 && covariance != 6)
+      fail(source, number, "header: a covariance needs all of cxx, cxy, cxz, cyy, cyz, czz");
+    if (covariance == 6 && h.index.count("sigma")) fail(source, number, "header: give a covariance or sigma, not both");
+    data.noise = covariance == 6          ? NoiseColumns::covariance
+                 : h.index.count("sigma") ? NoiseColumns::sigma
+                                          : NoiseColumns::none;
+  };
+  const auto on_row = [&](const Row& row) {
+    const auto value = [&](const char* column) { return row.value(column); };
     Measurement m;
-    m.line = number;
-    for (int j = 1; j <= h.joints; ++j) m.q.push_back(value("q" + std::to_string(j)));
+    m.line = row.line;
+    m.q = row.joints();
     m.position = Vector3(value("x"), value("y"), value("z"));
     if (data.has_orientation) {
       Eigen::Quaterniond q(value("qw"), value("qx"), value("qy"), value("qz"));
       if (std::abs(q.norm() - 1.0) > 1e-3)
-        fail(source, number,
+        fail(source, row.line,
              "the quaternion (qw, qx, qy, qz) is not a unit quaternion (norm " + number_text(q.norm()) + ")");
       m.orientation = q.normalized();
     }
@@ -157,16 +186,16 @@ Dataset parse_dataset(std::istream& in, const std::string& source) {
           value("cyz"), value("czz");
       Eigen::LLT<Matrix3> llt(c);
       if (llt.info() != Eigen::Success || c.diagonal().minCoeff() <= 0.0)
-        fail(source, number, "the covariance (cxx..czz) is not positive definite");
+        fail(source, row.line, "the covariance (cxx..czz) is not positive definite");
       m.covariance = c;
     } else if (data.noise == NoiseColumns::sigma) {
       const double s = value("sigma");
-      if (!(s > 0.0)) fail(source, number, "sigma must be positive");
+      if (!(s > 0.0)) fail(source, row.line, "sigma must be positive");
       m.covariance = Matrix3::Identity() * (s * s);
     }
     data.rows.push_back(std::move(m));
-  }
-  if (!have_header) fail(source, number, "no header row (expected q1,...,qN,x,y,z)");
+  };
+  read_table(in, source, false, on_header, on_row);
   return data;
 }
 
@@ -178,30 +207,8 @@ Dataset read_dataset(const std::string& path) {
 
 std::vector<std::vector<double>> parse_joints(std::istream& in, const std::string& source) {
   std::vector<std::vector<double>> rows;
-  std::string line;
-  int number = 0;
-  bool have_header = false;
-  Header h;
-  while (std::getline(in, line)) {
-    ++number;
-    if (skipped(line)) continue;
-    if (!have_header) {
-      h = parse_header(line, source, number, true);
-      have_header = true;
-      continue;
-    }
-    const std::vector<std::string> fields = split(line);
-    if (fields.size() != h.fields)
-      fail(source, number,
-           "expected " + std::to_string(h.fields) + " fields as in the header, found " + std::to_string(fields.size()));
-    std::vector<double> q;
-    for (int j = 1; j <= h.joints; ++j) {
-      const std::string column = "q" + std::to_string(j);
-      q.push_back(parse_number(fields[h.index.at(column)], column, source, number));
-    }
-    rows.push_back(std::move(q));
-  }
-  if (!have_header) fail(source, number, "no header row (expected q1,...,qN)");
+  read_table(
+      in, source, true, [](const Header&, int) {}, [&](const Row& row) { rows.push_back(row.joints()); });
   return rows;
 }
 

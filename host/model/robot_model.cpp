@@ -81,16 +81,19 @@ Transform forward_kinematics(const RobotModel& model, std::span<const double> q)
   return core::forward_kinematics(to_chain(model), joint_vector(q));
 }
 
+ChainAtJoints chain_at_joints(const RobotModel& model, std::span<const double> q) {
+  ChainAtJoints at;
+  core::prepare_chain(to_chain(model), at.chain);
+  at.q = joint_vector(q);
+  core::joint_trig(at.chain, at.q, at.trig);
+  core::forward_kinematics(at.chain, at.q, at.trig, at.frames);
+  return at;
+}
+
 Eigen::MatrixXd joint_jacobian(const RobotModel& model, std::span<const double> q) {
-  core::PreparedChain<double> chain;
-  core::prepare_chain(to_chain(model), chain);
-  const core::JointVector<double> qv = joint_vector(q);
-  std::array<core::SinCos<double>, core::kMaxJoints> trig{};
-  core::joint_trig(chain, qv, trig);
-  core::ChainFrames<double> frames;
-  core::forward_kinematics(chain, qv, trig, frames);
+  const ChainAtJoints at = chain_at_joints(model, q);
   core::JointJacobian<double> j;
-  core::joint_jacobian(chain, frames, j);
+  core::joint_jacobian(at.chain, at.frames, j);
   return j.leftCols(model.joint_count());
 }
 
@@ -146,15 +149,9 @@ std::vector<core::ParameterId> all_parameters(const RobotModel& model) {
 Eigen::MatrixXd parameter_jacobian(const RobotModel& model, std::span<const double> q,
                                    std::span<const core::ParameterId> ids) {
   const core::ParameterSet set = to_set(ids);
-  core::PreparedChain<double> chain;
-  core::prepare_chain(to_chain(model), chain);
-  const core::JointVector<double> qv = joint_vector(q);
-  std::array<core::SinCos<double>, core::kMaxJoints> trig{};
-  core::joint_trig(chain, qv, trig);
-  core::ChainFrames<double> frames;
-  core::forward_kinematics(chain, qv, trig, frames);
+  const ChainAtJoints at = chain_at_joints(model, q);
   core::ErrorMatrix<double> e = core::ErrorMatrix<double>::Zero();
-  if (core::parameter_jacobian(chain, qv, trig, frames, set, e) != core::ErrorModelStatus::ok)
+  if (core::parameter_jacobian(at.chain, at.q, at.trig, at.frames, set, e) != core::ErrorModelStatus::ok)
     throw std::invalid_argument("parameter_jacobian: a parameter names a joint the model does not have");
   return e.leftCols(set.count);
 }

@@ -16,6 +16,7 @@
 // Everything is double, SI (m, rad). Functions here do not throw unless they say so.
 #pragma once
 
+#include <array>
 #include <limits>
 #include <optional>
 #include <span>
@@ -93,6 +94,16 @@ core::ChainModel<double> to_chain(const RobotModel& model);
 RobotModel from_chain(const RobotModel& like, const core::ChainModel<double>& chain);
 
 core::JointVector<double> joint_vector(std::span<const double> q);
+
+// The core's chain of a model evaluated at joint readings q, with the inputs its frames were
+// computed from: what the Jacobians below and the joint axes (axes.hpp) start from.
+struct ChainAtJoints {
+  core::PreparedChain<double> chain;
+  core::JointVector<double> q;
+  std::array<core::SinCos<double>, core::kMaxJoints> trig{};
+  core::ChainFrames<double> frames;
+};
+ChainAtJoints chain_at_joints(const RobotModel& model, std::span<const double> q);
 
 // device_T_tool at joint readings q (q.size() == joint_count()).
 Transform forward_kinematics(const RobotModel& model, std::span<const double> q);

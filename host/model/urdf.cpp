@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <sstream>
 
+#include "host/model/xml_text.hpp"
+
 namespace kincal::model {
 
 namespace {
@@ -37,38 +39,15 @@ Transform translate(const Vector3& v) {
   return t;
 }
 
-std::string escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
 }  // namespace
 
 std::string write_urdf(const RobotModel& model) {
   const core::ChainModel<double> chain = to_chain(model);
   std::ostringstream out;
   out << "<?xml version=\"1.0\"?>\n";
-  out << "<!-- kincal: geometry of '" << escape(model.name)
+  out << "<!-- kincal: geometry of '" << escape_xml_text(model.name)
       << "' in the joint origins; joint values are the controller's readings (SI units) -->\n";
-  out << "<robot name=\"" << escape(model.name) << "\">\n";
+  out << "<robot name=\"" << escape_xml_text(model.name) << "\">\n";
   out << "  <link name=\"device\"/>\n";
   Transform previous_s = chain.base_T_frame0;
   std::string parent = "device";
@@ -88,7 +67,7 @@ std::string write_urdf(const RobotModel& model) {
     const bool limited = std::isfinite(j.lower) && std::isfinite(j.upper);
     const std::string child = "link" + std::to_string(i + 1);
     out << "  <link name=\"" << child << "\"/>\n";
-    out << "  <joint name=\"" << escape(j.name) << "\" type=\""
+    out << "  <joint name=\"" << escape_xml_text(j.name) << "\" type=\""
         << (revolute ? (limited ? "revolute" : "continuous") : "prismatic") << "\">\n";
     out << "    <parent link=\"" << parent << "\"/>\n    <child link=\"" << child << "\"/>\n";
     out << "    " << origin(previous_s * pre) << "\n    <axis xyz=\"0 0 1\"/>\n";

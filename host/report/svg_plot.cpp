@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "host/model/xml_text.hpp"
 #include "host/report/report.hpp"
 
 namespace kincal::report {
@@ -103,32 +104,7 @@ std::vector<Tick> ticks(const PlotAxis& axis, const Scale& s) {
 
 }  // namespace
 
-std::string escape_html(std::string_view text) {
-  std::string out;
-  out.reserve(text.size());
-  for (const char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      case '\'':
-        out += "&#39;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
+std::string escape_html(std::string_view text) { return model::escape_xml_text(text); }
 
 std::string svg_plot(const PlotSpec& spec) {
   std::vector<const std::vector<double>*> xs, ys;

@@ -20,7 +20,8 @@
 
 namespace kincal::report {
 
-// & < > " ' as entities: safe in element content and in quoted attributes.
+// & < > " ' as entities: safe in element content and in quoted attributes (the XML escaping
+// of host/model/xml_text.hpp, which the URDF writer shares).
 std::string escape_html(std::string_view text);
 
 struct PlotAxis {
