@@ -1,0 +1,203 @@
+#include "host/camera/calibration_file.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include <opencv2/core/eigen.hpp>
+
+namespace kincal::camera {
+
+namespace {
+
+cv::FileStorage open_file(const std::string& path, int mode) {
+  cv::FileStorage fs;
+  try {
+    fs.open(path, mode | cv::FileStorage::FORMAT_YAML);
+  } catch (const cv::Exception& e) {
+    throw CalibrationError(path + ": not an OpenCV YAML file (" + e.what() + ")");
+  }
+  if (!fs.isOpened())
+    throw CalibrationError(path + (mode == cv::FileStorage::READ ? ": cannot read" : ": cannot write"));
+  return fs;
+}
+
+cv::Mat read_matrix(const cv::FileStorage& fs, const std::string& path, const std::string& key, int rows, int cols) {
+  cv::Mat m;
+  const cv::FileNode node = fs[key];
+  try {
+    if (node.isMap()) node >> m;
+  } catch (const cv::Exception&) {
+    m.release();
+  }
+  if (m.rows != rows || m.cols != cols) {
+    throw CalibrationError(path + ": key '" + key + "' missing or not a " + std::to_string(rows) + "x" +
+                           std::to_string(cols) + " matrix");
+  }
+  m.convertTo(m, CV_64F);
+  return m;
+}
+
+double read_number(const cv::FileStorage& fs, const std::string& path, const std::string& key) {
+  const cv::FileNode node = fs[key];
+  if (!node.isReal() && !node.isInt()) throw CalibrationError(path + ": key '" + key + "' missing or not a number");
+  return static_cast<double>(node);
+}
+
+cv::Size read_size(const cv::FileStorage& fs, const std::string& path) {
+  const double w = read_number(fs, path, "image_width"), h = read_number(fs, path, "image_height");
+  if (!(w >= 1 && h >= 1) || w != std::floor(w) || h != std::floor(h)) {
+    throw CalibrationError(path + ": image_width and image_height must be positive integers");
+  }
+  return {static_cast<int>(w), static_cast<int>(h)};
+}
+
+CameraModel camera_from(const cv::Mat& k, const cv::Mat& d, cv::Size size) {
+  CameraModel c;
+  c.image_size = size;
+  c.camera_matrix = cv::Matx33d(k);
+  for (int i = 0; i < 5; ++i) c.distortion[static_cast<std::size_t>(i)] = d.at<double>(i);
+  return c;
+}
+
+cv::Mat matrix_of(const Eigen::Isometry3d& m) {
+  cv::Mat out;
+  const Eigen::Matrix4d e = m.matrix();
+  cv::eigen2cv(e, out);
+  return out;
+}
+
+Eigen::Isometry3d isometry_of(const cv::Mat& m, const std::string& path, const std::string& key) {
+  Eigen::Matrix4d e;
+  cv::cv2eigen(m, e);
+  const Eigen::Matrix3d r = e.topLeftCorner<3, 3>();
+  if (!((r.transpose() * r - Eigen::Matrix3d::Identity()).norm() < 1e-6) || !(r.determinant() > 0) ||
+      !e.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1))) {
+    throw CalibrationError(path + ": key '" + key + "' is not a rigid transform");
+  }
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = r;
+  out.translation() = e.topRightCorner<3, 1>();
+  return out;
+}
+
+float to_float(double v, const char* name) {
+  if (!std::isfinite(v) || std::abs(v) > static_cast<double>(std::numeric_limits<float>::max())) {
+    throw CalibrationError(std::string("camera parameter ") + name + " = " + std::to_string(v) +
+                           " does not fit the platform's float32");
+  }
+  return static_cast<float>(v);
+}
+
+std::uint16_t to_u16(int v, const char* name) {
+  if (v <= 0 || v > 65535) {
+    throw CalibrationError(std::string("camera ") + name + " " + std::to_string(v) + " px is outside 1..65535");
+  }
+  return static_cast<std::uint16_t>(v);
+}
+
+}  // namespace
+
+void save_camera(const std::string& path, const IntrinsicCalibration& c, const std::string& board_text) {
+  cv::FileStorage fs = open_file(path, cv::FileStorage::WRITE);
+  fs << "image_width" << c.camera.image_size.width << "image_height" << c.camera.image_size.height;
+  fs << "board" << board_text;
+  fs << "nr_of_frames" << c.views_used;
+  fs << "camera_matrix" << cv::Mat(c.camera.camera_matrix);
+  fs << "distortion_coefficients" << c.camera.distortion_mat();
+  fs << "avg_reprojection_error" << c.rms_px;
+  std::vector<double> per_view;
+  for (const ViewReport& v : c.views) {
+    if (v.used) per_view.push_back(v.rms_px);
+  }
+  fs << "per_view_reprojection_errors" << cv::Mat(per_view, true);
+  fs << "std_deviations_intrinsics" << cv::Mat(cv::Matx<double, 1, 9>(c.std_dev.data()));
+}
+
+CameraModel load_camera(const std::string& path) {
+  cv::FileStorage fs = open_file(path, cv::FileStorage::READ);
+  const cv::Mat k = read_matrix(fs, path, "camera_matrix", 3, 3);
+  const cv::Mat d = read_matrix(fs, path, "distortion_coefficients", 1, 5);
+  return camera_from(k, d, read_size(fs, path));
+}
+
+void save_stereo(const std::string& path, const StereoCalibration& c) {
+  cv::FileStorage fs = open_file(path, cv::FileStorage::WRITE);
+  fs << "image_width" << c.left.image_size.width << "image_height" << c.left.image_size.height;
+  fs << "M1" << cv::Mat(c.left.camera_matrix) << "D1" << c.left.distortion_mat();
+  fs << "M2" << cv::Mat(c.right.camera_matrix) << "D2" << c.right.distortion_mat();
+  fs << "R" << cv::Mat(c.right_R_left) << "T" << cv::Mat(c.right_t_left_m);
+  fs << "E" << cv::Mat(c.essential) << "F" << cv::Mat(c.fundamental);
+  fs << "R1" << cv::Mat(c.rectify_left) << "R2" << cv::Mat(c.rectify_right);
+  fs << "P1" << cv::Mat(c.projection_left) << "P2" << cv::Mat(c.projection_right);
+  fs << "Q" << cv::Mat(c.disparity_to_depth);
+  fs << "baseline_m" << c.baseline_m << "avg_reprojection_error" << c.rms_px;
+}
+
+StereoCalibration load_stereo(const std::string& path) {
+  cv::FileStorage fs = open_file(path, cv::FileStorage::READ);
+  const cv::Size size = read_size(fs, path);
+  StereoCalibration c;
+  const cv::Mat m1 = read_matrix(fs, path, "M1", 3, 3), d1 = read_matrix(fs, path, "D1", 1, 5);
+  const cv::Mat m2 = read_matrix(fs, path, "M2", 3, 3), d2 = read_matrix(fs, path, "D2", 1, 5);
+  c.left = camera_from(m1, d1, size);
+  c.right = camera_from(m2, d2, size);
+  c.right_R_left = cv::Matx33d(read_matrix(fs, path, "R", 3, 3));
+  c.right_t_left_m = cv::Vec3d(read_matrix(fs, path, "T", 3, 1));
+  c.essential = cv::Matx33d(read_matrix(fs, path, "E", 3, 3));
+  c.fundamental = cv::Matx33d(read_matrix(fs, path, "F", 3, 3));
+  c.rectify_left = cv::Matx33d(read_matrix(fs, path, "R1", 3, 3));
+  c.rectify_right = cv::Matx33d(read_matrix(fs, path, "R2", 3, 3));
+  c.projection_left = cv::Matx34d(read_matrix(fs, path, "P1", 3, 4));
+  c.projection_right = cv::Matx34d(read_matrix(fs, path, "P2", 3, 4));
+  c.disparity_to_depth = cv::Matx44d(read_matrix(fs, path, "Q", 4, 4));
+  c.baseline_m = cv::norm(c.right_t_left_m);
+  c.rms_px = read_number(fs, path, "avg_reprojection_error");
+  return c;
+}
+
+void save_hand_eye(const std::string& path, const HandEyeCalibration& c) {
+  cv::FileStorage fs = open_file(path, cv::FileStorage::WRITE);
+  fs << "gripper_T_camera" << matrix_of(c.gripper_T_camera);
+  fs << "base_T_target" << matrix_of(c.base_T_target);
+  fs << "method" << c.start_method;
+  fs << "reprojection_rms_before_px" << c.rms_before_px << "reprojection_rms_after_px" << c.rms_after_px;
+  fs << "poses" << c.poses_used;
+}
+
+HandEyeCalibration load_hand_eye(const std::string& path) {
+  cv::FileStorage fs = open_file(path, cv::FileStorage::READ);
+  HandEyeCalibration c;
+  c.gripper_T_camera = isometry_of(read_matrix(fs, path, "gripper_T_camera", 4, 4), path, "gripper_T_camera");
+  c.base_T_target = isometry_of(read_matrix(fs, path, "base_T_target", 4, 4), path, "base_T_target");
+  c.start_method = static_cast<std::string>(fs["method"]);
+  c.rms_before_px = read_number(fs, path, "reprojection_rms_before_px");
+  c.rms_after_px = read_number(fs, path, "reprojection_rms_after_px");
+  return c;
+}
+
+shared::CameraIntrinsics to_platform(const CameraModel& c) {
+  const cv::Matx33d& k = c.camera_matrix;
+  shared::CameraIntrinsics p;
+  p.fx_px = to_float(k(0, 0), "fx_px");
+  p.fy_px = to_float(k(1, 1), "fy_px");
+  p.cx_px = to_float(k(0, 2), "cx_px");
+  p.cy_px = to_float(k(1, 2), "cy_px");
+  p.k1 = to_float(c.distortion[0], "k1");
+  p.k2 = to_float(c.distortion[1], "k2");
+  p.p1 = to_float(c.distortion[2], "p1");
+  p.p2 = to_float(c.distortion[3], "p2");
+  p.k3 = to_float(c.distortion[4], "k3");
+  p.width_px = to_u16(c.image_size.width, "image width");
+  p.height_px = to_u16(c.image_size.height, "image height");
+  return p;
+}
+
+CameraModel from_platform(const shared::CameraIntrinsics& p) {
+  CameraModel c;
+  c.image_size = cv::Size(p.width_px, p.height_px);
+  c.camera_matrix = cv::Matx33d(p.fx_px, 0, p.cx_px, 0, p.fy_px, p.cy_px, 0, 0, 1);
+  c.distortion = {p.k1, p.k2, p.p1, p.p2, p.k3};
+  return c;
+}
+
+}  // namespace kincal::camera

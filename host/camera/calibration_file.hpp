@@ -1,0 +1,47 @@
+// Calibration results on disk and into the platform (issue #6).
+//
+// Files are OpenCV YAML (cv::FileStorage), readable by OpenCV's own tools, with the keys
+// OpenCV's samples use:
+//   camera     camera_matrix (3x3), distortion_coefficients (1x5: k1 k2 p1 p2 k3),
+//              image_width, image_height, avg_reprojection_error, nr_of_frames,
+//              per_view_reprojection_errors, std_deviations_intrinsics (fx fy cx cy k1 k2 p1 p2 k3),
+//              board (the board's text form)
+//   stereo     as stereo_calib.cpp: M1 D1 M2 D2 R T E F R1 R2 P1 P2 Q, plus image_width,
+//              image_height, baseline_m, avg_reprojection_error
+//   hand-eye   gripper_T_camera and base_T_target (4x4, metres), method (the refinement's start),
+//              reprojection_rms_before_px, reprojection_rms_after_px
+// Only the keys a loader needs are required; the rest are for people and other tools.
+//
+// to_platform converts a camera to the firmware's camera block (shared::CameraIntrinsics, float
+// and u16, as the platform stores it), so a host calibration loads into the platform as it is.
+//
+// Errors: CalibrationError naming the file and, for a bad or missing key, the key ("PATH: key
+// 'camera_matrix' missing or not a 3x3 matrix"); "cannot write" / "cannot read" for I/O.
+// to_platform refuses (CalibrationError naming the parameter) a non-finite value, one beyond
+// float's range, or an image size of 0 or above 65535.
+#pragma once
+
+#include <string>
+
+#include "host/camera/hand_eye.hpp"
+#include "host/camera/intrinsics.hpp"
+#include "host/camera/stereo.hpp"
+#include "shared/parameters.hpp"
+
+namespace kincal::camera {
+
+void save_camera(const std::string& path, const IntrinsicCalibration& calibration, const std::string& board_text);
+CameraModel load_camera(const std::string& path);
+
+void save_stereo(const std::string& path, const StereoCalibration& calibration);
+// The cameras, R, T, E, F, the rectification and the RMS (per-pair reports are not stored).
+StereoCalibration load_stereo(const std::string& path);
+
+void save_hand_eye(const std::string& path, const HandEyeCalibration& calibration);
+// gripper_T_camera, base_T_target, the method and the RMS before and after.
+HandEyeCalibration load_hand_eye(const std::string& path);
+
+shared::CameraIntrinsics to_platform(const CameraModel& camera);
+CameraModel from_platform(const shared::CameraIntrinsics& intrinsics);
+
+}  // namespace kincal::camera

@@ -1,0 +1,375 @@
+#include "host/camera/hand_eye.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <sstream>
+#include <utility>
+
+#include <ceres/ceres.h>
+#include <ceres/rotation.h>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+
+#include "host/camera/number_text.hpp"
+
+namespace kincal::camera {
+
+namespace {
+
+using Eigen::Isometry3d;
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+
+constexpr double kDeg = 180.0 / 3.14159265358979323846;
+
+struct Residual {
+  double rotation_rms_rad = 0, translation_rms_m = 0;
+};
+
+// RMS over all pairs i < j of (A X)^-1 (X B), A = H_i^-1 H_j, B = C_i C_j^-1 (from H_i X C_i =
+// base_T_target for every i).
+Residual ax_xb(const std::vector<Isometry3d>& base_T_gripper, const std::vector<Isometry3d>& camera_T_target,
+               const Isometry3d& gripper_T_camera) {
+  double rot2 = 0, trans2 = 0;
+  int n = 0;
+  for (std::size_t i = 0; i < base_T_gripper.size(); ++i) {
+    for (std::size_t j = i + 1; j < base_T_gripper.size(); ++j) {
+      const Isometry3d a = base_T_gripper[i].inverse() * base_T_gripper[j];
+      const Isometry3d b = camera_T_target[i] * camera_T_target[j].inverse();
+      const Isometry3d e = (a * gripper_T_camera).inverse() * (gripper_T_camera * b);
+      const double angle = Eigen::AngleAxisd(e.rotation()).angle();
+      rot2 += angle * angle;
+      trans2 += e.translation().squaredNorm();
+      ++n;
+    }
+  }
+  return {std::sqrt(rot2 / n), std::sqrt(trans2 / n)};
+}
+
+HandEyeEstimate estimate(const char* method, const Isometry3d& gripper_T_camera,
+                         const std::vector<Isometry3d>& base_T_gripper,
+                         const std::vector<Isometry3d>& camera_T_target) {
+  const Residual r = ax_xb(base_T_gripper, camera_T_target, gripper_T_camera);
+  return {method, gripper_T_camera, r.rotation_rms_rad, r.translation_rms_m};
+}
+
+Isometry3d isometry(const cv::Mat& r, const cv::Mat& t) {
+  Matrix3d rotation;
+  Vector3d translation;
+  cv::cv2eigen(r, rotation);
+  cv::cv2eigen(t, translation);
+  Isometry3d m = Isometry3d::Identity();
+  m.linear() = rotation;
+  m.translation() = translation;
+  return m;
+}
+
+void split(const Isometry3d& m, cv::Mat& r, cv::Mat& t) {
+  const Matrix3d rotation = m.rotation();
+  const Vector3d translation = m.translation();
+  cv::eigen2cv(rotation, r);
+  cv::eigen2cv(translation, t);
+}
+
+Isometry3d solve_hand_eye(const std::vector<Isometry3d>& base_T_gripper, const std::vector<Isometry3d>& camera_T_target,
+                          cv::HandEyeCalibrationMethod method) {
+  std::vector<cv::Mat> r_g2b(base_T_gripper.size()), t_g2b(base_T_gripper.size());
+  std::vector<cv::Mat> r_t2c(camera_T_target.size()), t_t2c(camera_T_target.size());
+  for (std::size_t i = 0; i < base_T_gripper.size(); ++i) {
+    split(base_T_gripper[i], r_g2b[i], t_g2b[i]);
+    split(camera_T_target[i], r_t2c[i], t_t2c[i]);
+  }
+  cv::Mat r, t;
+  cv::calibrateHandEye(r_g2b, t_g2b, r_t2c, t_t2c, r, t, method);
+  return isometry(r, t);
+}
+
+Isometry3d solve_robot_world(const std::vector<Isometry3d>& base_T_gripper,
+                             const std::vector<Isometry3d>& camera_T_target,
+                             cv::RobotWorldHandEyeCalibrationMethod method) {
+  // OpenCV's world is the board: world2cam = camera_T_target, base2gripper = gripper_T_base;
+  // it returns base2world = target_T_base and gripper2cam = camera_T_gripper.
+  std::vector<cv::Mat> r_w2c(camera_T_target.size()), t_w2c(camera_T_target.size());
+  std::vector<cv::Mat> r_b2g(base_T_gripper.size()), t_b2g(base_T_gripper.size());
+  for (std::size_t i = 0; i < base_T_gripper.size(); ++i) {
+    split(camera_T_target[i], r_w2c[i], t_w2c[i]);
+    split(base_T_gripper[i].inverse(), r_b2g[i], t_b2g[i]);
+  }
+  cv::Mat r_b2w, t_b2w, r_g2c, t_g2c;
+  cv::calibrateRobotWorldHandEye(r_w2c, t_w2c, r_b2g, t_b2g, r_b2w, t_b2w, r_g2c, t_g2c, method);
+  return isometry(r_g2c, t_g2c).inverse();
+}
+
+// One board corner seen in one view: residual in pixels of the projection of
+// camera_T_target = gripper_T_camera^-1 * base_T_gripper^-1 * base_T_target.
+struct CornerCost {
+  Matrix3d gripper_R_base;
+  Vector3d base_t_gripper;
+  Vector3d corner_m;
+  double u_px, v_px;
+  const CameraModel* camera;
+
+  template <typename T>
+  bool operator()(const T* gripper_T_camera, const T* base_T_target, T* residual) const {
+    const T corner[3] = {T(corner_m.x()), T(corner_m.y()), T(corner_m.z())};
+    T in_base[3];
+    ceres::AngleAxisRotatePoint(base_T_target, corner, in_base);
+    T offset[3];
+    for (int k = 0; k < 3; ++k) offset[k] = in_base[k] + base_T_target[3 + k] - T(base_t_gripper[k]);
+    T in_gripper[3];
+    for (int r = 0; r < 3; ++r) {
+      in_gripper[r] = T(gripper_R_base(r, 0)) * offset[0] + T(gripper_R_base(r, 1)) * offset[1] +
+                      T(gripper_R_base(r, 2)) * offset[2] - gripper_T_camera[3 + r];
+    }
+    const T inverse_rotation[3] = {-gripper_T_camera[0], -gripper_T_camera[1], -gripper_T_camera[2]};
+    T p[3];
+    ceres::AngleAxisRotatePoint(inverse_rotation, in_gripper, p);
+    const T x = p[0] / p[2], y = p[1] / p[2];
+    const std::array<double, 5>& d = camera->distortion;
+    const T r2 = x * x + y * y;
+    const T radial = T(1) + T(d[0]) * r2 + T(d[1]) * r2 * r2 + T(d[4]) * r2 * r2 * r2;
+    const T xd = x * radial + T(2 * d[2]) * x * y + T(d[3]) * (r2 + T(2) * x * x);
+    const T yd = y * radial + T(d[2]) * (r2 + T(2) * y * y) + T(2 * d[3]) * x * y;
+    const cv::Matx33d& k = camera->camera_matrix;
+    residual[0] = T(k(0, 0)) * xd + T(k(0, 2)) - T(u_px);
+    residual[1] = T(k(1, 1)) * yd + T(k(1, 2)) - T(v_px);
+    return true;
+  }
+};
+
+std::array<double, 6> to_parameters(const Isometry3d& m) {
+  const Eigen::AngleAxisd aa(m.rotation());
+  const Vector3d r = aa.angle() * aa.axis();
+  return {r.x(), r.y(), r.z(), m.translation().x(), m.translation().y(), m.translation().z()};
+}
+
+Isometry3d from_parameters(const std::array<double, 6>& p) {
+  const Vector3d r(p[0], p[1], p[2]);
+  Isometry3d m = Isometry3d::Identity();
+  if (r.norm() > 0) m.linear() = Eigen::AngleAxisd(r.norm(), r.normalized()).toRotationMatrix();
+  m.translation() = Vector3d(p[3], p[4], p[5]);
+  return m;
+}
+
+// RMS (px) of the corners' reprojection for a hand-eye and board pose, by cv::projectPoints.
+double reprojection_rms(const std::vector<const BoardDetection*>& detections,
+                        const std::vector<Isometry3d>& base_T_gripper, const CameraModel& camera,
+                        const Isometry3d& gripper_T_camera, const Isometry3d& base_T_target) {
+  double sum2 = 0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < detections.size(); ++i) {
+    const Isometry3d camera_T_target = gripper_T_camera.inverse() * base_T_gripper[i].inverse() * base_T_target;
+    cv::Mat r, rvec, tvec;
+    split(camera_T_target, r, tvec);
+    cv::Rodrigues(r, rvec);
+    std::vector<cv::Point2f> projected;
+    cv::projectPoints(detections[i]->board_m, rvec, tvec, cv::Mat(camera.camera_matrix), camera.distortion_mat(),
+                      projected);
+    for (std::size_t k = 0; k < projected.size(); ++k) {
+      const cv::Point2f e = projected[k] - detections[i]->image_px[k];
+      sum2 += static_cast<double>(e.dot(e));
+      ++n;
+    }
+  }
+  return std::sqrt(sum2 / static_cast<double>(n));
+}
+
+// The mean of base_T_gripper_i * X * camera_T_target_i (chordal mean of the rotations).
+Isometry3d mean_target(const std::vector<Isometry3d>& base_T_gripper, const std::vector<Isometry3d>& camera_T_target,
+                       const Isometry3d& gripper_T_camera) {
+  Eigen::Vector4d q_sum = Eigen::Vector4d::Zero();
+  Vector3d t_sum = Vector3d::Zero();
+  Eigen::Quaterniond first;
+  for (std::size_t i = 0; i < base_T_gripper.size(); ++i) {
+    const Isometry3d m = base_T_gripper[i] * gripper_T_camera * camera_T_target[i];
+    Eigen::Quaterniond q(m.rotation());
+    if (i == 0) first = q;
+    if (q.dot(first) < 0) q.coeffs() *= -1.0;
+    q_sum += q.coeffs();
+    t_sum += m.translation();
+  }
+  Isometry3d mean = Isometry3d::Identity();
+  mean.linear() = Eigen::Quaterniond(q_sum.normalized()).toRotationMatrix();
+  mean.translation() = t_sum / static_cast<double>(base_T_gripper.size());
+  return mean;
+}
+
+}  // namespace
+
+const char* convention_name(PoseConvention c) {
+  return c == PoseConvention::kGripperToBase ? "gripper2base" : "base2gripper";
+}
+
+HandEyeCalibration calibrate_hand_eye(const std::vector<HandEyeView>& views, const CameraModel& camera,
+                                      const HandEyeOptions& options) {
+  HandEyeCalibration result;
+  std::vector<Isometry3d> base_T_gripper, camera_T_target;
+  std::vector<const BoardDetection*> detections;
+  const cv::Mat k(camera.camera_matrix), distortion = camera.distortion_mat();
+  for (const HandEyeView& v : views) {
+    HandEyeViewReport report;
+    report.view = v.view;
+    cv::Mat rvec, tvec;
+    if (!v.detection.found) {
+      report.rejection = v.detection.reason;
+    } else if (v.detection.image_size != camera.image_size) {
+      report.rejection = "image size differs from the camera's calibration";
+    } else if (!cv::solvePnP(v.detection.board_m, v.detection.image_px, k, distortion, rvec, tvec)) {
+      report.rejection = "the board's pose was not found (solvePnP failed)";
+    } else {
+      cv::Mat r;
+      cv::Rodrigues(rvec, r);
+      report.used = true;
+      report.camera_T_target = isometry(r, tvec);
+      camera_T_target.push_back(report.camera_T_target);
+      base_T_gripper.push_back(options.convention == PoseConvention::kGripperToBase ? v.robot_pose
+                                                                                    : v.robot_pose.inverse());
+      detections.push_back(&v.detection);
+    }
+    result.views.push_back(std::move(report));
+  }
+  result.poses_used = static_cast<int>(base_T_gripper.size());
+  if (result.poses_used < std::max(3, options.min_poses)) {
+    std::string message = "hand-eye calibration: " + std::to_string(result.poses_used) + " usable poses of " +
+                          std::to_string(views.size()) + ", at least " +
+                          std::to_string(std::max(3, options.min_poses)) + " needed";
+    for (const HandEyeViewReport& r : result.views) {
+      if (!r.used) message += "\n  " + r.view + ": " + r.rejection;
+    }
+    throw CalibrationError(message);
+  }
+
+  // Rotation diversity of the gripper's relative motions.
+  std::vector<Vector3d> large_axes;
+  for (std::size_t i = 0; i < base_T_gripper.size(); ++i) {
+    for (std::size_t j = i + 1; j < base_T_gripper.size(); ++j) {
+      const Eigen::AngleAxisd motion((base_T_gripper[i].inverse() * base_T_gripper[j]).rotation());
+      result.largest_rotation_rad = std::max(result.largest_rotation_rad, motion.angle());
+      if (motion.angle() >= options.min_rotation_rad) large_axes.push_back(motion.axis());
+    }
+  }
+  if (result.largest_rotation_rad < options.min_rotation_rad) {
+    throw CalibrationError("hand-eye calibration: the largest rotation between two poses is " +
+                           fixed(result.largest_rotation_rad * kDeg, 1) + " degrees; at least " +
+                           fixed(options.min_rotation_rad * kDeg, 1) +
+                           " degrees about two non-parallel axes is needed: rotate the gripper more between poses");
+  }
+  for (std::size_t i = 0; i < large_axes.size(); ++i) {
+    for (std::size_t j = i + 1; j < large_axes.size(); ++j) {
+      const double angle = std::acos(std::min(1.0, std::abs(large_axes[i].dot(large_axes[j]))));
+      result.largest_axis_angle_rad = std::max(result.largest_axis_angle_rad, angle);
+    }
+  }
+  if (result.largest_axis_angle_rad < options.min_axis_angle_rad) {
+    throw CalibrationError(
+        "hand-eye calibration: the rotations between poses are about nearly parallel axes "
+        "(largest angle between two axes " +
+        fixed(result.largest_axis_angle_rad * kDeg, 1) + " degrees, at least " +
+        fixed(options.min_axis_angle_rad * kDeg, 1) + " degrees needed): rotate the gripper about a second axis");
+  }
+
+  // Convention: solve both readings of the robot poses and compare their residuals.
+  std::vector<Isometry3d> other(base_T_gripper.size());
+  std::transform(base_T_gripper.begin(), base_T_gripper.end(), other.begin(),
+                 [](const Isometry3d& m) { return m.inverse(); });
+  const double given_rms =
+      ax_xb(base_T_gripper, camera_T_target, solve_hand_eye(base_T_gripper, camera_T_target, cv::CALIB_HAND_EYE_PARK))
+          .rotation_rms_rad;
+  result.other_convention_rotation_rms_rad =
+      ax_xb(other, camera_T_target, solve_hand_eye(other, camera_T_target, cv::CALIB_HAND_EYE_PARK)).rotation_rms_rad;
+  if (given_rms > 0.5 / kDeg && result.other_convention_rotation_rms_rad * options.convention_ratio < given_rms) {
+    const PoseConvention fits = options.convention == PoseConvention::kGripperToBase ? PoseConvention::kBaseToGripper
+                                                                                     : PoseConvention::kGripperToBase;
+    throw CalibrationError(std::string("hand-eye calibration: the robot poses fit as ") + convention_name(fits) +
+                           (fits == PoseConvention::kGripperToBase ? " (base_T_gripper)" : " (gripper_T_base)") +
+                           ", not as " + convention_name(options.convention) + " as given: AX = XB rotation residual " +
+                           fixed(result.other_convention_rotation_rms_rad * kDeg, 3) + " degrees against " +
+                           fixed(given_rms * kDeg, 3) + " degrees; invert the poses or give the other convention");
+  }
+
+  const std::array<std::pair<const char*, cv::HandEyeCalibrationMethod>, 5> methods = {{
+      {"tsai", cv::CALIB_HAND_EYE_TSAI},
+      {"park", cv::CALIB_HAND_EYE_PARK},
+      {"horaud", cv::CALIB_HAND_EYE_HORAUD},
+      {"andreff", cv::CALIB_HAND_EYE_ANDREFF},
+      {"daniilidis", cv::CALIB_HAND_EYE_DANIILIDIS},
+  }};
+  for (const auto& [name, method] : methods) {
+    result.methods.push_back(
+        estimate(name, solve_hand_eye(base_T_gripper, camera_T_target, method), base_T_gripper, camera_T_target));
+  }
+  const std::array<std::pair<const char*, cv::RobotWorldHandEyeCalibrationMethod>, 2> robot_world = {{
+      {"shah", cv::CALIB_ROBOT_WORLD_HAND_EYE_SHAH},
+      {"li", cv::CALIB_ROBOT_WORLD_HAND_EYE_LI},
+  }};
+  for (const auto& [name, method] : robot_world) {
+    result.robot_world.push_back(
+        estimate(name, solve_robot_world(base_T_gripper, camera_T_target, method), base_T_gripper, camera_T_target));
+  }
+
+  // Refinement from the AX = XB estimate with the smallest rotation residual.
+  const HandEyeEstimate& start =
+      *std::min_element(result.methods.begin(), result.methods.end(),
+                        [](const auto& a, const auto& b) { return a.rotation_rms_rad < b.rotation_rms_rad; });
+  result.start_method = start.method;
+  const Isometry3d target0 = mean_target(base_T_gripper, camera_T_target, start.gripper_T_camera);
+  result.rms_before_px = reprojection_rms(detections, base_T_gripper, camera, start.gripper_T_camera, target0);
+  std::array<double, 6> x = to_parameters(start.gripper_T_camera), w = to_parameters(target0);
+  ceres::Problem problem;
+  for (std::size_t i = 0; i < detections.size(); ++i) {
+    const Isometry3d gripper_T_base = base_T_gripper[i].inverse();
+    for (std::size_t c = 0; c < detections[i]->board_m.size(); ++c) {
+      const cv::Point3f& corner = detections[i]->board_m[c];
+      const cv::Point2f& px = detections[i]->image_px[c];
+      auto* cost = new ceres::AutoDiffCostFunction<CornerCost, 2, 6, 6>(
+          new CornerCost{gripper_T_base.rotation(), base_T_gripper[i].translation(),
+                         Vector3d(corner.x, corner.y, corner.z), px.x, px.y, &camera});
+      problem.AddResidualBlock(cost, nullptr, x.data(), w.data());
+    }
+  }
+  ceres::Solver::Options solver;
+  solver.linear_solver_type = ceres::DENSE_QR;
+  solver.max_num_iterations = 200;
+  solver.function_tolerance = 1e-12;
+  solver.parameter_tolerance = 1e-12;
+  solver.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &problem, &summary);
+  if (!summary.IsSolutionUsable()) {
+    throw CalibrationError("hand-eye calibration: the refinement failed: " + summary.message);
+  }
+  result.gripper_T_camera = from_parameters(x);
+  result.base_T_target = from_parameters(w);
+  result.rms_after_px =
+      reprojection_rms(detections, base_T_gripper, camera, result.gripper_T_camera, result.base_T_target);
+  const Residual refined = ax_xb(base_T_gripper, camera_T_target, result.gripper_T_camera);
+  result.rotation_rms_rad = refined.rotation_rms_rad;
+  result.translation_rms_m = refined.translation_rms_m;
+  return result;
+}
+
+std::string describe(const HandEyeCalibration& c) {
+  std::ostringstream out;
+  out << "poses used: " << c.poses_used << " of " << c.views.size() << "\n";
+  out << "largest rotation between poses: " << fixed(c.largest_rotation_rad * kDeg, 1)
+      << " degrees; largest angle between rotation axes: " << fixed(c.largest_axis_angle_rad * kDeg, 1) << " degrees\n";
+  out << "method, AX = XB rotation RMS (degrees), translation RMS (mm), gripper_t_camera (m):\n";
+  const auto line = [&out](const HandEyeEstimate& e) {
+    const Vector3d t = e.gripper_T_camera.translation();
+    out << "  " << e.method << ": " << fixed(e.rotation_rms_rad * kDeg, 4) << ", "
+        << fixed(e.translation_rms_m * 1e3, 3) << ", " << fixed(t.x(), 5) << " " << fixed(t.y(), 5) << " "
+        << fixed(t.z(), 5) << "\n";
+  };
+  for (const HandEyeEstimate& e : c.methods) line(e);
+  for (const HandEyeEstimate& e : c.robot_world) line(e);
+  line({"refined", c.gripper_T_camera, c.rotation_rms_rad, c.translation_rms_m});
+  out << "refinement from " << c.start_method << ": reprojection RMS " << fixed(c.rms_before_px, 4) << " px before, "
+      << fixed(c.rms_after_px, 4) << " px after\n";
+  for (const HandEyeViewReport& v : c.views) {
+    if (!v.used) out << "view " << v.view << ": rejected: " << v.rejection << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace kincal::camera

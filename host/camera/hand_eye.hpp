@@ -1,0 +1,94 @@
+// Hand-eye calibration (issue #6): where the camera sits on the gripper (gripper_T_camera), and
+// where the board stands in the robot's base frame (base_T_target), from robot poses and images
+// of a fixed board taken by a camera on the gripper (eye-in-hand, the sensor platform's case).
+//
+// What it does, in order, and how each step can refuse:
+//  1. Per view: the board's pose in the camera (camera_T_target, cv::solvePnP with the camera
+//     model). A view without the board, or whose pose fails, is left out with its reason.
+//  2. Enough poses: at least options.min_poses usable views, else CalibrationError "N usable
+//     poses ... at least M needed" listing the views left out.
+//  3. Rotation diversity (AX = XB is degenerate without it): over all pairs of poses, the
+//     relative gripper rotation; the largest must reach options.min_rotation_rad, and among the
+//     motions that reach it two axes must differ by options.min_axis_angle_rad or more.
+//     Otherwise CalibrationError naming the value found and the minimum.
+//  4. Convention: robot poses are base_T_gripper (OpenCV's "gripper2base") unless
+//     options.convention says they are gripper_T_base ("base2gripper"). Both readings are
+//     solved (Park) and judged by their AX = XB rotation residual; if the other reading fits
+//     options.convention_ratio times better (and the given one is worse than 0.5 degrees), it is a
+//     mix-up: CalibrationError saying which convention fits and both residuals.
+//  5. cv::calibrateHandEye by Tsai, Park, Horaud, Andreff and Daniilidis, and
+//     cv::calibrateRobotWorldHandEye by Shah and Li; each with its AX = XB residuals (RMS over
+//     all pairs of poses of the rotation angle and translation of (A X)^-1 (X B)).
+//  6. Refinement (Ceres, Levenberg-Marquardt): gripper_T_camera and base_T_target minimizing
+//     the reprojection error of every board corner in every used view, starting from the
+//     AX = XB method with the smallest rotation residual; RMS before and after are reported.
+// Robot poses are taken as exact (their errors are what the kinematic calibration finds).
+// Cost: O(n^2) motions for the checks and residuals (n poses), O(m^2) in the m large motions for
+// the axis check; the refinement is milliseconds for tens of views.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "host/camera/board.hpp"
+#include "host/camera/intrinsics.hpp"
+
+namespace kincal::camera {
+
+enum class PoseConvention {
+  kGripperToBase,  // poses are base_T_gripper (maps gripper coordinates to base coordinates)
+  kBaseToGripper,  // poses are gripper_T_base
+};
+const char* convention_name(PoseConvention c);  // "gripper2base" / "base2gripper"
+
+struct HandEyeView {
+  std::string view;
+  Eigen::Isometry3d robot_pose = Eigen::Isometry3d::Identity();  // in options.convention
+  BoardDetection detection;
+};
+
+struct HandEyeOptions {
+  PoseConvention convention = PoseConvention::kGripperToBase;
+  int min_poses = 5;
+  double min_rotation_rad = 20 * 3.14159265358979323846 / 180;
+  double min_axis_angle_rad = 20 * 3.14159265358979323846 / 180;
+  double convention_ratio = 5;
+};
+
+struct HandEyeEstimate {
+  std::string method;
+  Eigen::Isometry3d gripper_T_camera = Eigen::Isometry3d::Identity();
+  double rotation_rms_rad = 0;  // AX = XB residuals
+  double translation_rms_m = 0;
+};
+
+struct HandEyeViewReport {
+  std::string view;
+  bool used = false;
+  std::string rejection;
+  Eigen::Isometry3d camera_T_target = Eigen::Isometry3d::Identity();
+};
+
+struct HandEyeCalibration {
+  std::vector<HandEyeViewReport> views;
+  int poses_used = 0;
+  double largest_rotation_rad = 0;
+  double largest_axis_angle_rad = 0;
+  double other_convention_rotation_rms_rad = 0;  // step 4's residual of the other reading
+  std::vector<HandEyeEstimate> methods;          // Tsai, Park, Horaud, Andreff, Daniilidis
+  std::vector<HandEyeEstimate> robot_world;      // Shah, Li
+  std::string start_method;
+  Eigen::Isometry3d gripper_T_camera = Eigen::Isometry3d::Identity();  // refined
+  Eigen::Isometry3d base_T_target = Eigen::Isometry3d::Identity();     // refined
+  double rms_before_px = 0, rms_after_px = 0;
+  double rotation_rms_rad = 0, translation_rms_m = 0;  // AX = XB residuals of the refined result
+};
+
+HandEyeCalibration calibrate_hand_eye(const std::vector<HandEyeView>& views, const CameraModel& camera,
+                                      const HandEyeOptions& options = {});
+
+std::string describe(const HandEyeCalibration& calibration);
+
+}  // namespace kincal::camera

@@ -1,0 +1,159 @@
+#include "host/camera/intrinsics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include <opencv2/calib3d.hpp>
+
+#include "host/camera/number_text.hpp"
+
+namespace kincal::camera {
+
+namespace {
+
+std::string size_text(cv::Size s) { return std::to_string(s.width) + "x" + std::to_string(s.height); }
+
+constexpr int kGridCols = 8, kGridRows = 6;
+
+}  // namespace
+
+cv::Mat CameraModel::distortion_mat() const {
+  cv::Mat d(1, 5, CV_64F);
+  for (int i = 0; i < 5; ++i) d.at<double>(0, i) = distortion[static_cast<std::size_t>(i)];
+  return d;
+}
+
+IntrinsicCalibration calibrate_intrinsics(const std::vector<BoardDetection>& detections,
+                                          const IntrinsicOptions& options) {
+  IntrinsicCalibration result;
+  std::vector<std::vector<cv::Point3f>> object_points;
+  std::vector<std::vector<cv::Point2f>> image_points;
+  std::vector<std::size_t> used;  // indices into result.views
+  cv::Size image_size;
+  for (const BoardDetection& d : detections) {
+    ViewReport v;
+    v.view = d.view;
+    v.corners = static_cast<int>(d.image_px.size());
+    if (!d.found) {
+      v.rejection = d.reason;
+    } else if (d.board_m.size() != d.image_px.size()) {
+      v.rejection = "detection without board coordinates";
+    } else if (image_size.area() > 0 && d.image_size != image_size) {
+      v.rejection = "image size " + size_text(d.image_size) + " differs from the first view's " + size_text(image_size);
+    } else {
+      image_size = d.image_size;
+      v.used = true;
+      object_points.push_back(d.board_m);
+      image_points.push_back(d.image_px);
+      used.push_back(result.views.size());
+    }
+    result.views.push_back(std::move(v));
+  }
+  result.views_used = static_cast<int>(used.size());
+  if (result.views_used < options.min_views) {
+    std::string message = "intrinsic calibration: " + std::to_string(result.views_used) + " usable views of " +
+                          std::to_string(detections.size()) + ", at least " + std::to_string(options.min_views) +
+                          " needed";
+    for (const ViewReport& v : result.views) {
+      if (!v.used) message += "\n  " + v.view + ": " + v.rejection;
+    }
+    throw CalibrationError(message);
+  }
+
+  cv::Mat camera_matrix, distortion, std_intrinsics, std_extrinsics, per_view;
+  std::vector<cv::Mat> rvecs, tvecs;
+  result.rms_px = cv::calibrateCamera(object_points, image_points, image_size, camera_matrix, distortion, rvecs, tvecs,
+                                      std_intrinsics, std_extrinsics, per_view, options.flags);
+  result.camera.image_size = image_size;
+  result.camera.camera_matrix = cv::Matx33d(camera_matrix);
+  for (int i = 0; i < 5; ++i) result.camera.distortion[static_cast<std::size_t>(i)] = distortion.at<double>(i);
+  for (int i = 0; i < 9; ++i) result.std_dev[static_cast<std::size_t>(i)] = std_intrinsics.at<double>(i);
+
+  std::vector<double> view_rms;
+  double max_tilt_rad = 0;
+  std::vector<bool> cells(kGridCols * kGridRows, false);
+  for (std::size_t k = 0; k < used.size(); ++k) {
+    ViewReport& v = result.views[used[k]];
+    v.rms_px = per_view.at<double>(static_cast<int>(k));
+    v.camera_r_board = cv::Vec3d(rvecs[k]);
+    v.camera_t_board_m = cv::Vec3d(tvecs[k]);
+    view_rms.push_back(v.rms_px);
+    // Tilt: the angle between the board's normal and the camera's optical axis.
+    cv::Matx33d r;
+    cv::Rodrigues(v.camera_r_board, r);
+    max_tilt_rad = std::max(max_tilt_rad, std::acos(std::min(1.0, std::abs(r(2, 2)))));
+    for (const cv::Point2f& p : image_points[k]) {
+      const int cx =
+          std::clamp(static_cast<int>(p.x * kGridCols / static_cast<float>(image_size.width)), 0, kGridCols - 1);
+      const int cy =
+          std::clamp(static_cast<int>(p.y * kGridRows / static_cast<float>(image_size.height)), 0, kGridRows - 1);
+      cells[static_cast<std::size_t>(cy * kGridCols + cx)] = true;
+    }
+  }
+  result.coverage =
+      static_cast<double>(std::count(cells.begin(), cells.end(), true)) / static_cast<double>(cells.size());
+
+  if (result.views_used < options.recommended_views) {
+    result.warnings.push_back("only " + std::to_string(result.views_used) + " views used; " +
+                              std::to_string(options.recommended_views) + " or more give reliable distortion");
+  }
+  if (result.coverage < options.min_coverage) {
+    result.warnings.push_back("the corners cover " + fixed(100 * result.coverage, 0) + " % of the image (cells of " +
+                              std::to_string(kGridCols) + "x" + std::to_string(kGridRows) + "), less than " +
+                              fixed(100 * options.min_coverage, 0) +
+                              " %: distortion near the edges is extrapolated; add views with the board near the "
+                              "image corners");
+  }
+  if (max_tilt_rad < options.min_tilt_rad) {
+    result.warnings.push_back("the board is never tilted more than " + fixed(max_tilt_rad * 180 / CV_PI, 1) +
+                              " degrees (at least " + fixed(options.min_tilt_rad * 180 / CV_PI, 0) +
+                              " wanted): focal length and distance are confounded; add tilted views");
+  }
+  std::vector<double> sorted = view_rms;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  for (std::size_t k = 0; k < used.size(); ++k) {
+    const ViewReport& v = result.views[used[k]];
+    if (v.rms_px > 3 * median) {
+      result.warnings.push_back(v.view + ": RMS " + fixed(v.rms_px, 3) + " px is more than 3 times the median (" +
+                                fixed(median, 3) + " px): a bad detection or a moved board?");
+    }
+  }
+  return result;
+}
+
+std::string describe(const IntrinsicCalibration& c) {
+  static constexpr std::array<const char*, 9> kNames = {"fx_px", "fy_px", "cx_px", "cy_px", "k1",
+                                                        "k2",    "p1",    "p2",    "k3"};
+  const cv::Matx33d& k = c.camera.camera_matrix;
+  const std::array<double, 9> values = {k(0, 0),
+                                        k(1, 1),
+                                        k(0, 2),
+                                        k(1, 2),
+                                        c.camera.distortion[0],
+                                        c.camera.distortion[1],
+                                        c.camera.distortion[2],
+                                        c.camera.distortion[3],
+                                        c.camera.distortion[4]};
+  std::ostringstream out;
+  out << "image: " << size_text(c.camera.image_size) << "\n";
+  out << "views used: " << c.views_used << " of " << c.views.size() << "\n";
+  out << "reprojection RMS: " << fixed(c.rms_px, 4) << " px\n";
+  for (std::size_t i = 0; i < kNames.size(); ++i) {
+    out << kNames[i] << ": " << general(values[i]) << " +- " << general(c.std_dev[i]) << "\n";
+  }
+  out << "coverage: " << fixed(100 * c.coverage, 0) << " %\n";
+  for (const ViewReport& v : c.views) {
+    out << "view " << v.view << ": ";
+    if (v.used) {
+      out << v.corners << " corners, RMS " << fixed(v.rms_px, 4) << " px\n";
+    } else {
+      out << "rejected: " << v.rejection << "\n";
+    }
+  }
+  for (const std::string& w : c.warnings) out << "warning: " << w << "\n";
+  return out.str();
+}
+
+}  // namespace kincal::camera

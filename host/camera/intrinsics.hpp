@@ -1,0 +1,80 @@
+// Intrinsic camera calibration (issue #6): cv::calibrateCamera over board detections, with what
+// a user needs to judge the result -- one standard deviation per parameter, the RMS
+// reprojection error of every view, the views left out and why, and warnings when the views do
+// not constrain the model well.
+//
+// Model: OpenCV's pinhole with k1 k2 p1 p2 k3 (the firmware's model, firmware/core/
+// camera_model.hpp), zero skew, pixel (0, 0) at the centre of the top-left pixel.
+//
+// Views left out (ViewReport::rejection): the detection's own reason ("pattern not found",
+// "too few corners (N, at least M)"), or "image size WxH differs from the first view's WxH".
+// Warnings (IntrinsicCalibration::warnings; the calibration is still returned):
+//   - fewer than options.recommended_views views used;
+//   - the corners cover less than options.min_coverage of the image (cells of an 8 x 6 grid
+//     holding at least one corner): distortion near the edges is extrapolated;
+//   - no view tilts the board by options.min_tilt_rad or more: the focal length is then
+//     strongly correlated with the board distance;
+//   - a view's RMS is more than 3 times the median: a bad detection or a moved board.
+// Errors: CalibrationError when fewer than options.min_views views are usable; its message
+// counts the views and lists each rejected one with its reason. Detections must carry their
+// board coordinates (detect_board does).
+// Cost: one Levenberg-Marquardt solve in OpenCV, about a millisecond per view and iteration.
+#pragma once
+
+#include <array>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "host/camera/board.hpp"
+
+namespace kincal::camera {
+
+class CalibrationError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct CameraModel {
+  cv::Size image_size;
+  cv::Matx33d camera_matrix = cv::Matx33d::eye();  // fx 0 cx; 0 fy cy; 0 0 1 (px)
+  std::array<double, 5> distortion{};              // k1 k2 p1 p2 k3
+  cv::Mat distortion_mat() const;                  // 1 x 5, CV_64F, a copy
+};
+
+struct ViewReport {
+  std::string view;
+  bool used = false;
+  std::string rejection;  // why not used; empty when used
+  int corners = 0;
+  double rms_px = 0;                           // used views only
+  cv::Vec3d camera_r_board, camera_t_board_m;  // rotation vector and translation, used views only
+};
+
+struct IntrinsicOptions {
+  int min_views = 3;
+  int recommended_views = 10;
+  double min_coverage = 0.5;
+  double min_tilt_rad = 20 * 3.14159265358979323846 / 180;
+  int flags = 0;  // extra cv::CALIB_* flags (e.g. CALIB_FIX_K3)
+};
+
+struct IntrinsicCalibration {
+  CameraModel camera;
+  std::array<double, 9> std_dev{};  // fx fy cx cy (px), k1 k2 p1 p2 k3
+  double rms_px = 0;
+  double coverage = 0;  // fraction of the 8 x 6 cells holding a corner
+  int views_used = 0;
+  std::vector<ViewReport> views;  // one per detection, in the order given
+  std::vector<std::string> warnings;
+};
+
+IntrinsicCalibration calibrate_intrinsics(const std::vector<BoardDetection>& detections,
+                                          const IntrinsicOptions& options = {});
+
+// A text report: parameters with their standard deviations, RMS, each view, the warnings.
+std::string describe(const IntrinsicCalibration& calibration);
+
+}  // namespace kincal::camera

@@ -1,0 +1,132 @@
+#include "host/camera/stereo.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <sstream>
+
+#include <opencv2/calib3d.hpp>
+
+#include "host/camera/number_text.hpp"
+
+namespace kincal::camera {
+
+StereoCalibration calibrate_stereo(const std::vector<BoardDetection>& left, const std::vector<BoardDetection>& right,
+                                   const CameraModel& left_camera, const CameraModel& right_camera,
+                                   const StereoOptions& options) {
+  if (left.size() != right.size()) {
+    throw CalibrationError("stereo calibration: " + std::to_string(left.size()) + " left views but " +
+                           std::to_string(right.size()) + " right views");
+  }
+  if (left_camera.image_size != right_camera.image_size) {
+    throw CalibrationError("stereo calibration: the cameras' image sizes differ");
+  }
+  StereoCalibration result;
+  result.left = left_camera;
+  result.right = right_camera;
+  std::vector<std::vector<cv::Point3f>> object_points;
+  std::vector<std::vector<cv::Point2f>> left_points, right_points;
+  std::vector<std::size_t> used;
+  for (std::size_t i = 0; i < left.size(); ++i) {
+    const BoardDetection& l = left[i];
+    const BoardDetection& r = right[i];
+    StereoPairReport p{l.view, r.view, false, {}, 0, 0};
+    for (const BoardDetection* d : {&l, &r}) {
+      if (d->found && d->image_size != left_camera.image_size) {
+        throw CalibrationError(d->view + ": image size differs from the camera's calibration");
+      }
+    }
+    if (!l.found || !r.found) {
+      p.rejection = !l.found ? l.view + ": " + l.reason : r.view + ": " + r.reason;
+    } else {
+      std::map<int, std::size_t> right_index;
+      for (std::size_t k = 0; k < r.ids.size(); ++k) right_index[r.ids[k]] = k;
+      std::vector<cv::Point3f> obj;
+      std::vector<cv::Point2f> lp, rp;
+      for (std::size_t k = 0; k < l.ids.size(); ++k) {
+        const auto it = right_index.find(l.ids[k]);
+        if (it == right_index.end()) continue;
+        obj.push_back(l.board_m[k]);
+        lp.push_back(l.image_px[k]);
+        rp.push_back(r.image_px[it->second]);
+      }
+      p.common_corners = static_cast<int>(obj.size());
+      if (p.common_corners < options.min_common_corners) {
+        p.rejection = "too few corners seen by both cameras (" + std::to_string(p.common_corners) + ", at least " +
+                      std::to_string(options.min_common_corners) + ")";
+      } else {
+        p.used = true;
+        object_points.push_back(std::move(obj));
+        left_points.push_back(std::move(lp));
+        right_points.push_back(std::move(rp));
+        used.push_back(result.pairs.size());
+      }
+    }
+    result.pairs.push_back(std::move(p));
+  }
+  if (static_cast<int>(used.size()) < options.min_pairs) {
+    std::string message = "stereo calibration: " + std::to_string(used.size()) + " usable pairs of " +
+                          std::to_string(left.size()) + ", at least " + std::to_string(options.min_pairs) + " needed";
+    for (const StereoPairReport& p : result.pairs) {
+      if (!p.used) message += "\n  " + p.left_view + " / " + p.right_view + ": " + p.rejection;
+    }
+    throw CalibrationError(message);
+  }
+
+  cv::Mat k1(left_camera.camera_matrix), k2(right_camera.camera_matrix);
+  cv::Mat d1 = left_camera.distortion_mat(), d2 = right_camera.distortion_mat();
+  cv::Mat r, t, e, f, per_view;
+  const int flags = options.refine_intrinsics ? cv::CALIB_USE_INTRINSIC_GUESS : cv::CALIB_FIX_INTRINSIC;
+  result.rms_px = cv::stereoCalibrate(object_points, left_points, right_points, k1, d1, k2, d2, left_camera.image_size,
+                                      r, t, e, f, per_view, flags,
+                                      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-10));
+  result.left.camera_matrix = cv::Matx33d(k1);
+  result.right.camera_matrix = cv::Matx33d(k2);
+  for (int i = 0; i < 5; ++i) {
+    result.left.distortion[static_cast<std::size_t>(i)] = d1.at<double>(i);
+    result.right.distortion[static_cast<std::size_t>(i)] = d2.at<double>(i);
+  }
+  result.right_R_left = cv::Matx33d(r);
+  result.right_t_left_m = cv::Vec3d(t);
+  result.baseline_m = cv::norm(result.right_t_left_m);
+  result.essential = cv::Matx33d(e);
+  result.fundamental = cv::Matx33d(f);
+  for (std::size_t k = 0; k < used.size(); ++k) {
+    // OpenCV gives the RMS of each camera per view; the pair's RMS is over both images.
+    const double el = per_view.at<double>(static_cast<int>(k), 0), er = per_view.at<double>(static_cast<int>(k), 1);
+    result.pairs[used[k]].rms_px = std::sqrt(0.5 * (el * el + er * er));
+  }
+  cv::Mat r1, r2, p1, p2, q;
+  cv::stereoRectify(k1, d1, k2, d2, left_camera.image_size, r, t, r1, r2, p1, p2, q, cv::CALIB_ZERO_DISPARITY, 0);
+  result.rectify_left = cv::Matx33d(r1);
+  result.rectify_right = cv::Matx33d(r2);
+  result.projection_left = cv::Matx34d(p1);
+  result.projection_right = cv::Matx34d(p2);
+  result.disparity_to_depth = cv::Matx44d(q);
+  return result;
+}
+
+std::string describe(const StereoCalibration& c) {
+  std::ostringstream out;
+  out << "pairs used: "
+      << std::count_if(c.pairs.begin(), c.pairs.end(), [](const StereoPairReport& p) { return p.used; }) << " of "
+      << c.pairs.size() << "\n";
+  out << "reprojection RMS: " << fixed(c.rms_px, 4) << " px\n";
+  out << "baseline: " << fixed(c.baseline_m, 6) << " m\n";
+  out << "right_t_left: " << fixed(c.right_t_left_m[0], 6) << " " << fixed(c.right_t_left_m[1], 6) << " "
+      << fixed(c.right_t_left_m[2], 6) << " m\n";
+  cv::Vec3d rotation;
+  cv::Rodrigues(c.right_R_left, rotation);
+  out << "right_R_left: " << fixed(cv::norm(rotation) * 180 / CV_PI, 4) << " degrees\n";
+  for (const StereoPairReport& p : c.pairs) {
+    out << "pair " << p.left_view << " / " << p.right_view << ": ";
+    if (p.used) {
+      out << p.common_corners << " corners, RMS " << fixed(p.rms_px, 4) << " px\n";
+    } else {
+      out << "rejected: " << p.rejection << "\n";
+    }
+  }
+  return out.str();
+}
+
+}  // namespace kincal::camera

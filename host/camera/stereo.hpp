@@ -1,0 +1,65 @@
+// Stereo calibration (issue #6): the pose of the right camera relative to the left from views
+// of the same board seen by both at once (cv::stereoCalibrate), then the rectification that
+// makes their epipolar lines image rows (cv::stereoRectify).
+//
+// Conventions: right_R_left, right_t_left_m map a point from the left camera frame to the right
+// one (x_right = R x_left + t), as OpenCV's R and T; baseline_m = |t|. The rectification
+// (R1 R2 P1 P2 Q) is OpenCV's, with alpha = 0 (only valid pixels) and CALIB_ZERO_DISPARITY.
+// With refine_intrinsics false (the default) both cameras keep the intrinsics given
+// (CALIB_FIX_INTRINSIC); otherwise they are the start of a joint refinement
+// (CALIB_USE_INTRINSIC_GUESS) and the refined models are returned.
+//
+// Pairs: detections[i] of the left and right lists are one pair (same instant; see
+// host/capture/stereo_source.hpp for pairing by time). A pair is used with the corners both
+// images found (matched by id); it is left out, with its reason, when either side has no board
+// or they share fewer than min_common_corners corners.
+// Errors: CalibrationError when the lists differ in length, the two cameras' image sizes
+// differ, an image size differs from its camera's, or fewer than min_pairs pairs are usable
+// (the message lists each pair left out and why).
+// Cost: one Levenberg-Marquardt solve in OpenCV (milliseconds for tens of pairs).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "host/camera/board.hpp"
+#include "host/camera/intrinsics.hpp"
+
+namespace kincal::camera {
+
+struct StereoOptions {
+  bool refine_intrinsics = false;
+  int min_common_corners = 6;
+  int min_pairs = 3;
+};
+
+struct StereoPairReport {
+  std::string left_view, right_view;
+  bool used = false;
+  std::string rejection;
+  int common_corners = 0;
+  double rms_px = 0;  // used pairs: RMS over both images
+};
+
+struct StereoCalibration {
+  CameraModel left, right;
+  cv::Matx33d right_R_left = cv::Matx33d::eye();
+  cv::Vec3d right_t_left_m;
+  double baseline_m = 0;
+  double rms_px = 0;
+  cv::Matx33d essential, fundamental;
+  cv::Matx33d rectify_left, rectify_right;        // R1, R2
+  cv::Matx34d projection_left, projection_right;  // P1, P2
+  cv::Matx44d disparity_to_depth;                 // Q
+  std::vector<StereoPairReport> pairs;
+};
+
+StereoCalibration calibrate_stereo(const std::vector<BoardDetection>& left, const std::vector<BoardDetection>& right,
+                                   const CameraModel& left_camera, const CameraModel& right_camera,
+                                   const StereoOptions& options = {});
+
+std::string describe(const StereoCalibration& calibration);
+
+}  // namespace kincal::camera

@@ -1,0 +1,185 @@
+#include "host/capture/frame_source.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <system_error>
+#include <utility>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio/registry.hpp>
+
+namespace kincal::capture {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+bool is_image_file(const fs::path& path) {
+  static constexpr std::array<const char*, 14> kExtensions = {".png",  ".jpg", ".jpeg", ".bmp", ".tif",
+                                                              ".tiff", ".pgm", ".ppm",  ".pbm", ".pnm",
+                                                              ".webp", ".exr", ".hdr",  ".jp2"};
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return std::find(kExtensions.begin(), kExtensions.end(), ext) != kExtensions.end();
+}
+
+bool all_digits(const std::string& s) {
+  return !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
+}
+
+double steady_seconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+}  // namespace
+
+bool natural_less(const std::string& a, const std::string& b) {
+  std::size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    const bool da = std::isdigit(static_cast<unsigned char>(a[i])) != 0;
+    const bool db = std::isdigit(static_cast<unsigned char>(b[j])) != 0;
+    if (da && db) {
+      std::size_t ie = i, je = j;
+      while (ie < a.size() && std::isdigit(static_cast<unsigned char>(a[ie])) != 0) ++ie;
+      while (je < b.size() && std::isdigit(static_cast<unsigned char>(b[je])) != 0) ++je;
+      // Compare the runs by value without converting: strip leading zeros, then length, then text.
+      std::size_t is = i, js = j;
+      while (is + 1 < ie && a[is] == '0') ++is;
+      while (js + 1 < je && b[js] == '0') ++js;
+      if (ie - is != je - js) return ie - is < je - js;
+      const int c = a.compare(is, ie - is, b, js, je - js);
+      if (c != 0) return c < 0;
+      i = ie;
+      j = je;
+    } else {
+      if (a[i] != b[j]) return a[i] < b[j];
+      ++i;
+      ++j;
+    }
+  }
+  if (a.size() - i != b.size() - j) return a.size() - i < b.size() - j;
+  return a < b;  // equal in natural order ("img01" vs "img1"): fall back to the text
+}
+
+CameraSource::CameraSource(const std::string& device, int width_px, int height_px) : name_(device) {
+  bool opened = false;
+  if (all_digits(device)) {
+    const int index = std::stoi(device);
+    std::error_code ec;
+    if (!fs::exists("/dev/video" + device, ec))
+      throw CaptureError(name_ + ": no such device (/dev/video" + device + ")");
+    opened = capture_.open(index, cv::CAP_V4L2);
+  } else {
+    std::error_code ec;
+    if (!fs::exists(device, ec)) throw CaptureError(name_ + ": no such device");
+    opened = capture_.open(device, cv::CAP_V4L2);
+  }
+  if (!opened || !capture_.isOpened()) throw CaptureError(name_ + ": cannot open the device as a V4L2 camera");
+  if (width_px > 0) capture_.set(cv::CAP_PROP_FRAME_WIDTH, width_px);
+  if (height_px > 0) capture_.set(cv::CAP_PROP_FRAME_HEIGHT, height_px);
+}
+
+std::optional<Frame> CameraSource::next() {
+  Frame f;
+  if (!capture_.read(f.image) || f.image.empty()) {
+    throw CaptureError(name_ + ": frame grab failed after " + std::to_string(index_) + " frames");
+  }
+  const double device_ms = capture_.get(cv::CAP_PROP_POS_MSEC);
+  f.timestamp_s = device_ms > 0 ? device_ms * 1e-3 : steady_seconds();
+  f.index = index_++;
+  f.origin = name_ + " frame " + std::to_string(f.index);
+  return f;
+}
+
+VideoFileSource::VideoFileSource(const std::string& path, double fps_override) : name_(path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw CaptureError(name_ + ": no such file");
+  if (is_image_file(path)) throw CaptureError(name_ + ": an image, not a video (use an image sequence)");
+  // Only the file backends: probing every backend (CAP_ANY) wakes GStreamer and camera
+  // libraries that print noise and leak for a file none of them reads.
+  for (const cv::VideoCaptureAPIs api : {cv::CAP_FFMPEG, cv::CAP_OPENCV_MJPEG}) {
+    if (!cv::videoio_registry::hasBackend(api)) continue;
+    try {
+      if (capture_.open(path, api)) break;
+    } catch (const cv::Exception&) {
+      // this backend cannot read it; try the next
+    }
+  }
+  if (!capture_.isOpened()) throw CaptureError(name_ + ": not a video OpenCV can read");
+  fps_ = fps_override > 0 ? fps_override : capture_.get(cv::CAP_PROP_FPS);
+  if (!(fps_ > 0) || !std::isfinite(fps_)) throw CaptureError(name_ + ": frame rate unknown (give one)");
+}
+
+std::optional<Frame> VideoFileSource::next() {
+  Frame f;
+  if (!capture_.read(f.image) || f.image.empty()) return std::nullopt;
+  f.index = index_++;
+  f.timestamp_s = static_cast<double>(f.index) / fps_;
+  f.origin = name_ + " frame " + std::to_string(f.index);
+  return f;
+}
+
+ImageSequenceSource::ImageSequenceSource(const std::string& directory, double period_s)
+    : name_(directory), period_s_(period_s) {
+  std::error_code ec;
+  if (!fs::is_directory(directory, ec)) throw CaptureError(name_ + ": no such directory");
+  for (const fs::directory_entry& entry : fs::directory_iterator(directory, ec)) {
+    if (entry.is_regular_file(ec) && is_image_file(entry.path())) files_.push_back(entry.path().string());
+  }
+  if (ec) throw CaptureError(name_ + ": cannot list the directory (" + ec.message() + ")");
+  if (files_.empty()) throw CaptureError(name_ + ": no image files in the directory");
+  std::sort(files_.begin(), files_.end(), natural_less);
+}
+
+ImageSequenceSource::ImageSequenceSource(std::vector<std::string> files, double period_s)
+    : name_(files.empty() ? std::string("image list") : files.front()), files_(std::move(files)), period_s_(period_s) {
+  if (files_.empty()) throw CaptureError("image list: no image files given");
+  std::error_code ec;
+  for (const std::string& f : files_) {
+    if (!fs::is_regular_file(f, ec)) throw CaptureError(f + ": no such file");
+  }
+}
+
+std::optional<Frame> ImageSequenceSource::next() {
+  if (next_ >= files_.size()) return std::nullopt;
+  const std::string& path = files_[next_];
+  Frame f;
+  try {
+    f.image = cv::imread(path, cv::IMREAD_ANYCOLOR);
+  } catch (const cv::Exception& e) {
+    throw CaptureError(path + ": unreadable image (" + e.what() + ")");
+  }
+  if (f.image.empty()) throw CaptureError(path + ": unreadable image (not a format OpenCV decodes)");
+  f.index = static_cast<std::int64_t>(next_);
+  f.timestamp_s = static_cast<double>(next_) * period_s_;
+  f.origin = path;
+  ++next_;
+  return f;
+}
+
+MemorySource::MemorySource(std::string name, std::vector<Frame> frames)
+    : name_(std::move(name)), frames_(std::move(frames)) {}
+
+std::optional<Frame> MemorySource::next() {
+  if (next_ >= frames_.size()) return std::nullopt;
+  return std::move(frames_[next_++]);
+}
+
+std::unique_ptr<FrameSource> open_source(const std::vector<std::string>& arguments) {
+  if (arguments.empty()) throw CaptureError("no input given (a camera, a video, a directory or image files)");
+  if (arguments.size() == 1) {
+    const std::string& a = arguments.front();
+    std::error_code ec;
+    if (all_digits(a) || a.rfind("/dev/video", 0) == 0) return std::make_unique<CameraSource>(a);
+    if (fs::is_directory(a, ec)) return std::make_unique<ImageSequenceSource>(a);
+    if (fs::is_regular_file(a, ec) && !is_image_file(a)) return std::make_unique<VideoFileSource>(a);
+  }
+  return std::make_unique<ImageSequenceSource>(arguments);
+}
+
+}  // namespace kincal::capture

@@ -1,0 +1,164 @@
+#include "host/cli/camera_command.hpp"
+
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "host/camera/board.hpp"
+#include "host/camera/calibration_file.hpp"
+#include "host/camera/hand_eye.hpp"
+#include "host/camera/intrinsics.hpp"
+#include "host/camera/stereo.hpp"
+#include "host/capture/frame_source.hpp"
+#include "host/capture/stereo_source.hpp"
+#include "host/model/dataset.hpp"
+
+namespace kincal::cli {
+
+namespace {
+
+struct CameraArgs {
+  std::string board, out, left_camera, right_camera, camera, poses, convention = "gripper2base";
+  std::vector<std::string> images, left, right;
+  bool refine_intrinsics = false;
+  double tolerance_s = 0.5;
+  int min_corners = 6;
+};
+
+std::vector<camera::BoardDetection> detect_all(const camera::Board& board, const std::vector<std::string>& inputs,
+                                               int min_corners) {
+  std::unique_ptr<capture::FrameSource> source = capture::open_source(inputs);
+  std::vector<camera::BoardDetection> detections;
+  while (std::optional<capture::Frame> f = source->next()) {
+    detections.push_back(camera::detect_board(board, f->image, f->origin, min_corners));
+  }
+  return detections;
+}
+
+int run_calibrate(const CameraArgs& a) {
+  const camera::Board board = camera::parse_board(a.board);
+  const camera::IntrinsicCalibration c = camera::calibrate_intrinsics(detect_all(board, a.images, a.min_corners));
+  std::cout << camera::describe(c);
+  camera::save_camera(a.out, c, board.text());
+  std::cout << "written: " << a.out << "\n";
+  return 0;
+}
+
+int run_stereo(const CameraArgs& a) {
+  const camera::Board board = camera::parse_board(a.board);
+  capture::StereoSource frames(capture::open_source(a.left), capture::open_source(a.right), a.tolerance_s);
+  std::vector<camera::BoardDetection> left, right;
+  while (std::optional<capture::StereoFrame> p = frames.next()) {
+    left.push_back(camera::detect_board(board, p->left.image, p->left.origin, a.min_corners));
+    right.push_back(camera::detect_board(board, p->right.image, p->right.origin, a.min_corners));
+  }
+  for (const capture::UnpairedFrame& u : frames.unpaired()) {
+    std::cout << "unpaired " << (u.side == capture::Side::kLeft ? "left" : "right") << " frame: " << u.origin << " ("
+              << u.timestamp_s << " s)\n";
+  }
+  const auto camera_for = [&](const std::string& file, const std::vector<camera::BoardDetection>& views,
+                              const char* side) {
+    if (!file.empty()) return camera::load_camera(file);
+    const camera::IntrinsicCalibration c = camera::calibrate_intrinsics(views);
+    std::cout << side << " camera: reprojection RMS " << c.rms_px << " px over " << c.views_used << " views\n";
+    for (const std::string& w : c.warnings) std::cout << side << " camera warning: " << w << "\n";
+    return c.camera;
+  };
+  const camera::CameraModel left_camera = camera_for(a.left_camera, left, "left");
+  const camera::CameraModel right_camera = camera_for(a.right_camera, right, "right");
+  camera::StereoOptions options;
+  options.refine_intrinsics = a.refine_intrinsics;
+  const camera::StereoCalibration s = camera::calibrate_stereo(left, right, left_camera, right_camera, options);
+  std::cout << camera::describe(s);
+  camera::save_stereo(a.out, s);
+  std::cout << "written: " << a.out << "\n";
+  return 0;
+}
+
+int run_hand_eye(const CameraArgs& a) {
+  const camera::Board board = camera::parse_board(a.board);
+  const camera::CameraModel cam = camera::load_camera(a.camera);
+  const model::Dataset poses = model::read_dataset(a.poses);
+  if (!poses.has_orientation) {
+    throw camera::CalibrationError(a.poses + ": no orientation columns (qw,qx,qy,qz): hand-eye needs full poses");
+  }
+  const std::vector<camera::BoardDetection> detections = detect_all(board, a.images, a.min_corners);
+  if (detections.size() != poses.rows.size()) {
+    throw camera::CalibrationError(a.poses + ": " + std::to_string(poses.rows.size()) + " poses but " +
+                                   std::to_string(detections.size()) + " images");
+  }
+  std::vector<camera::HandEyeView> views;
+  for (std::size_t i = 0; i < detections.size(); ++i) {
+    const model::Measurement& m = poses.rows[i];
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = m.orientation->normalized().toRotationMatrix();
+    pose.translation() = m.position;
+    views.push_back({detections[i].view + " (" + a.poses + ":" + std::to_string(m.line) + ")", pose, detections[i]});
+  }
+  camera::HandEyeOptions options;
+  options.convention =
+      a.convention == "base2gripper" ? camera::PoseConvention::kBaseToGripper : camera::PoseConvention::kGripperToBase;
+  const camera::HandEyeCalibration h = camera::calibrate_hand_eye(views, cam, options);
+  std::cout << camera::describe(h);
+  camera::save_hand_eye(a.out, h);
+  std::cout << "written: " << a.out << "\n";
+  return 0;
+}
+
+// Runs a command, turning every error into a message on stderr and exit status 1.
+template <typename F>
+void guarded(const char* name, int& status, F&& run) {
+  try {
+    status = run();
+  } catch (const std::exception& e) {
+    std::cerr << "kincal camera " << name << ": " << e.what() << "\n";
+    status = 1;
+  }
+}
+
+void add_common(CLI::App* cmd, CameraArgs& a) {
+  cmd->add_option("--board", a.board, "chessboard:COLSxROWS:SQUARE_M or charuco:COLSxROWS:SQUARE_M:MARKER_M[:DICT]")
+      ->required();
+  cmd->add_option("-o,--out", a.out, "output file (OpenCV YAML)")->required();
+  cmd->add_option("--min-corners", a.min_corners, "fewest corners a view may have")->capture_default_str();
+}
+
+}  // namespace
+
+void add_camera_command(CLI::App& app, int& status) {
+  auto args = std::make_shared<CameraArgs>();
+  CLI::App* camera = app.add_subcommand("camera", "Camera calibration: intrinsic, stereo, hand-eye");
+  camera->require_subcommand(1);
+
+  CLI::App* calibrate = camera->add_subcommand("calibrate", "Intrinsic calibration from images of a board");
+  add_common(calibrate, *args);
+  calibrate->add_option("images", args->images, "image files, a directory or a video")->required();
+  calibrate->callback([args, &status] { guarded("calibrate", status, [&] { return run_calibrate(*args); }); });
+
+  CLI::App* stereo = camera->add_subcommand("stereo", "Stereo calibration from image pairs of a board");
+  add_common(stereo, *args);
+  stereo->add_option("--left", args->left, "left images, directory or video")->required();
+  stereo->add_option("--right", args->right, "right images, directory or video")->required();
+  stereo->add_option("--left-camera", args->left_camera, "left camera (YAML; default: calibrate from the images)");
+  stereo->add_option("--right-camera", args->right_camera, "right camera (YAML; default: calibrate from the images)");
+  stereo->add_flag("--refine-intrinsics", args->refine_intrinsics, "refine both cameras jointly with the pose");
+  stereo->add_option("--tolerance", args->tolerance_s, "largest time difference of a pair (s)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  stereo->callback([args, &status] { guarded("stereo", status, [&] { return run_stereo(*args); }); });
+
+  CLI::App* hand_eye = camera->add_subcommand("hand-eye", "Hand-eye calibration of a camera on the gripper");
+  add_common(hand_eye, *args);
+  hand_eye->add_option("--camera", args->camera, "the camera's calibration (YAML)")->required();
+  hand_eye->add_option("--poses", args->poses, "robot poses: q1..qN,x,y,z,qw,qx,qy,qz, one row per image")->required();
+  hand_eye->add_option("--images", args->images, "images, in the order of the poses (files or a directory)")
+      ->required();
+  hand_eye->add_option("--convention", args->convention, "what the poses are: base_T_gripper or gripper_T_base")
+      ->check(CLI::IsMember({"gripper2base", "base2gripper"}))
+      ->capture_default_str();
+  hand_eye->callback([args, &status] { guarded("hand-eye", status, [&] { return run_hand_eye(*args); }); });
+}
+
+}  // namespace kincal::cli

@@ -1,0 +1,32 @@
+// `kincal camera`: camera calibration from image files (host/camera, host/capture).
+//
+//   kincal camera calibrate --board BOARD IMAGES... -o camera.yaml
+//   kincal camera stereo --board BOARD --left IMAGES... --right IMAGES... -o stereo.yaml
+//                        [--left-camera L.yaml --right-camera R.yaml] [--refine-intrinsics]
+//   kincal camera hand-eye --board BOARD --camera camera.yaml --poses robot_poses.csv
+//                          --images IMAGES... -o hand_eye.yaml [--convention gripper2base|base2gripper]
+//
+// BOARD: chessboard:COLSxROWS:SQUARE_M (inner corners) or charuco:COLSxROWS:SQUARE_M:MARKER_M[:DICT]
+// (squares); see host/camera/board.hpp. IMAGES: image files (in the order given), one directory
+// (its images in natural order) or one video file. Stereo pairs left and right frames by their
+// timestamps (image i at i seconds, video frames at index / fps), within --tolerance seconds,
+// and lists the frames left unpaired. Without camera files, stereo first calibrates each camera
+// from its own images.
+// Robot poses: a kincal dataset CSV with orientation, q1..qN,x,y,z,qw,qx,qy,qz (host/model/
+// dataset.hpp), one row per image in the same order; x..qz are the gripper (flange) pose in the
+// robot base frame, base_T_gripper (OpenCV's gripper2base), metres and a unit quaternion --
+// or gripper_T_base with --convention base2gripper.
+//
+// Each command prints its report (parameters, residuals, every view used or rejected and why,
+// warnings) and writes OpenCV YAML (host/camera/calibration_file.hpp). Any error -- a missing or
+// unreadable file, a bad board text, too few usable views, a refused hand-eye pose set -- is a
+// message on stderr naming the file or what was wrong, and exit status 1.
+#pragma once
+
+#include <CLI/App.hpp>
+
+namespace kincal::cli {
+
+void add_camera_command(CLI::App& app, int& status);
+
+}  // namespace kincal::cli

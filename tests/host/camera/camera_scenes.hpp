@@ -1,0 +1,45 @@
+// Simulated scenes for the camera-calibration tests and the CLI test images: a known camera,
+// board views that cover the image with varied tilts, a stereo rig and a robot carrying the
+// camera, all rendered by kincal::sim (host/sim/render.hpp).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include "host/camera/board.hpp"
+#include "host/sim/render.hpp"
+
+namespace kincal::camera::scenes {
+
+// 640 x 480, fx 610, fy 606, principal point off centre, barrel distortion.
+sim::CameraSpec test_camera();
+
+// The boards the tests use: a 9 x 6 chessboard (COLS + ROWS odd) of 30 mm squares, and a 7 x 5
+// ChArUco board of 40 mm squares.
+const char* chessboard_text();
+const char* charuco_text();
+
+// n camera_T_board poses, 0.5..0.75 m away, tilted 15..35 degrees in turning directions, aimed
+// at points spread over the board so that it moves over the image, rolled by up to 15 degrees.
+std::vector<Eigen::Isometry3d> board_views(const camera::Board& board, int n);
+
+// The board's reflectance: sim::chessboard, or OpenCV's ChArUco drawing as a texture.
+sim::PlanarTarget target_of(const camera::Board& board);
+
+// One rendered view (2x supersampling, mild noise; `seed` varies the noise).
+cv::Mat render(const sim::CameraSpec& camera, const Eigen::Isometry3d& camera_T_board, const sim::PlanarTarget& target,
+               std::uint64_t seed);
+
+// The stereo rig: the right camera 0.12 m along the left's x, turned 3 degrees about y.
+Eigen::Isometry3d left_T_right();
+
+// The robot: the camera on the gripper at gripper_T_camera, the board fixed at base_T_target;
+// base_T_gripper for camera_T_board = views[i].
+Eigen::Isometry3d gripper_T_camera();
+Eigen::Isometry3d base_T_target();
+std::vector<Eigen::Isometry3d> gripper_poses(const std::vector<Eigen::Isometry3d>& camera_T_board);
+
+}  // namespace kincal::camera::scenes

@@ -1,0 +1,429 @@
+#include <doctest/doctest.h>
+
+#include <unistd.h>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+
+#include "host/camera/board.hpp"
+#include "host/camera/calibration_file.hpp"
+#include "host/camera/hand_eye.hpp"
+#include "host/camera/intrinsics.hpp"
+#include "host/camera/stereo.hpp"
+#include "shared/parameters.hpp"
+#include "tests/host/camera/camera_scenes.hpp"
+
+namespace fs = std::filesystem;
+using namespace kincal;
+using namespace kincal::camera;
+
+namespace {
+
+constexpr double kDeg = 3.14159265358979323846 / 180;
+constexpr int kViews = 12;
+
+CameraModel model_of(const sim::CameraSpec& s) {
+  CameraModel m;
+  m.image_size = cv::Size(s.width_px, s.height_px);
+  m.camera_matrix = cv::Matx33d(s.fx_px, 0, s.cx_px, 0, s.fy_px, s.cy_px, 0, 0, 1);
+  m.distortion = s.distortion;
+  return m;
+}
+
+sim::CameraSpec spec_of_right() {
+  sim::CameraSpec s = scenes::test_camera();
+  s.fx_px = 598;
+  s.fy_px = 597;
+  s.cx_px = 316;
+  s.cy_px = 244;
+  s.distortion = {-0.15, 0.05, -0.0004, 0.0006, 0.0};
+  return s;
+}
+
+std::vector<BoardDetection> detect_rendered(const Board& board, const sim::CameraSpec& camera,
+                                            const std::vector<Eigen::Isometry3d>& camera_T_board,
+                                            const std::string& prefix) {
+  const sim::PlanarTarget target = scenes::target_of(board);
+  std::vector<BoardDetection> out;
+  for (std::size_t i = 0; i < camera_T_board.size(); ++i) {
+    const cv::Mat image = scenes::render(camera, camera_T_board[i], target, 100 + i);
+    out.push_back(detect_board(board, image, prefix + std::to_string(i)));
+  }
+  return out;
+}
+
+// The 12 chessboard views of the test camera, rendered and detected once for every test case.
+const std::vector<BoardDetection>& chessboard_views() {
+  static const std::vector<BoardDetection> views = [] {
+    const Board board = parse_board(scenes::chessboard_text());
+    return detect_rendered(board, scenes::test_camera(), scenes::board_views(board, kViews), "view");
+  }();
+  return views;
+}
+
+// Corners projected by OpenCV with 0.1 px noise: detections without rendering, for the checks.
+BoardDetection projected(const Board& board, const CameraModel& camera, const Eigen::Isometry3d& camera_T_board,
+                         const std::string& view, cv::RNG& rng) {
+  BoardDetection d;
+  d.view = view;
+  d.image_size = camera.image_size;
+  d.found = true;
+  std::vector<cv::Point3f> all;
+  for (int id = 0; id < board.corner_count(); ++id) all.push_back(board.corner_m(id));
+  cv::Mat r, rvec, tvec;
+  const Eigen::Matrix3d rotation = camera_T_board.rotation();
+  cv::eigen2cv(rotation, r);
+  cv::Rodrigues(r, rvec);
+  tvec = (cv::Mat_<double>(3, 1) << camera_T_board.translation().x(), camera_T_board.translation().y(),
+          camera_T_board.translation().z());
+  std::vector<cv::Point2f> px;
+  cv::projectPoints(all, rvec, tvec, cv::Mat(camera.camera_matrix), camera.distortion_mat(), px);
+  for (std::size_t i = 0; i < px.size(); ++i) {
+    d.ids.push_back(static_cast<int>(i));
+    d.board_m.push_back(all[i]);
+    d.image_px.emplace_back(px[i].x + static_cast<float>(rng.gaussian(0.1)),
+                            px[i].y + static_cast<float>(rng.gaussian(0.1)));
+  }
+  return d;
+}
+
+double rotation_error_rad(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return Eigen::AngleAxisd(a.rotation().transpose() * b.rotation()).angle();
+}
+
+template <typename F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+struct TempDir {
+  fs::path path;
+  TempDir() : path(fs::temp_directory_path() / ("kincal_camera_" + std::to_string(getpid()))) {
+    fs::create_directories(path);
+  }
+  ~TempDir() { fs::remove_all(path); }
+  std::string file(const std::string& name) const { return (path / name).string(); }
+};
+
+}  // namespace
+
+TEST_CASE("board texts parse, print back and name what is wrong") {
+  const Board chess = parse_board("chessboard:9x6:0.03");
+  CHECK(chess.kind == BoardKind::kChessboard);
+  CHECK(chess.corner_count() == 54);
+  CHECK(chess.corner_m(10).x == doctest::Approx(0.03));
+  CHECK(chess.corner_m(10).y == doctest::Approx(0.03));
+  CHECK(parse_board(chess.text()).text() == chess.text());
+  const Board charuco = parse_board("charuco:7x5:0.04:0.03");
+  CHECK(charuco.dictionary == "DICT_4X4_50");
+  CHECK(charuco.corner_count() == 24);
+  CHECK(parse_board(charuco.text()).text() == charuco.text());
+
+  CHECK(contains(error_of([] { parse_board("chessboard:9x6"); }), "board 'chessboard:9x6': wrong number of fields"));
+  CHECK(contains(error_of([] { parse_board("chessboard:9by6:0.03"); }), "size '9by6' is not COLSxROWS"));
+  CHECK(contains(error_of([] { parse_board("chessboard:9x6:-1"); }), "square size '-1' must be > 0 m"));
+  CHECK(contains(error_of([] { parse_board("charuco:7x5:0.04:0.05"); }), "marker must be smaller than the square"));
+  CHECK(contains(error_of([] { parse_board("charuco:7x5:0.04:0.03:DICT_9X9"); }), "unknown dictionary 'DICT_9X9'"));
+  CHECK(contains(error_of([] { parse_board("charuco:20x20:0.04:0.03:DICT_4X4_50"); }),
+                 "needs 200 markers, DICT_4X4_50 has 50"));
+  CHECK(contains(error_of([] { parse_board("circles:4x11:0.02"); }), "unknown board type"));
+}
+
+TEST_CASE("an image without the board is rejected with its reason") {
+  const cv::Mat blank(480, 640, CV_8UC1, cv::Scalar(128));
+  const BoardDetection chess = detect_board(parse_board(scenes::chessboard_text()), blank, "blank.png");
+  CHECK_FALSE(chess.found);
+  CHECK(chess.reason == "pattern not found");
+  const BoardDetection charuco = detect_board(parse_board(scenes::charuco_text()), blank, "blank.png");
+  CHECK_FALSE(charuco.found);
+  CHECK(charuco.reason == "pattern not found (no markers of DICT_4X4_50)");
+  CHECK(contains(error_of([] { (void)detect_board(parse_board(scenes::chessboard_text()), cv::Mat(), "x.png"); }),
+                 "x.png: empty image"));
+}
+
+TEST_CASE("intrinsic calibration on rendered chessboards recovers the simulated camera") {
+  const Board board = parse_board(scenes::chessboard_text());
+  const sim::CameraSpec truth = scenes::test_camera();
+  std::vector<BoardDetection> detections = chessboard_views();
+  detections.push_back(detect_board(board, cv::Mat(480, 640, CV_8UC1, cv::Scalar(90)), "blank"));
+  detections.push_back(detections.front());
+  detections.back().view = "small";
+  detections.back().image_size = cv::Size(320, 240);
+
+  const IntrinsicCalibration c = calibrate_intrinsics(detections);
+  MESSAGE(describe(c));
+  CHECK(c.views_used == 12);
+  CHECK(c.views[12].rejection == "pattern not found");
+  CHECK(c.views[13].rejection == "image size 320x240 differs from the first view's 640x480");
+  const cv::Matx33d& k = c.camera.camera_matrix;
+  CHECK(std::abs(k(0, 0) / truth.fx_px - 1) < 0.005);
+  CHECK(std::abs(k(1, 1) / truth.fy_px - 1) < 0.005);
+  CHECK(std::abs(k(0, 2) - truth.cx_px) < 3.0);
+  CHECK(std::abs(k(1, 2) - truth.cy_px) < 3.0);
+  CHECK(std::abs(c.camera.distortion[0] - truth.distortion[0]) < 0.03);
+  CHECK(std::abs(c.camera.distortion[2] - truth.distortion[2]) < 0.002);
+  CHECK(std::abs(c.camera.distortion[3] - truth.distortion[3]) < 0.002);
+  CHECK(c.rms_px < 0.3);
+  // The standard deviations are positive and say the focal length is known to a fraction of 0.5 %.
+  for (double s : c.std_dev) CHECK(s > 0);
+  CHECK(c.std_dev[0] < 0.005 * truth.fx_px);
+  for (const std::string& w : c.warnings) CHECK_FALSE(contains(w, "cover"));
+}
+
+TEST_CASE("intrinsic calibration warns on poor coverage and refuses too few views") {
+  const Board board = parse_board(scenes::chessboard_text());
+  const CameraModel truth = model_of(scenes::test_camera());
+  cv::RNG rng(7);
+  // The board far away, always in the middle and hardly tilted.
+  std::vector<BoardDetection> detections;
+  for (int i = 0; i < 6; ++i) {
+    Eigen::Isometry3d camera_T_board = Eigen::Isometry3d::Identity();
+    camera_T_board.linear() = Eigen::AngleAxisd(0.05 * i, Eigen::Vector3d(1, 1, 0).normalized()).toRotationMatrix();
+    camera_T_board.translation() = Eigen::Vector3d(-0.12, -0.075, 1.5 + 0.05 * i);
+    detections.push_back(projected(board, truth, camera_T_board, "far" + std::to_string(i), rng));
+  }
+  const IntrinsicCalibration c = calibrate_intrinsics(detections);
+  std::string warnings;
+  for (const std::string& w : c.warnings) warnings += w + "\n";
+  CHECK(contains(warnings, "only 6 views used; 10 or more"));
+  CHECK(contains(warnings, "% of the image (cells of 8x6), less than 50 %"));
+  CHECK(contains(warnings, "the board is never tilted more than"));
+
+  std::vector<BoardDetection> two(detections.begin(), detections.begin() + 2);
+  two.push_back(detect_board(board, cv::Mat(480, 640, CV_8UC1, cv::Scalar(90)), "blank.png"));
+  const std::string message = error_of([&] { (void)calibrate_intrinsics(two); });
+  CHECK(contains(message, "2 usable views of 3, at least 3 needed"));
+  CHECK(contains(message, "blank.png: pattern not found"));
+}
+
+TEST_CASE("ChArUco boards drawn by OpenCV are detected with ids and calibrate the camera") {
+  const Board board = parse_board(scenes::charuco_text());
+  const sim::CameraSpec truth = scenes::test_camera();
+  const std::vector<BoardDetection> detections =
+      detect_rendered(board, truth, scenes::board_views(board, 8), "charuco");
+  for (const BoardDetection& d : detections) {
+    CHECK_MESSAGE(d.found, d.view << ": " << d.reason);
+    CHECK(d.ids.size() >= 12);
+  }
+  const IntrinsicCalibration c = calibrate_intrinsics(detections);
+  MESSAGE(describe(c));
+  CHECK(std::abs(c.camera.camera_matrix(0, 0) / truth.fx_px - 1) < 0.01);
+  CHECK(c.rms_px < 0.5);
+}
+
+TEST_CASE("stereo calibration recovers the baseline and rectifies") {
+  const Board board = parse_board(scenes::chessboard_text());
+  const std::vector<Eigen::Isometry3d> left_views = scenes::board_views(board, kViews);
+  std::vector<Eigen::Isometry3d> right_views;
+  for (const Eigen::Isometry3d& v : left_views) right_views.push_back(scenes::left_T_right().inverse() * v);
+  const std::vector<BoardDetection>& left = chessboard_views();
+  const std::vector<BoardDetection> right = detect_rendered(board, spec_of_right(), right_views, "right");
+  const CameraModel left_camera = calibrate_intrinsics(left).camera;
+  const CameraModel right_camera = calibrate_intrinsics(right).camera;
+  const double baseline_m = scenes::left_T_right().translation().norm();
+
+  for (const bool refine : {false, true}) {
+    CAPTURE(refine);
+    StereoOptions options;
+    options.refine_intrinsics = refine;
+    const StereoCalibration s = calibrate_stereo(left, right, left_camera, right_camera, options);
+    MESSAGE(describe(s));
+    CHECK(std::abs(s.baseline_m / baseline_m - 1) < 0.01);
+    cv::Vec3d rotation;
+    cv::Rodrigues(s.right_R_left, rotation);
+    CHECK(cv::norm(rotation) == doctest::Approx(3 * kDeg).epsilon(0.05));
+    CHECK(s.rms_px < 0.4);
+    // Rectified: the right projection carries -f * baseline in its x translation.
+    CHECK(-s.projection_right(0, 3) / s.projection_right(0, 0) == doctest::Approx(s.baseline_m).epsilon(1e-6));
+  }
+
+  std::vector<BoardDetection> short_right(right.begin(), right.end() - 1);
+  CHECK(contains(error_of([&] { (void)calibrate_stereo(left, short_right, left_camera, right_camera); }),
+                 "12 left views but 11 right views"));
+  std::vector<BoardDetection> bad_right = right;
+  for (std::size_t i = 0; i < 10; ++i)
+    bad_right[i] = detect_board(board, cv::Mat(480, 640, CV_8UC1, cv::Scalar(128)), "blank");
+  const std::string message = error_of([&] { (void)calibrate_stereo(left, bad_right, left_camera, right_camera); });
+  CHECK(contains(message, "2 usable pairs of 12, at least 3 needed"));
+  CHECK(contains(message, "view0 / blank: blank: pattern not found"));
+}
+
+TEST_CASE("hand-eye calibration on rendered views recovers gripper_T_camera") {
+  const Board board = parse_board(scenes::chessboard_text());
+  const std::vector<Eigen::Isometry3d> views = scenes::board_views(board, kViews);
+  const std::vector<Eigen::Isometry3d> poses = scenes::gripper_poses(views);
+  const std::vector<BoardDetection>& detections = chessboard_views();
+  std::vector<HandEyeView> input;
+  for (std::size_t i = 0; i < views.size(); ++i) input.push_back({detections[i].view, poses[i], detections[i]});
+  const CameraModel camera = model_of(scenes::test_camera());
+
+  const HandEyeCalibration h = calibrate_hand_eye(input, camera);
+  MESSAGE(describe(h));
+  CHECK(h.poses_used == kViews);
+  CHECK((h.gripper_T_camera.translation() - scenes::gripper_T_camera().translation()).norm() < 0.002);
+  CHECK(rotation_error_rad(h.gripper_T_camera, scenes::gripper_T_camera()) < 0.2 * kDeg);
+  CHECK((h.base_T_target.translation() - scenes::base_T_target().translation()).norm() < 0.002);
+  CHECK(h.rms_after_px <= h.rms_before_px);
+  CHECK(h.rms_after_px < 0.3);
+  REQUIRE(h.methods.size() == 5);
+  REQUIRE(h.robot_world.size() == 2);
+  for (const HandEyeEstimate& e : h.methods) {
+    CAPTURE(e.method);
+    CHECK((e.gripper_T_camera.translation() - scenes::gripper_T_camera().translation()).norm() < 0.01);
+    CHECK(e.rotation_rms_rad < 0.5 * kDeg);
+  }
+  for (const HandEyeEstimate& e : h.robot_world) {
+    CAPTURE(e.method);
+    CHECK((e.gripper_T_camera.translation() - scenes::gripper_T_camera().translation()).norm() < 0.01);
+  }
+}
+
+TEST_CASE("hand-eye checks refuse weak pose sets and detect a swapped convention") {
+  const Board board = parse_board(scenes::chessboard_text());
+  const CameraModel camera = model_of(scenes::test_camera());
+  const Eigen::Isometry3d base_T_target = scenes::base_T_target();
+  const Eigen::Isometry3d gripper_T_camera = scenes::gripper_T_camera();
+  cv::RNG rng(3);
+  const auto views_from = [&](const std::vector<Eigen::Isometry3d>& board_T_camera) {
+    std::vector<HandEyeView> views;
+    for (std::size_t i = 0; i < board_T_camera.size(); ++i) {
+      const std::string name = "pose" + std::to_string(i);
+      views.push_back({name, base_T_target * board_T_camera[i] * gripper_T_camera.inverse(),
+                       projected(board, camera, board_T_camera[i].inverse(), name, rng)});
+    }
+    return views;
+  };
+  const Eigen::Isometry3d first = scenes::board_views(board, 1).front().inverse();  // board_T_camera
+
+  SUBCASE("too few poses") {
+    const std::vector<Eigen::Isometry3d> some(scenes::board_views(board, 3));
+    std::vector<Eigen::Isometry3d> board_T_camera;
+    for (const Eigen::Isometry3d& v : some) board_T_camera.push_back(v.inverse());
+    CHECK(contains(error_of([&] { (void)calibrate_hand_eye(views_from(board_T_camera), camera); }),
+                   "3 usable poses of 3, at least 5 needed"));
+  }
+  SUBCASE("translations only") {
+    std::vector<Eigen::Isometry3d> board_T_camera;
+    for (int i = 0; i < 6; ++i) {
+      board_T_camera.push_back(Eigen::Translation3d(0.01 * i, -0.008 * i, 0.005 * (i % 3)) * first);
+    }
+    const std::string message = error_of([&] { (void)calibrate_hand_eye(views_from(board_T_camera), camera); });
+    CAPTURE(message);
+    CHECK(contains(message, "the largest rotation between two poses is 0.0 degrees; at least 20.0 degrees"));
+  }
+  SUBCASE("rotations about one axis") {
+    std::vector<Eigen::Isometry3d> board_T_camera;
+    const Eigen::Vector3d centre(0.12, 0.075, 0);
+    for (int i = 0; i < 6; ++i) {
+      board_T_camera.push_back(Eigen::Translation3d(centre) * Eigen::AngleAxisd(0.3 * i, Eigen::Vector3d::UnitZ()) *
+                               Eigen::Translation3d(-centre) * first);
+    }
+    const std::string message = error_of([&] { (void)calibrate_hand_eye(views_from(board_T_camera), camera); });
+    CAPTURE(message);
+    CHECK(contains(message, "nearly parallel axes (largest angle between two axes 0.0 degrees, at least 20.0"));
+  }
+  SUBCASE("swapped convention") {
+    std::vector<Eigen::Isometry3d> board_T_camera;
+    for (const Eigen::Isometry3d& v : scenes::board_views(board, 8)) board_T_camera.push_back(v.inverse());
+    std::vector<HandEyeView> views = views_from(board_T_camera);
+    for (HandEyeView& v : views) v.robot_pose = v.robot_pose.inverse();  // gripper_T_base given as base_T_gripper
+    const std::string message = error_of([&] { (void)calibrate_hand_eye(views, camera); });
+    CHECK(contains(message, "the robot poses fit as base2gripper (gripper_T_base), not as gripper2base as given"));
+
+    HandEyeOptions options;
+    options.convention = PoseConvention::kBaseToGripper;
+    const HandEyeCalibration h = calibrate_hand_eye(views, camera, options);
+    CHECK((h.gripper_T_camera.translation() - gripper_T_camera.translation()).norm() < 0.001);
+    CHECK(rotation_error_rad(h.gripper_T_camera, gripper_T_camera) < 0.1 * kDeg);
+  }
+}
+
+TEST_CASE("calibration files round-trip in OpenCV YAML and name bad keys") {
+  TempDir dir;
+  const Board board = parse_board(scenes::chessboard_text());
+  const CameraModel truth = model_of(scenes::test_camera());
+  cv::RNG rng(11);
+  std::vector<BoardDetection> detections;
+  for (const Eigen::Isometry3d& v : scenes::board_views(board, 6)) {
+    detections.push_back(projected(board, truth, v, "v" + std::to_string(detections.size()), rng));
+  }
+  const IntrinsicCalibration c = calibrate_intrinsics(detections);
+  save_camera(dir.file("camera.yaml"), c, board.text());
+  const CameraModel loaded = load_camera(dir.file("camera.yaml"));
+  CHECK(loaded.image_size == c.camera.image_size);
+  CHECK(cv::norm(cv::Mat(loaded.camera_matrix), cv::Mat(c.camera.camera_matrix)) < 1e-9);
+  for (std::size_t i = 0; i < 5; ++i) CHECK(loaded.distortion[i] == doctest::Approx(c.camera.distortion[i]));
+  // OpenCV reads the file as it reads its own samples' files.
+  cv::FileStorage fs(dir.file("camera.yaml"), cv::FileStorage::READ);
+  CHECK(static_cast<int>(fs["image_width"]) == 640);
+  CHECK(static_cast<int>(fs["nr_of_frames"]) == 6);
+
+  std::vector<BoardDetection> right;
+  for (const Eigen::Isometry3d& v : scenes::board_views(board, 6)) {
+    right.push_back(projected(board, truth, scenes::left_T_right().inverse() * v, "r", rng));
+  }
+  const StereoCalibration s = calibrate_stereo(detections, right, truth, truth);
+  save_stereo(dir.file("stereo.yaml"), s);
+  const StereoCalibration s2 = load_stereo(dir.file("stereo.yaml"));
+  CHECK(s2.baseline_m == doctest::Approx(s.baseline_m).epsilon(1e-12));
+  CHECK(cv::norm(cv::Mat(s2.projection_right), cv::Mat(s.projection_right)) < 1e-9);
+  CHECK(s2.rms_px == doctest::Approx(s.rms_px));
+
+  HandEyeCalibration h;
+  h.gripper_T_camera = scenes::gripper_T_camera();
+  h.base_T_target = scenes::base_T_target();
+  h.start_method = "park";
+  h.rms_before_px = 0.5;
+  h.rms_after_px = 0.1;
+  save_hand_eye(dir.file("hand_eye.yaml"), h);
+  const HandEyeCalibration h2 = load_hand_eye(dir.file("hand_eye.yaml"));
+  CHECK(h2.gripper_T_camera.isApprox(h.gripper_T_camera, 1e-12));
+  CHECK(h2.base_T_target.isApprox(h.base_T_target, 1e-12));
+  CHECK(h2.start_method == "park");
+
+  std::ofstream(dir.file("partial.yaml")) << "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n";
+  CHECK(error_of([&] { (void)load_camera(dir.file("partial.yaml")); }) ==
+        dir.file("partial.yaml") + ": key 'camera_matrix' missing or not a 3x3 matrix");
+  CHECK(error_of([&] { (void)load_camera(dir.file("none.yaml")); }) == dir.file("none.yaml") + ": cannot read");
+  CHECK(contains(error_of([&] { (void)load_hand_eye(dir.file("camera.yaml")); }), "key 'gripper_T_camera' missing"));
+}
+
+TEST_CASE("a host calibration converts to the platform's camera block and back") {
+  const CameraModel truth = model_of(scenes::test_camera());
+  const shared::CameraIntrinsics p = to_platform(truth);
+  CHECK(p.fx_px == 610.0f);
+  CHECK(p.cx_px == 324.5f);
+  CHECK(p.k1 == static_cast<float>(truth.distortion[0]));
+  CHECK(p.p2 == static_cast<float>(truth.distortion[3]));
+  CHECK(p.width_px == 640);
+  CHECK(p.height_px == 480);
+  // Through the block's byte image, as it travels to the platform.
+  std::array<std::uint8_t, shared::kIntrinsicsBytes> bytes{};
+  REQUIRE(shared::encode_block(p, bytes) == shared::kIntrinsicsBytes);
+  shared::CameraIntrinsics decoded;
+  REQUIRE(shared::decode_block(bytes, decoded) == shared::DecodeStatus::kOk);
+  const CameraModel back = from_platform(decoded);
+  CHECK(back.image_size == truth.image_size);
+  CHECK(back.camera_matrix(1, 2) == doctest::Approx(truth.camera_matrix(1, 2)));
+  CHECK(back.distortion[1] == doctest::Approx(truth.distortion[1]).epsilon(1e-6));
+
+  CameraModel wide = truth;
+  wide.image_size.width = 70000;
+  CHECK(error_of([&] { (void)to_platform(wide); }) == "camera image width 70000 px is outside 1..65535");
+  CameraModel broken = truth;
+  broken.distortion[4] = std::nan("");
+  CHECK(contains(error_of([&] { (void)to_platform(broken); }), "camera parameter k3 = nan"));
+}
