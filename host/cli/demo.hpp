@@ -1,5 +1,5 @@
-// `kincal demo`: the main job. Until the calibration loop lands (issue #6) it says so and
-// shows what the build already does: the firmware core's pixel-path number formats.
+// `kincal demo`: the main job -- the whole calibration loop on the simulated ARID platform rig
+// and the simulated Kapucu & Baysec stereo rig, with the report (host/session/demo.hpp).
 #pragma once
 
 #include <CLI/App.hpp>

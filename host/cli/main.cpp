@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 
 #include "host/cli/blobs.hpp"
+#include "host/cli/camera_command.hpp"
 #include "host/cli/colour_table.hpp"
 #include "host/cli/dbc_command.hpp"
 #include "host/cli/demo.hpp"
@@ -12,6 +13,7 @@
 #include "host/cli/monitor.hpp"
 #include "host/cli/plan_command.hpp"
 #include "host/cli/predict_command.hpp"
+#include "host/cli/session_command.hpp"
 #include "host/cli/urdf_command.hpp"
 
 int main(int argc, char** argv) {
@@ -21,6 +23,7 @@ int main(int argc, char** argv) {
 
   int status = 0;
   kincal::cli::add_demo_command(app, status);
+  kincal::cli::add_session_command(app, status);
   kincal::cli::add_monitor_command(app, status);
   kincal::cli::add_exercise_command(app, status);
   kincal::cli::add_dbc_command(app, status);
@@ -32,6 +35,7 @@ int main(int argc, char** argv) {
   kincal::cli::add_predict_command(app, status);
   kincal::cli::add_plan_command(app, status);
   kincal::cli::add_urdf_command(app, status);
+  kincal::cli::add_camera_command(app, status);
 
   CLI11_PARSE(app, argc, argv);
   return status;

@@ -1,0 +1,136 @@
+#include "host/session/online_correction.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <ostream>
+
+#include "host/identify/problem.hpp"
+
+namespace kincal::session {
+
+namespace {
+
+float to_float(double v, const std::string& what) {
+  if (!std::isfinite(v) || std::abs(v) > static_cast<double>(std::numeric_limits<float>::max()))
+    throw model::InputError("correction block: " + what + " = " + std::to_string(v) + " does not fit a float");
+  return static_cast<float>(v);
+}
+
+shared::DhValues values(const core::LinkParameters<double>& p, const std::string& link) {
+  return {to_float(p.a_m, link + " a"), to_float(p.alpha_rad, link + " alpha"), to_float(p.d_m, link + " d"),
+          to_float(p.theta_rad, link + " theta"), to_float(p.beta_rad, link + " beta")};
+}
+
+identify::AccuracyStats position_stats(const std::vector<double>& errors_m) {
+  identify::AccuracyStats s;
+  s.count = static_cast<int>(errors_m.size());
+  for (const double e : errors_m) {
+    s.mean_m += e / s.count;
+    s.rms_m += e * e / s.count;
+    s.max_m = std::max(s.max_m, e);
+  }
+  s.rms_m = std::sqrt(s.rms_m);
+  return s;
+}
+
+}  // namespace
+
+shared::CorrectionParameters correction_block(const model::RobotModel& controller,
+                                              const model::RobotModel& identified) {
+  const int n = controller.joint_count();
+  if (n != identified.joint_count())
+    throw model::InputError("correction block: the models have " + std::to_string(n) + " and " +
+                            std::to_string(identified.joint_count()) + " joints");
+  if (n < 1 || n > static_cast<int>(shared::kJoints))
+    throw model::InputError("correction block: " + std::to_string(n) + " joints; the protocol carries 1 to " +
+                            std::to_string(shared::kJoints));
+  const core::ChainModel<double> a = model::to_chain(controller), b = model::to_chain(identified);
+  shared::CorrectionParameters block;
+  block.joint_count = static_cast<std::uint8_t>(n);
+  for (int j = 0; j < n; ++j) {
+    const auto& la = a.links[static_cast<std::size_t>(j)];
+    const auto& lb = b.links[static_cast<std::size_t>(j)];
+    const std::string name = "joint " + std::to_string(j + 1);
+    if (la.joint != lb.joint || la.convention != lb.convention)
+      throw model::InputError("correction block: " + name + " differs in type or convention between the models");
+    shared::JointModel& m = block.joints[static_cast<std::size_t>(j)];
+    m.type = la.joint == core::JointType::prismatic ? shared::JointKind::kPrismatic : shared::JointKind::kRevolute;
+    m.convention = la.convention == core::LinkConvention::standard_dh   ? shared::LinkKind::kStandardDh
+                   : la.convention == core::LinkConvention::modified_dh ? shared::LinkKind::kModifiedDh
+                                                                        : shared::LinkKind::kDoty;
+    m.nominal = values(la.parameters, name);
+    core::LinkParameters<double> d;
+    d.d_m = lb.parameters.d_m - la.parameters.d_m;
+    d.theta_rad = lb.parameters.theta_rad - la.parameters.theta_rad;
+    d.a_m = lb.parameters.a_m - la.parameters.a_m;
+    d.alpha_rad = lb.parameters.alpha_rad - la.parameters.alpha_rad;
+    d.beta_rad = lb.parameters.beta_rad - la.parameters.beta_rad;
+    m.error = values(d, name + " error");
+  }
+  const model::Vector3 tool_r = identify::so3_log(a.flange_T_tool.rotation);
+  const model::Matrix3 r_nominal_t = a.flange_T_tool.rotation.transpose();
+  const model::Vector3 error_t = r_nominal_t * (b.flange_T_tool.translation - a.flange_T_tool.translation);
+  const model::Vector3 error_r = identify::so3_log(r_nominal_t * b.flange_T_tool.rotation);
+  for (int k = 0; k < 3; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    block.tool_offset[i] = to_float(a.flange_T_tool.translation(k), "tool offset");
+    block.tool_offset[i + 3] = to_float(tool_r(k), "tool rotation");
+    block.tool_error[i] = to_float(error_t(k), "tool error");
+    block.tool_error[i + 3] = to_float(error_r(k), "tool rotation error");
+  }
+  return block;
+}
+
+CorrectionCheck verify_online_correction(can::PlatformClient& client, bool fd, const Calibration& calibration,
+                                         const SessionData& data, RobotDriver& driver, Sensor& sensor,
+                                         std::ostream& log) {
+  const identify::IdentifyResult& r = calibration.result;
+  const shared::CorrectionParameters block = correction_block(r.start, r.model);
+  std::array<std::uint8_t, shared::kCorrectionBytes> image{};
+  if (shared::encode_block(block, image) != image.size()) throw SessionError("correction block: encoding failed");
+  CorrectionCheck check;
+  try {
+    client.set_mode(false, false);  // the platform takes parameters only when idle
+    check.storage_sequence = client.upload(shared::ParameterBlock::kCorrection, image);
+    const std::vector<std::uint8_t> back = client.download(shared::ParameterBlock::kCorrection);
+    if (!std::equal(back.begin(), back.end(), image.begin(), image.end()))
+      throw SessionError("the platform's copy of the correction parameters differs from the upload");
+    client.set_mode(true, true);
+  } catch (const can::PlatformError& e) {
+    throw SessionError(std::string("uploading the correction parameters: ") + e.what());
+  }
+  log << "correction parameters uploaded (" << image.size() << " bytes, stored as copy " << check.storage_sequence
+      << ") and read back identical\n";
+
+  // The goal of each target: the controller's chain and tool, placed with the identified base.
+  model::RobotModel goal_model = r.start;
+  goal_model.base_T_frame0 = r.model.base_T_frame0;
+  const model::RobotModel& nominal = r.start;
+  std::vector<double> before, after;
+  for (std::size_t i = 0; i < data.validation.rows.size(); ++i) {
+    const model::Measurement& m = data.validation.rows[i];
+    std::array<std::int32_t, shared::kJoints> raw{};
+    for (std::size_t j = 0; j < m.q.size(); ++j) raw[j] = shared::quantize_joint_angle(m.q[j]);
+    std::array<std::int32_t, shared::kJoints> corrected_raw{};
+    try {
+      corrected_raw = client.correct(raw, fd);
+    } catch (const can::PlatformError& e) {
+      throw SessionError("validation pose " + std::to_string(i) + ": the platform did not correct it: " + e.what());
+    }
+    std::vector<double> corrected(m.q.size());
+    for (std::size_t j = 0; j < m.q.size(); ++j)
+      corrected[j] = std::ldexp(static_cast<double>(corrected_raw[j]), -shared::kJointAngleFractionBits);
+    const int index = static_cast<int>(data.calibration.rows.size() + i);
+    const std::vector<double> readings = driver.move_to(index, corrected);
+    const Observation o = sensor.measure(index, model::forward_kinematics(nominal, readings));
+    const model::Vector3 goal = model::forward_kinematics(goal_model, m.q).translation;
+    before.push_back((m.position - goal).norm());
+    after.push_back((o.position - goal).norm());
+  }
+  check.before = position_stats(before);
+  check.after = position_stats(after);
+  return check;
+}
+
+}  // namespace kincal::session

@@ -1,0 +1,103 @@
+// What a calibration session measures with (issue #6): the tool's position (and orientation) in
+// the measuring device's frame, one observation per pose, or a SessionError that stops the
+// session at once (fail fast: a missing sensor, a blob-less frame or a non-flat surface at the
+// first pose, not a wasted run).
+//
+//   PlatformPoseSensor   Doty's ARID platform over CAN: the platform's camera and four rangers
+//                        measure square_T_camera on board; the strip layout places the square
+//                        in the strip (device) frame: strip_T_camera = strip_T_square[k] *
+//                        square_T_camera. Which square k the platform measured against is the
+//                        one that puts the camera nearest the nominal prediction (squares are 4
+//                        inches apart, far more than any kinematic error), so the platform may
+//                        pick any square in view. The observation is a full pose.
+//   StereoBeaconSensor   Kapucu & Baysec's rig: a fixed parallel stereo pair sees a bright beacon
+//                        on the tool; the firmware core's labeler finds it in each image (the
+//                        largest bright blob) and triangulate_parallel() gives the point (in the
+//                        left camera's OpenCV frame, the right camera one baseline along its x),
+//                        placed in the device frame by device_T_right (the right camera's
+//                        OpenCV frame in the device frame; for host/model/robots/stanford_rrp.yaml
+//                        a half turn about z: their camera frame has y up), with its first-order
+//                        covariance from the pixel noise (depth about 18 cm per pixel of
+//                        disparity on their rig).
+//
+// Thread safety: one session thread. Cost: one CAN round trip, or two labelings of a frame.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include "firmware/core/stereo.hpp"
+#include "host/can/platform_client.hpp"
+#include "host/model/robot_model.hpp"
+#include "host/session/session_error.hpp"
+
+namespace kincal::session {
+
+struct Observation {
+  model::Vector3 position = model::Vector3::Zero();  // device frame, m
+  std::optional<Eigen::Quaterniond> orientation;     // device_R_tool
+  std::optional<model::Matrix3> covariance;          // of position, m^2
+  std::uint32_t sequence = 0;                        // the platform's trigger sequence, if any
+  double timestamp_s = 0;                            // when the sensor saw it (sensor clock)
+  std::string note;                                  // e.g. "square 3, 6 fiducials"
+};
+
+class Sensor {
+ public:
+  virtual ~Sensor() = default;
+  // One observation at pose `index`; `predicted` is the nominal model's device_T_tool there.
+  virtual Observation measure(int index, const model::Transform& predicted) = 0;
+  virtual std::string name() const = 0;
+  // What every observation carries (the journal's layout is fixed when it is created).
+  virtual bool gives_orientation() const = 0;
+  virtual bool gives_covariance() const = 0;
+};
+
+class PlatformPoseSensor : public Sensor {
+ public:
+  // strip_T_square: every calibration square's pose in the strip frame. Puts the platform in
+  // measuring mode (and clears its error flags); throws SessionError if it does not answer.
+  PlatformPoseSensor(can::PlatformClient& client, std::vector<model::Transform> strip_T_square);
+  Observation measure(int index, const model::Transform& predicted) override;
+  std::string name() const override { return "sensor platform over CAN"; }
+  bool gives_orientation() const override { return true; }
+  bool gives_covariance() const override { return false; }
+
+  // The square k for which strip_T_square[k] * square_T_camera is nearest `predicted`.
+  int measured_square(const model::Transform& square_T_camera, const model::Transform& predicted) const;
+
+ private:
+  can::PlatformClient& client_;
+  std::vector<model::Transform> strip_T_square_;
+};
+
+struct StereoFrames {
+  cv::Mat left, right;  // 8-bit grey
+  double timestamp_s = 0;
+};
+
+class StereoBeaconSensor : public Sensor {
+ public:
+  // `grab` returns the next pair (from host/capture, or the simulator); pixel_sigma_px is the
+  // centroid noise the covariance assumes.
+  StereoBeaconSensor(std::function<StereoFrames()> grab, const core::ParallelStereoRig& rig,
+                     const model::Transform& device_T_right, double pixel_sigma_px);
+  Observation measure(int index, const model::Transform& predicted) override;
+  std::string name() const override { return "stereo pair and beacon"; }
+  bool gives_orientation() const override { return false; }
+  bool gives_covariance() const override { return true; }
+
+ private:
+  std::function<StereoFrames()> grab_;
+  core::ParallelStereoRig rig_;
+  model::Transform device_T_right_;
+  double pixel_sigma_px_;
+};
+
+}  // namespace kincal::session

@@ -1,0 +1,42 @@
+// A calibration run as the report shows it (issue #6): host/report's plain numbers filled from a
+// session's data and its identification, so that `kincal session` and `kincal demo` write the
+// same report.
+//
+//   parameters  every identified parameter: the starting (nominal) value, the identified one,
+//               its 1-sigma and, when the data are simulated, the true value. Link parameters are
+//               the chain's values (joint offsets folded in); base and tool rows are the small
+//               motions of those frames from the starting model (so the nominal value is 0).
+//   validation  per validation pose, the position error of the nominal and the identified model.
+//   sweeps      each single-joint sweep of the calibration data with its circle or line fit,
+//               when circle-point analysis ran (cpa).
+//   bus         frames, payload bytes and bus load from the session's candump log.
+// Errors: model::InputError (a truth model of another joint count), can::CanError (log).
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "host/identify/cpa.hpp"
+#include "host/report/report.hpp"
+#include "host/session/session.hpp"
+
+namespace kincal::session {
+
+struct RunDescription {
+  std::string title, robot, method, data;
+  bool simulated = false;
+};
+
+report::Run report_run(const RunDescription& description, const model::RobotModel& nominal, const SessionData& data,
+                       const Calibration& calibration, const std::optional<model::RobotModel>& truth,
+                       const identify::CpaResult* cpa);
+
+// The value of parameter `id` in `model`, as report_run shows it (see above); exported for the
+// demo's tables.
+double parameter_value(const model::RobotModel& model, const model::RobotModel& start, core::ParameterId id);
+
+// Frames, payload bytes, span and load of a candump -L log of a bus at `bit_rate` (worst-case
+// bit stuffing, as host/can/bus_budget counts frames).
+report::BusStatistics bus_statistics(const std::string& candump_log, const std::string& bus, double bit_rate);
+
+}  // namespace kincal::session

@@ -1,0 +1,257 @@
+#include "host/session/simulated_rig.hpp"
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <numbers>
+#include <random>
+
+#include <Eigen/Eigenvalues>
+
+#include "host/can/loopback.hpp"
+#include "host/sim/beacon.hpp"
+#include "host/sim/parameter_blocks.hpp"
+#include "host/sim/rangers.hpp"
+#include "host/sim/render.hpp"
+#include "host/sim/robot.hpp"
+#include "host/sim/simulated_platform.hpp"
+#include "host/sim/strip.hpp"
+
+namespace kincal::session {
+
+namespace {
+
+Eigen::Isometry3d isometry(const model::Transform& t) {
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = t.rotation;
+  out.translation() = t.translation;
+  return out;
+}
+
+model::Transform transform(const Eigen::Isometry3d& t) {
+  model::Transform out;
+  out.rotation = t.linear();
+  out.translation = t.translation();
+  return out;
+}
+
+// The noise of pose `index`: the same whatever happened before (a resumed session sees what an
+// uninterrupted one would).
+std::uint64_t pose_seed(std::uint64_t seed, int index) {
+  constexpr std::uint64_t kGolden = 0x9E3779B97F4A7C15u, kMix = 0xBF58476D1CE4E5B9u;
+  return seed * kGolden + static_cast<std::uint64_t>(index) * kMix + 1u;
+}
+
+// Goes exactly where it is told, then lets the world show what is there.
+class SimulatedDriver : public RobotDriver {
+ public:
+  explicit SimulatedDriver(std::function<void(int, const std::vector<double>&)> moved) : moved_(std::move(moved)) {}
+  std::vector<double> move_to(int index, const std::vector<double>& target) override {
+    moved_(index, target);
+    return target;
+  }
+  std::string name() const override { return "simulated"; }
+
+ private:
+  std::function<void(int, const std::vector<double>&)> moved_;
+};
+
+// ---- Doty's ARID with the sensor platform ----------------------------------------------------
+
+constexpr double kStandOffM = 0.3;    // camera to strip at the rail's nearest reading
+constexpr double kRailTravelM = 0.1;  // the rail moves the camera along its axis: keep within the rangers
+constexpr int kSquares = 16;
+
+class PlatformRig : public SimulatedRig {
+ public:
+  PlatformRig(const model::RobotModel& file, const RigOptions& options)
+      : options_(options), nominal_(place(file)), robot_(nominal_, options.seed) {
+    camera_.distortion = {-0.05, 0.01, 0, 0, 0};
+    if (!options.candump_log.empty()) bus_.log_to(options.candump_log);
+    platform_ = std::make_unique<sim::SimulatedPlatform>(bus_, options.fd, camera_.width_px, camera_.height_px, view_);
+    can::LoopbackOptions lo;
+    lo.fd = options.fd;
+    transport_ = std::make_unique<can::LoopbackTransport>(bus_.attach(), lo);
+    client_ = std::make_unique<can::PlatformClient>(*transport_);
+    upload(shared::ParameterBlock::kIntrinsics, sim::to_intrinsics(camera_));
+    upload(shared::ParameterBlock::kGeometry, sim::platform_geometry(strip_, rangers_));
+    std::vector<model::Transform> squares;
+    for (int k = 0; k < strip_.squares; ++k) squares.push_back(transform(sim::strip_T_square(strip_, k)));
+    sensor_ = std::make_unique<PlatformPoseSensor>(*client_, squares);
+    driver_ = std::make_unique<SimulatedDriver>([this](int index, const std::vector<double>& q) { show(index, q); });
+  }
+
+  const model::RobotModel& nominal() const override { return nominal_; }
+  const model::RobotModel& truth() const override { return robot_.truth(); }
+  RobotDriver& driver() override { return *driver_; }
+  Sensor& sensor() override { return *sensor_; }
+  can::PlatformClient* platform() override { return client_.get(); }
+  bool fd() const override { return options_.fd; }
+  std::string description() const override {
+    return "Doty's ARID (" + nominal_.name + ") with the camera-and-ranger platform over a strip of " +
+           std::to_string(strip_.squares) + " calibration squares; the firmware in the loop on a loopback bus";
+  }
+
+  bool observable(const std::vector<double>& q) const override {
+    const model::Transform strip_T_camera = model::forward_kinematics(nominal_, q);
+    const model::Vector3 axis = strip_T_camera.rotation.col(2);
+    if (axis.z() > -0.9) return false;  // not looking at the strip
+    const double t = -strip_T_camera.translation.z() / axis.z();
+    if (t < 0.2 || t > 0.6) return false;
+    const model::Vector3 hit = strip_T_camera.translation + t * axis;
+    const double half = strip_.square_m / 2;
+    return hit.x() > half && hit.x() < (strip_.squares - 1.5) * strip_.square_m && std::abs(hit.y()) < half * 0.6;
+  }
+
+ private:
+  // The file's chain and camera, placed so that the camera looks along the joint axes at the
+  // strip kStandOffM away, the strip along the band the camera sweeps (the principal direction
+  // of the camera's positions over random poses); the rail limited to kRailTravelM.
+  static model::RobotModel place(model::RobotModel m) {
+    for (model::Joint& j : m.joints)
+      if (j.type == core::JointType::prismatic) j.upper = std::min(j.upper, j.lower + kRailTravelM);
+    m.base_T_frame0 = model::Transform{};
+    std::mt19937_64 rng(12345);
+    std::vector<model::Vector3> p;
+    for (int i = 0; i < 2000; ++i)
+      p.push_back(model::forward_kinematics(m, sim::random_configuration(m, rng)).translation);
+    model::Vector3 centre = model::Vector3::Zero();
+    double nearest_z = std::numeric_limits<double>::infinity();
+    for (const auto& v : p) {
+      centre += v / static_cast<double>(p.size());
+      nearest_z = std::min(nearest_z, v.z());
+    }
+    Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
+    for (const auto& v : p) scatter += (v - centre).head<2>() * (v - centre).head<2>().transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(scatter);
+    const Eigen::Vector2d u = eigen.eigenvectors().col(1);
+    // The strip frame in frame 0: x along u, z toward the camera (which looks along +z0).
+    model::Transform frame0_T_strip;
+    frame0_T_strip.rotation.col(0) = model::Vector3(u.x(), u.y(), 0);
+    frame0_T_strip.rotation.col(2) = model::Vector3(0, 0, -1);
+    frame0_T_strip.rotation.col(1) = frame0_T_strip.rotation.col(2).cross(frame0_T_strip.rotation.col(0));
+    const double half_length = (kSquares - 1) * sim::kInch_m * 4 / 2;
+    frame0_T_strip.translation = centre - half_length * frame0_T_strip.rotation.col(0);
+    frame0_T_strip.translation.z() = nearest_z + kStandOffM + kRailTravelM;
+    m.base_T_frame0 = frame0_T_strip.inverse();
+    return m;
+  }
+
+  template <class Block>
+  void upload(shared::ParameterBlock id, const Block& block) {
+    std::array<std::uint8_t, shared::kMaxBlockBytes> image{};
+    const std::size_t n = shared::encode_block(block, image);
+    try {
+      client_->upload(id, std::span<const std::uint8_t>(image.data(), n));
+    } catch (const can::PlatformError& e) {
+      throw SessionError(std::string("simulated platform: loading its parameters: ") + e.what());
+    }
+  }
+
+  void show(int index, const std::vector<double>& q) {
+    // Forward kinematics without the limit check of tool_pose(): a corrected target may lie a
+    // hair beyond a limit.
+    const Eigen::Isometry3d camera_T_strip = isometry(model::forward_kinematics(robot_.truth(), q).inverse());
+    sim::ImagingConditions conditions;
+    conditions.seed = pose_seed(options_.seed, index);
+    conditions.read_noise_dn *= options_.measurement_scale;
+    sim::RangerSpec rangers = rangers_;
+    rangers.sigma_m *= options_.measurement_scale;
+    std::mt19937_64 rng(conditions.seed);
+    view_.set(sim::render_plane(camera_, camera_T_strip, target_, conditions),
+              sim::simulate_ranges(rangers, camera_T_strip, rng));
+  }
+
+  RigOptions options_;
+  model::RobotModel nominal_;
+  sim::SimulatedRobot robot_;
+  sim::CameraSpec camera_;
+  sim::StripSpec strip_{kSquares};
+  sim::RangerSpec rangers_;
+  sim::PlanarTarget target_ = sim::strip_target(strip_);
+  sim::SimulatedView view_;
+  can::LoopbackBus bus_;
+  std::unique_ptr<sim::SimulatedPlatform> platform_;
+  std::unique_ptr<can::LoopbackTransport> transport_;
+  std::unique_ptr<can::PlatformClient> client_;
+  std::unique_ptr<PlatformPoseSensor> sensor_;
+  std::unique_ptr<SimulatedDriver> driver_;
+};
+
+// ---- Kapucu & Baysec's stereo rig ------------------------------------------------------------
+
+// Centroid noise the stereo sensor's covariance assumes (px): measured on this rig's rendered
+// beacon (tests/host/session: the spread of the centroid over noise seeds).
+constexpr double kBeaconCentroidSigmaPx = 0.05;
+
+class StereoRig : public SimulatedRig {
+ public:
+  StereoRig(const model::RobotModel& file, const RigOptions& options) : options_(options), robot_(file, options.seed) {
+    beacon_.radius_m = 0.015;
+    core::ParallelStereoRig rig;
+    rig.focal_x_px = static_cast<float>(spec_.camera.fx_px);
+    rig.focal_y_px = static_cast<float>(spec_.camera.fy_px);
+    rig.baseline_m = static_cast<float>(spec_.baseline_m);
+    rig.principal_left_px = {static_cast<float>(spec_.camera.cx_px), static_cast<float>(spec_.camera.cy_px)};
+    rig.principal_right_px = rig.principal_left_px;
+    // Their camera frame has y up: the right camera's OpenCV frame turned half a turn about z.
+    model::Transform device_T_right;
+    device_T_right.rotation = Eigen::AngleAxisd(std::numbers::pi, model::Vector3::UnitZ()).toRotationMatrix();
+    sensor_ = std::make_unique<StereoBeaconSensor>([this] { return frames_; }, rig, device_T_right,
+                                                   kBeaconCentroidSigmaPx * options.measurement_scale);
+    driver_ = std::make_unique<SimulatedDriver>([this](int index, const std::vector<double>& q) { show(index, q); });
+  }
+
+  const model::RobotModel& nominal() const override { return robot_.nominal(); }
+  const model::RobotModel& truth() const override { return robot_.truth(); }
+  RobotDriver& driver() override { return *driver_; }
+  Sensor& sensor() override { return *sensor_; }
+  can::PlatformClient* platform() override { return nullptr; }
+  bool fd() const override { return false; }
+  std::string description() const override {
+    return "Kapucu & Baysec's rig (" + robot_.nominal().name +
+           "): a beacon on the tool, a parallel stereo pair 4.54 m away, baseline 12.6 cm";
+  }
+
+  bool observable(const std::vector<double>& q) const override {
+    const model::Vector3 p = model::forward_kinematics(robot_.nominal(), q).translation;
+    if (p.z() < 1.0) return false;
+    const double margin = 30;
+    for (const double x_offset : {0.0, spec_.baseline_m}) {  // right camera, then left
+      // Device frame (y up) to the camera's pixels.
+      const double u = spec_.camera.cx_px - spec_.camera.fx_px * (p.x() - x_offset) / p.z();
+      const double v = spec_.camera.cy_px - spec_.camera.fy_px * p.y() / p.z();
+      if (u < margin || v < margin || u > spec_.camera.width_px - 1 - margin || v > spec_.camera.height_px - 1 - margin)
+        return false;
+    }
+    return true;
+  }
+
+ private:
+  void show(int index, const std::vector<double>& q) {
+    sim::ImagingConditions conditions;
+    conditions.seed = pose_seed(options_.seed, index);
+    conditions.read_noise_dn *= options_.measurement_scale;
+    const model::Vector3 beacon = model::forward_kinematics(robot_.truth(), q).translation;
+    const sim::StereoFrame f = sim::render_beacon(spec_, beacon_, beacon, conditions);
+    frames_ = {f.left, f.right, 0.0};
+  }
+
+  RigOptions options_;
+  sim::SimulatedRobot robot_;
+  sim::StereoRigSpec spec_;
+  sim::BeaconSpec beacon_;
+  StereoFrames frames_;
+  std::unique_ptr<StereoBeaconSensor> sensor_;
+  std::unique_ptr<SimulatedDriver> driver_;
+};
+
+}  // namespace
+
+std::unique_ptr<SimulatedRig> make_simulated_rig(RigKind kind, const model::RobotModel& model,
+                                                 const RigOptions& options) {
+  if (kind == RigKind::platform) return std::make_unique<PlatformRig>(model, options);
+  return std::make_unique<StereoRig>(model, options);
+}
+
+}  // namespace kincal::session
