@@ -216,7 +216,9 @@ FidStatus identify_fiducials(const FidModel& model, std::span<const Blob> blobs,
     for (int b = a + 1; b <= 6; ++b)
       for (int c = b + 1; c <= 6; ++c) {
         if (ids[a] < 0 || ids[b] < 0 || ids[c] < 0) continue;
-        const std::int64_t cross = abs64((px[b] - px[a]) * (py[c] - py[a]) - (py[b] - py[a]) * (px[c] - px[a]));
+        // 64-bit products: q8 differences of fiducials 200 px apart multiply beyond 2^31.
+        const std::int64_t bx = px[b] - px[a], by = py[b] - py[a], cx = px[c] - px[a], cy = py[c] - py[a];
+        const std::int64_t cross = abs64(bx * cy - by * cx);
         widest = cross > widest ? cross : widest;
       }
   return widest > needed ? FidStatus::kOk : FidStatus::kCollinear;

@@ -53,8 +53,8 @@ int main() {
     int failures = 0;
     for (int seed = 0; seed < seeds; ++seed) {
       std::mt19937_64 rng(1000u + static_cast<unsigned>(seed));
-      const model::RobotModel truth = simulation::perturbed(nominal, rng);
-      const auto qs = simulation::random_configurations(nominal, r.measurements, rng);
+      const model::RobotModel truth = sim::perturbed(nominal, rng);
+      const auto qs = sim::random_configurations(nominal, r.measurements, rng);
       const model::Dataset data = simulation::measure(truth, qs, rng, sigma_m, r.pose, sigma_rad, true);
       identify::IdentifyOptions options;
       options.orientation_sigma_rad = sigma_rad;
@@ -81,7 +81,7 @@ int main() {
                         residual, &j);
       const Eigen::MatrixXd info = j.transpose() * j;
       const Eigen::LDLT<Eigen::MatrixXd> ldlt(info);
-      for (const auto& q : simulation::random_configurations(nominal, held_out, rng)) {
+      for (const auto& q : sim::random_configurations(nominal, held_out, rng)) {
         Eigen::MatrixXd jq;
         const model::Transform t = at_truth.pose(q, &jq);
         const Eigen::MatrixXd p = jq.topRows(3);
@@ -105,9 +105,9 @@ int main() {
   {
     const model::RobotModel nominal = robot("puma560.yaml");
     std::mt19937_64 rng(42);
-    const model::RobotModel truth = simulation::perturbed(nominal, rng);
-    const model::Dataset data = simulation::measure(truth, simulation::random_configurations(nominal, 200, rng), rng,
-                                                    sigma_m, true, sigma_rad, true);
+    const model::RobotModel truth = sim::perturbed(nominal, rng);
+    const model::Dataset data =
+        simulation::measure(truth, sim::random_configurations(nominal, 200, rng), rng, sigma_m, true, sigma_rad, true);
     identify::IdentifyOptions options;
     options.orientation_sigma_rad = sigma_rad;
     std::vector<double> ms;

@@ -203,7 +203,7 @@ int main() {
   const auto qs = sweep_configurations();
   // The template handed to every method: the nominal table off by 2 cm / 2 deg (their method and
   // cpa take only conventions and free choices from it).
-  simulation::ErrorScale rough;
+  sim::ErrorScale rough;
   rough.length_m = 0.02;
   rough.angle_rad = 2 * kDeg;
   rough.base_length_m = 0.0;
@@ -216,7 +216,7 @@ int main() {
     std::vector<double> e;
     for (int s = 0; s < calibration_seeds; ++s) {
       std::mt19937_64 rng(500u + static_cast<unsigned>(s));
-      const RobotModel guess = simulation::perturbed(truth, rng, rough);
+      const RobotModel guess = sim::perturbed(truth, rng, rough);
       e.push_back(worst_dh_length_error(their_method(guess, measure(truth, qs, sigma_px, rng)), truth));
     }
     return identify::median(e);
@@ -237,7 +237,7 @@ int main() {
   int points = 0;
   for (int s = 0; s < seeds; ++s) {
     std::mt19937_64 rng(9000u + static_cast<unsigned>(s));
-    const RobotModel guess = simulation::perturbed(truth, rng, rough);
+    const RobotModel guess = sim::perturbed(truth, rng, rough);
     const model::Dataset d = measure(truth, qs, sigma_px, rng);
     const RobotModel theirs = their_method(guess, d);
     identify::IdentifyOptions o;
@@ -246,7 +246,7 @@ int main() {
     o.method = identify::Method::full;
     o.start = identify::Start::cpa;
     const RobotModel full = identify::identify(guess, d, o).model;
-    for (const auto& q : simulation::random_configurations(truth, 100, rng)) {
+    for (const auto& q : sim::random_configurations(truth, 100, rng)) {
       const Vector3 t = model::forward_kinematics(truth, q).translation;
       theirs2 += (model::forward_kinematics(theirs, q).translation - t).squaredNorm();
       cpa2 += (model::forward_kinematics(cpa, q).translation - t).squaredNorm();

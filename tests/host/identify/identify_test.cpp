@@ -69,7 +69,7 @@ TEST_CASE("the identification Jacobian is exact away from zero, base and tool ro
   std::normal_distribution<double> u(0.0, 0.2);
   for (double& d : delta) d = u(rng);
   p.set(delta);
-  const std::vector<double> q = simulation::random_configuration(m, rng);
+  const std::vector<double> q = sim::random_configuration(m, rng);
   Eigen::MatrixXd j;
   const model::Transform t0 = p.pose(q, &j);
   (void)t0;
@@ -93,8 +93,7 @@ TEST_CASE("the identification Jacobian is exact away from zero, base and tool ro
 TEST_CASE("identifiability names what point data cannot give") {
   std::mt19937_64 rng(2);
   const RobotModel m = robot("ur5.yaml");
-  const model::Dataset d =
-      simulation::measure(m, simulation::random_configurations(m, 40, rng), rng, 1e-5, false, 0.0, true);
+  const model::Dataset d = simulation::measure(m, sim::random_configurations(m, 40, rng), rng, 1e-5, false, 0.0, true);
   const identify::IdentifyResult r = identify::identify(m, d, {});
   // 4 per revolute joint + 3 for the tool point + 6 base - (theta1, d1 to the base) ...: 4R + 3 = 27.
   CHECK(r.identifiability.identified.size() == 27);
@@ -120,7 +119,7 @@ TEST_CASE("identifiable parameter counts: 4R + 2P + 6 with poses, 4R + 2P + 3 wi
     INFO(c.file, c.pose ? " poses" : " points");
     const RobotModel m = robot(c.file);
     const model::Dataset d =
-        simulation::measure(m, simulation::random_configurations(m, 50, rng), rng, 1e-5, c.pose, 1e-5, true);
+        simulation::measure(m, sim::random_configurations(m, 50, rng), rng, 1e-5, c.pose, 1e-5, true);
     identify::IdentifyOptions o;
     o.orientation_sigma_rad = 1e-5;
     const identify::IdentifyResult r = identify::identify(m, d, o);
@@ -134,14 +133,14 @@ TEST_CASE("full, first-order and cpa recover known errors from noise-free data")
   for (const char* name : {"puma560.yaml", "ur5.yaml", "stanford_rrp.yaml", "arid_prrr.yaml"}) {
     INFO(name);
     const RobotModel nominal = robot(name);
-    const RobotModel truth = simulation::perturbed(nominal, rng);
+    const RobotModel truth = sim::perturbed(nominal, rng);
     const bool pose = nominal.tool == model::ToolKind::frame;
-    const auto qs = simulation::random_configurations(nominal, 60, rng);
+    const auto qs = sim::random_configurations(nominal, 60, rng);
     const model::Dataset d = simulation::measure(truth, qs, rng, 0.0, pose, 0.0, false);
     identify::IdentifyOptions o;
     o.sigma_m = 1e-4;
     o.orientation_sigma_rad = 1e-4;
-    const auto held_out = simulation::random_configurations(nominal, 50, rng);
+    const auto held_out = sim::random_configurations(nominal, 50, rng);
     const identify::IdentifyResult full = identify::identify(nominal, d, o);
     CHECK(simulation::prediction_rms(full.model, truth, held_out) < 1e-9);
     CHECK(full.outlier_lines.empty());
@@ -164,14 +163,14 @@ TEST_CASE("cpa on single-joint sweeps finds the axes; full from cpa converges") 
   for (const char* name : {"stanford_rrp.yaml", "puma560.yaml", "ur5.yaml"}) {
     INFO(name);
     const RobotModel nominal = robot(name);
-    const RobotModel truth = simulation::perturbed(nominal, rng);
+    const RobotModel truth = sim::perturbed(nominal, rng);
     std::vector<double> home;
     for (const auto& j : nominal.joints) home.push_back(0.5 * (j.lower + j.upper) + 0.1);
     const model::Dataset d = simulation::measure(truth, sweeps(nominal, home, 10, 0.5), rng, 0.0, false, 0.0, false);
     identify::IdentifyOptions o;
     o.method = identify::Method::cpa;
     const identify::IdentifyResult cpa = identify::identify(nominal, d, o);
-    const auto held_out = simulation::random_configurations(nominal, 50, rng);
+    const auto held_out = sim::random_configurations(nominal, 50, rng);
     CHECK(simulation::prediction_rms(cpa.model, truth, held_out) < 1e-7);
     CHECK(cpa.cpa_sweeps.size() == nominal.joints.size());
   }
@@ -180,7 +179,7 @@ TEST_CASE("cpa on single-joint sweeps finds the axes; full from cpa converges") 
 TEST_CASE("cpa rejects an outlier in a sweep and reports its line") {
   std::mt19937_64 rng(5);
   const RobotModel nominal = robot("stanford_rrp.yaml");
-  const RobotModel truth = simulation::perturbed(nominal, rng);
+  const RobotModel truth = sim::perturbed(nominal, rng);
   const std::vector<double> home = {0.1, 1.6, 0.8};
   model::Dataset d = simulation::measure(truth, sweeps(nominal, home, 12, 0.5), rng, 2e-4, false, 0.0, true);
   d.rows[15].position.x() += 0.02;  // a 2 cm blunder in the sweep of joint 2
@@ -195,16 +194,16 @@ TEST_CASE("cpa rejects an outlier in a sweep and reports its line") {
 TEST_CASE("full identification with noise: outliers rejected by line, noise estimated") {
   std::mt19937_64 rng(6);
   const RobotModel nominal = robot("puma560.yaml");
-  const RobotModel truth = simulation::perturbed(nominal, rng);
+  const RobotModel truth = sim::perturbed(nominal, rng);
   model::Dataset d =
-      simulation::measure(truth, simulation::random_configurations(nominal, 80, rng), rng, 5e-5, true, 1e-4, false);
+      simulation::measure(truth, sim::random_configurations(nominal, 80, rng), rng, 5e-5, true, 1e-4, false);
   d.rows[10].position.z() += 0.01;
   const identify::IdentifyResult r = identify::identify(nominal, d, {});
   CHECK(r.outlier_lines == std::vector<int>{d.rows[10].line});
   CHECK(r.sigma_estimated);
   CHECK(r.sigma_m == doctest::Approx(5e-5).epsilon(0.15));
   CHECK(r.orientation_sigma_rad == doctest::Approx(1e-4).epsilon(0.15));
-  const auto held_out = simulation::random_configurations(nominal, 100, rng);
+  const auto held_out = sim::random_configurations(nominal, 100, rng);
   CHECK(simulation::prediction_rms(r.model, truth, held_out) < 1e-4);
   // The standard deviations describe the errors: the tool point error is within a few sigma.
   CHECK(r.stddev.size() == static_cast<Eigen::Index>(r.identifiability.identified.size()));
@@ -218,7 +217,7 @@ TEST_CASE("errors: joint count, a joint never moved, too few poses, unidentifiab
   const RobotModel puma = robot("puma560.yaml");
   const RobotModel rrp = robot("stanford_rrp.yaml");
   const model::Dataset d =
-      simulation::measure(rrp, simulation::random_configurations(rrp, 30, rng), rng, 1e-4, false, 0.0, true);
+      simulation::measure(rrp, sim::random_configurations(rrp, 30, rng), rng, 1e-4, false, 0.0, true);
   CHECK(has(error_of(puma, d, {}), "the data has 3 joint columns but the model 'puma560' has 6 joints"));
 
   model::Dataset still = d;

@@ -27,16 +27,16 @@ int main(int argc, char** argv) {
   std::filesystem::create_directories(out, error);
   const model::RobotModel nominal = model::load_model(robots + "/stanford_rrp.yaml");
   std::mt19937_64 rng(2024);
-  const model::RobotModel truth = simulation::perturbed(nominal, rng);
+  const model::RobotModel truth = sim::perturbed(nominal, rng);
   const auto write = [&](const std::string& name, const model::Dataset& d) {
     std::ofstream f(out + "/" + name);
     model::write_dataset(f, d);
     return static_cast<bool>(f);
   };
-  bool ok = write("meas.csv", simulation::measure(truth, simulation::random_configurations(nominal, 40, rng), rng, 1e-4,
-                                                  false, 0.0, true));
-  ok = ok && write("validate.csv", simulation::measure(truth, simulation::random_configurations(nominal, 30, rng), rng,
-                                                       1e-4, false, 0.0, false));
+  bool ok = write("meas.csv", simulation::measure(truth, sim::random_configurations(nominal, 40, rng), rng, 1e-4, false,
+                                                  0.0, true));
+  ok = ok && write("validate.csv", simulation::measure(truth, sim::random_configurations(nominal, 30, rng), rng, 1e-4,
+                                                       false, 0.0, false));
   std::vector<std::vector<double>> sweeps;
   const std::vector<double> home = {0.1, 1.7, 0.9};
   const double spans[3] = {1.5, 1.0, 0.7};
