@@ -215,7 +215,8 @@ TEST_CASE("parameter messages: framing, CRC, version, block") {
   REQUIRE(n == kParameterHeaderBytes + kIntrinsicsBytes);
   CHECK(msg[0] == 0x01);
   CHECK(msg[1] == 1);
-  CHECK(msg[2] == 1);  // version 1, little-endian
+  CHECK(msg[2] == kBlockFormatVersion);  // little-endian
+  CHECK(msg[3] == 0);
   CHECK(msg[4] == kIntrinsicsBytes);
   const std::uint32_t crc = crc32(image);
   CHECK(msg[6] == static_cast<std::uint8_t>(crc));
@@ -234,7 +235,7 @@ TEST_CASE("parameter messages: framing, CRC, version, block") {
   REQUIRE(decode_parameter_message(std::span<const std::uint8_t>(bad).first(n), h, payload) == DecodeStatus::kOk);
   CHECK(check_parameter_payload(h, payload) == AckStatus::kCrcMismatch);
   bad = msg;
-  bad[2] = 2;
+  bad[2] = static_cast<std::uint8_t>(kBlockFormatVersion + 1);
   REQUIRE(decode_parameter_message(std::span<const std::uint8_t>(bad).first(n), h, payload) == DecodeStatus::kOk);
   CHECK(check_parameter_payload(h, payload) == AckStatus::kBadVersion);
   bad = msg;
