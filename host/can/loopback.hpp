@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "firmware/app/ports.hpp"
 #include "firmware/core/isotp.hpp"
 #include "host/can/candump_log.hpp"
 #include "host/can/transport.hpp"
@@ -62,6 +63,18 @@ class LoopbackBus {
   std::mutex mutex_;
   std::vector<std::shared_ptr<LoopbackEndpoint>> endpoints_;
   std::unique_ptr<CandumpWriter> log_;
+};
+
+// The platform application's CanPort (firmware/app/ports.hpp) on a loopback endpoint: how the
+// firmware runs in-process on the bus (host/sim's simulated platform, the end-to-end tests).
+// Sending never fails (the endpoints queue), and the bus has no error states.
+struct LoopbackCanPort {
+  std::shared_ptr<LoopbackEndpoint> endpoint;
+  bool try_send(const CanFrame& frame) {
+    endpoint->send(frame);
+    return true;
+  }
+  app::CanHealth health() { return {}; }
 };
 
 struct LoopbackOptions {

@@ -156,7 +156,7 @@ ScenarioResult run_platform_scenario(PlatformClient& client, const ScenarioOptio
     for (std::size_t j = 0; j < shared::kJoints; ++j)
       joints[j] = shared::quantize_joint_angle(home_rad[j] + 0.5 * std::sin(0.01 * i + static_cast<double>(j)));
     const auto t0 = std::chrono::steady_clock::now();
-    const auto out = client.correct(joints, options.fd);
+    const auto out = client.correct(joints, options.fd, options.correction_timeout);
     round_trips_us.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
     const std::array<double, shared::kJoints> expected = reference_correction(params, joints);
     bool exact = true;

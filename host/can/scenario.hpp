@@ -10,6 +10,7 @@
 #pragma once
 
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <ostream>
 #include <string>
@@ -23,6 +24,9 @@ struct ScenarioOptions {
   int measurements = 10;
   int corrections = 200;
   bool fd = false;  // CAN FD joint stream
+  // How long one corrected joint state may take (the first after an upload also builds the
+  // platform's correction model); the VM test's emulated, sanitized platform needs more.
+  std::chrono::milliseconds correction_timeout{100};
 };
 
 struct ScenarioResult {

@@ -18,6 +18,7 @@ struct ExerciseOptions {
   bool no_padding = false;
   int measurements = 10;
   int corrections = 200;
+  int correction_timeout_ms = 100;
 };
 
 }  // namespace
@@ -31,12 +32,16 @@ void add_exercise_command(CLI::App& app, int& status) {
   cmd->add_option("--log", o->log, "write the session as a candump -L log");
   cmd->add_option("--measurements", o->measurements, "measurements to run")->check(CLI::Range(0, 100000));
   cmd->add_option("--corrections", o->corrections, "correction cycles to run")->check(CLI::Range(0, 1000000));
+  cmd->add_option("--correction-timeout-ms", o->correction_timeout_ms, "longest wait for one corrected joint state")
+      ->check(CLI::Range(1, 60000))
+      ->capture_default_str();
   cmd->callback([o, &status] {
     try {
       can::SocketCanTransport transport(o->interface, {o->fd, !o->no_padding, o->log});
       can::PlatformClient client(transport);
-      const can::ScenarioResult r =
-          can::run_platform_scenario(client, {o->measurements, o->corrections, o->fd}, std::cout);
+      const can::ScenarioResult r = can::run_platform_scenario(
+          client, {o->measurements, o->corrections, o->fd, std::chrono::milliseconds(o->correction_timeout_ms)},
+          std::cout);
       status = r.ok() ? 0 : 1;
     } catch (const std::exception& e) {
       std::cerr << "kincal exercise: " << e.what() << "\n";

@@ -35,15 +35,6 @@ std::uint64_t now_us() {
           .count());
 }
 
-struct LoopbackCanPort {
-  std::shared_ptr<can::LoopbackEndpoint> endpoint;
-  bool try_send(const shared::CanFrame& frame) {
-    endpoint->send(frame);
-    return true;
-  }
-  app::CanHealth health() { return {}; }
-};
-
 // Parameter storage in RAM: the platform starts without parameters, as a fresh board does.
 struct RamStorage {
   static constexpr std::size_t kSlotBytes = 4096;
@@ -113,7 +104,7 @@ class ViewRangers {
 };
 
 using Measurement = app::PlatformMeasurement<ViewCamera, ViewRangers>;
-using App = app::PlatformApp<LoopbackCanPort, RamStorage, Measurement, app::KinematicCorrection>;
+using App = app::PlatformApp<can::LoopbackCanPort, RamStorage, Measurement, app::KinematicCorrection>;
 
 }  // namespace
 
@@ -124,7 +115,7 @@ struct SimulatedPlatform::Firmware {
     config.fd = fd;
     application = std::make_unique<App>(config, port, storage, measure, correct);
   }
-  LoopbackCanPort port;
+  can::LoopbackCanPort port;
   RamStorage storage;
   ViewCamera camera;
   ViewRangers rangers;

@@ -42,11 +42,11 @@ expect_frame() {
 candump -L vcan0 >/tmp/session.log &
 CANDUMP=$!
 platform
-kincal exercise --can vcan0 --measurements 10 --corrections 200 >/tmp/ex1.txt 2>&1 && ok scenario_classic ||
+kincal exercise --can vcan0 --measurements 10 --corrections 200 --correction-timeout-ms 3000 >/tmp/ex1.txt 2>&1 && ok scenario_classic ||
   { show /tmp/ex1.txt; bad scenario_classic; }
 stop_platform platform_stops_cleanly
 platform --fd
-kincal exercise --can vcan0 --fd --measurements 10 --corrections 200 >/tmp/ex2.txt 2>&1 && ok scenario_fd ||
+kincal exercise --can vcan0 --fd --measurements 10 --corrections 200 --correction-timeout-ms 3000 >/tmp/ex2.txt 2>&1 && ok scenario_fd ||
   { show /tmp/ex2.txt; bad scenario_fd; }
 # The parameters uploaded in round 1 were loaded from storage by the restarted platform:
 # only the colour LUT and geometry flags (0x6) remain in its first heartbeat.
@@ -103,7 +103,7 @@ reports=$(grep -c "140#" /tmp/flood.txt)
 echo "flood: 20000 frames in $((end - start + 1)) s or less, $reports error reports"
 [ "$reports" -ge 1 ] && [ "$reports" -le $(((end - start + 2) * 100 + 5)) ] && ok flood_reports_rate_limited ||
   bad flood_reports_rate_limited
-kincal exercise --can vcan0 --measurements 2 --corrections 20 >/tmp/ex3.txt 2>&1 && ok platform_alive_after_flood ||
+kincal exercise --can vcan0 --measurements 2 --corrections 20 --correction-timeout-ms 3000 >/tmp/ex3.txt 2>&1 && ok platform_alive_after_flood ||
   { show /tmp/ex3.txt; bad platform_alive_after_flood; }
 stop_platform platform_stops_cleanly_after_flood
 

@@ -5,7 +5,7 @@
 # VMTEST lines init.sh prints on the serial console.
 #   vm_test.sh PLATFORM_BINARY KINCAL_BINARY WORK_DIR
 # Exit 0 when every check passed; otherwise 1 and the console log. Bounded by KINCAL_VM_TIMEOUT
-# (seconds, default 100).
+# (seconds, default 170).
 set -euo pipefail
 platform=$1 kincal=$2 work=$3
 here=$(cd "$(dirname "$0")" && pwd)
@@ -58,7 +58,7 @@ PY
 (cd "$root" && find . | cpio -o -H newc --quiet | gzip -1) >"$work/initramfs.gz"
 log=$work/console.log
 set +e
-timeout --kill-after=5 "${KINCAL_VM_TIMEOUT:-100}" qemu-system-x86_64 -accel tcg -m 2048 -smp 1 -nographic \
+timeout --kill-after=5 "${KINCAL_VM_TIMEOUT:-170}" qemu-system-x86_64 -accel tcg -m 2048 -smp 1 -nographic \
   -no-reboot -kernel "$kernel" -initrd "$work/initramfs.gz" \
   -append "console=ttyS0 quiet loglevel=3 panic=-1 rdinit=/init" >"$log" 2>&1
 qemu_status=$?

@@ -26,17 +26,8 @@ using namespace kincal;
 
 namespace {
 
-struct LoopbackCanPort {
-  std::shared_ptr<can::LoopbackEndpoint> endpoint;
-  bool try_send(const shared::CanFrame& frame) {
-    endpoint->send(frame);
-    return true;
-  }
-  app::CanHealth health() { return {}; }
-};
-
 using Measure = app::PlatformMeasurement<test::FakeCamera, test::FakeRangers>;
-using LoopbackApp = app::PlatformApp<LoopbackCanPort, test::FakeStorage, Measure, app::KinematicCorrection>;
+using LoopbackApp = app::PlatformApp<can::LoopbackCanPort, test::FakeStorage, Measure, app::KinematicCorrection>;
 
 std::uint64_t now_us() {
   return static_cast<std::uint64_t>(
@@ -67,7 +58,7 @@ class PlatformThread {
   }
 
  private:
-  LoopbackCanPort port_;
+  can::LoopbackCanPort port_;
   test::FakeStorage storage_;
   test::FakeCamera camera_;  // the scenario asks for ranges only
   test::FakeRangers rangers_;
