@@ -96,7 +96,7 @@ class MeasurementPipeline {
 
   MeasurementPipeline() noexcept : labeler_(buffers_.memory()) {}
 
-  // A new measurement: what it needs, from the request and the blocks present.
+  // The next measurement: what it needs, from the request and the blocks present.
   void begin(const MeasureRequest& request, const ParameterSet& parameters) noexcept;
   bool needs_camera() const noexcept { return needs_camera_; }
   bool needs_rangers() const noexcept { return needs_rangers_; }

@@ -29,7 +29,7 @@
 // overrun_ (32-bit, single writer), the main loop lines_read_. Memory: kLineSlots x kWidthPx
 // bytes (10 KiB) of line buffers plus a few words; the one instance is `camera` (below), which
 // the interrupt handler serves. Cost: read_row one 640-byte copy; the ISR ~30 cycles per line.
-// Failure modes (every one ends the frame; begin_frame starts a new one):
+// Failure modes (every one ends the frame; begin_frame starts the next one):
 //   - start(): none it can detect (a missing sensor shows as rows that never come).
 //   - begin_frame(): kFailed if start() was not called or the stream did not stop within its
 //     bounded wait.

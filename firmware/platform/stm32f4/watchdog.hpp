@@ -24,7 +24,7 @@
 // ISR safety: main loop only (start, refresh and the guarded storage calls). Cost: refresh() is
 // one register store; a timeout change writes three registers and waits for the IWDG to take
 // them (up to 5 LSI periods, about 0.3 ms).
-// Failure modes: kUpdateTimedOut when the IWDG did not confirm new prescaler and reload values
+// Failure modes: kUpdateTimedOut when the IWDG did not confirm the changed prescaler and reload values
 // within the bounded wait (the LSI does not run): the watchdog then runs with whatever it last
 // accepted, or not at all if the LSI is dead. kNotStarted from set_timeout() before start() (the
 // application loads its parameters before the watchdog runs).
