@@ -31,7 +31,6 @@
 #include "host/session/session_report.hpp"
 #include "host/session/simulated_rig.hpp"
 #include "host/sim/robot.hpp"
-#include "host/sim/strip.hpp"
 
 namespace kincal::cli {
 
@@ -89,17 +88,7 @@ int run(const SessionArgs& a) {
     if (a.plan.empty()) throw model::InputError("a real robot visits only planned poses: --plan FILE is required");
     transport = std::make_unique<can::SocketCanTransport>(a.can, can::SocketCanOptions{a.fd, true, {}});
     client = std::make_unique<can::PlatformClient>(*transport);
-    sim::StripSpec strip;
-    strip.squares = a.squares;
-    std::vector<model::Transform> squares;
-    for (int k = 0; k < strip.squares; ++k) {
-      const Eigen::Isometry3d t = sim::strip_T_square(strip, k);
-      model::Transform square;
-      square.rotation = t.linear();
-      square.translation = t.translation();
-      squares.push_back(square);
-    }
-    sensor = std::make_unique<session::PlatformPoseSensor>(*client, squares);
+    sensor = std::make_unique<session::PlatformPoseSensor>(*client, session::strip_square_poses(a.squares));
     if (!a.robot_cmd.empty())
       driver = std::make_unique<session::CommandRobotDriver>(a.robot_cmd);
     else

@@ -39,6 +39,13 @@ Eigen::Matrix3d so3_right_jacobian_inverse(const Eigen::Vector3d& r) {
   return Eigen::Matrix3d::Identity() + 0.5 * k + (1.0 / t2 - (1.0 + std::cos(t)) / (2.0 * t * std::sin(t))) * k * k;
 }
 
+Eigen::Matrix<double, 6, 1> small_motion(const Transform& a, const Transform& b) {
+  Eigen::Matrix<double, 6, 1> m;
+  m.head<3>() = a.rotation.transpose() * (b.translation - a.translation);
+  m.tail<3>() = so3_log(a.rotation.transpose() * b.rotation);
+  return m;
+}
+
 Eigen::Vector3d so3_log(const Eigen::Matrix3d& r) {
   const Eigen::AngleAxisd aa(r);
   return aa.angle() * aa.axis();

@@ -61,6 +61,9 @@ Eigen::Matrix3d so3_right_jacobian(const Eigen::Vector3d& r);
 Eigen::Matrix3d so3_right_jacobian_inverse(const Eigen::Vector3d& r);
 // The rotation vector of R (angle <= pi).
 Eigen::Vector3d so3_log(const Eigen::Matrix3d& r);
+// The small motion (t, r) of frame b from frame a, as the base and tool parameters compose:
+// b = a * [exp(r), t], so t is in a's axes.
+Eigen::Matrix<double, 6, 1> small_motion(const Transform& a, const Transform& b);
 
 struct Weights {
   std::vector<Eigen::Matrix3d> position;  // per measurement: L with L^T L = covariance^-1

@@ -69,15 +69,13 @@ shared::CorrectionParameters correction_block(const model::RobotModel& controlle
     m.error = values(d, name + " error");
   }
   const model::Vector3 tool_r = identify::so3_log(a.flange_T_tool.rotation);
-  const model::Matrix3 r_nominal_t = a.flange_T_tool.rotation.transpose();
-  const model::Vector3 error_t = r_nominal_t * (b.flange_T_tool.translation - a.flange_T_tool.translation);
-  const model::Vector3 error_r = identify::so3_log(r_nominal_t * b.flange_T_tool.rotation);
+  const Eigen::Matrix<double, 6, 1> tool_error = identify::small_motion(a.flange_T_tool, b.flange_T_tool);
   for (int k = 0; k < 3; ++k) {
     const auto i = static_cast<std::size_t>(k);
     block.tool_offset[i] = to_float(a.flange_T_tool.translation(k), "tool offset");
     block.tool_offset[i + 3] = to_float(tool_r(k), "tool rotation");
-    block.tool_error[i] = to_float(error_t(k), "tool error");
-    block.tool_error[i + 3] = to_float(error_r(k), "tool rotation error");
+    block.tool_error[i] = to_float(tool_error(k), "tool error");
+    block.tool_error[i + 3] = to_float(tool_error(k + 3), "tool rotation error");
   }
   return block;
 }

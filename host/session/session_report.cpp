@@ -23,14 +23,6 @@ std::string group_of(core::ParameterId id) {
   return "joint " + std::to_string(id.link + 1);
 }
 
-// The small motion (t, r) with b = a * [exp(r), t].
-Eigen::Matrix<double, 6, 1> motion(const model::Transform& a, const model::Transform& b) {
-  Eigen::Matrix<double, 6, 1> m;
-  m.head<3>() = a.rotation.transpose() * (b.translation - a.translation);
-  m.tail<3>() = identify::so3_log(a.rotation.transpose() * b.rotation);
-  return m;
-}
-
 double error_of(const model::RobotModel& model, std::span<const double> q, const model::Vector3& measured) {
   return (model::forward_kinematics(model, q).translation - measured).norm();
 }
@@ -40,9 +32,11 @@ double error_of(const model::RobotModel& model, std::span<const double> q, const
 double parameter_value(const model::RobotModel& model, const model::RobotModel& start, core::ParameterId id) {
   using K = core::ParameterKind;
   if (id.kind >= K::base_x && id.kind <= K::base_rz)
-    return motion(start.base_T_frame0, model.base_T_frame0)(static_cast<int>(id.kind) - static_cast<int>(K::base_x));
+    return identify::small_motion(start.base_T_frame0,
+                                  model.base_T_frame0)(static_cast<int>(id.kind) - static_cast<int>(K::base_x));
   if (id.kind >= K::tool_x)
-    return motion(start.flange_T_tool, model.flange_T_tool)(static_cast<int>(id.kind) - static_cast<int>(K::tool_x));
+    return identify::small_motion(start.flange_T_tool,
+                                  model.flange_T_tool)(static_cast<int>(id.kind) - static_cast<int>(K::tool_x));
   const core::LinkParameters<double> p = model::to_chain(model).links[id.link].parameters;
   switch (id.kind) {
     case K::link_d:

@@ -75,9 +75,7 @@ class PlatformRig : public SimulatedRig {
     client_ = std::make_unique<can::PlatformClient>(*transport_);
     upload(shared::ParameterBlock::kIntrinsics, sim::to_intrinsics(camera_));
     upload(shared::ParameterBlock::kGeometry, sim::platform_geometry(strip_, rangers_));
-    std::vector<model::Transform> squares;
-    for (int k = 0; k < strip_.squares; ++k) squares.push_back(transform(sim::strip_T_square(strip_, k)));
-    sensor_ = std::make_unique<PlatformPoseSensor>(*client_, squares);
+    sensor_ = std::make_unique<PlatformPoseSensor>(*client_, strip_square_poses(strip_.squares));
     driver_ = std::make_unique<SimulatedDriver>([this](int index, const std::vector<double>& q) { show(index, q); });
   }
 
@@ -247,6 +245,14 @@ class StereoRig : public SimulatedRig {
 };
 
 }  // namespace
+
+std::vector<model::Transform> strip_square_poses(int squares) {
+  sim::StripSpec strip;
+  strip.squares = squares;
+  std::vector<model::Transform> poses;
+  for (int k = 0; k < strip.squares; ++k) poses.push_back(transform(sim::strip_T_square(strip, k)));
+  return poses;
+}
 
 std::unique_ptr<SimulatedRig> make_simulated_rig(RigKind kind, const model::RobotModel& model,
                                                  const RigOptions& options) {

@@ -61,6 +61,10 @@ class SimulatedRig {
   virtual std::string description() const = 0;
 };
 
+// The poses of a strip's squares (sim::strip_T_square: 4-inch squares in a row, the layout real
+// strips are printed from), as PlatformPoseSensor takes them.
+std::vector<model::Transform> strip_square_poses(int squares);
+
 std::unique_ptr<SimulatedRig> make_simulated_rig(RigKind kind, const model::RobotModel& model,
                                                  const RigOptions& options);
 
