@@ -450,7 +450,7 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
       if (static_cast<int>(rows.size()) * size < needed) {
         throw InputError(data.source + ": after rejecting " + std::to_string(outliers.size()) +
                          " outliers too few measurements remain; the model is probably far from the robot, or the "
-                         "noise level (--sigma) too small");
+                         "noise level too small (the dataset's sigma or covariance columns, or identify --sigma)");
       }
       if (outliers == previous_outliers && !rescaled && pass > 0) break;
       previous_outliers = outliers;
