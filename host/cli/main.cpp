@@ -10,6 +10,7 @@
 #include "host/cli/exercise.hpp"
 #include "host/cli/fiducials.hpp"
 #include "host/cli/identify_command.hpp"
+#include "host/cli/import_command.hpp"
 #include "host/cli/monitor.hpp"
 #include "host/cli/plan_command.hpp"
 #include "host/cli/predict_command.hpp"
@@ -32,6 +33,7 @@ int main(int argc, char** argv) {
   kincal::cli::add_colour_table_command(app, status);
 
   kincal::cli::add_identify_command(app, status);
+  kincal::cli::add_import_command(app, status);
   kincal::cli::add_predict_command(app, status);
   kincal::cli::add_plan_command(app, status);
   kincal::cli::add_urdf_command(app, status);

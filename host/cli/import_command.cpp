@@ -1,0 +1,106 @@
+#include "host/cli/import_command.hpp"
+
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <numbers>
+
+#include "host/model/dataset.hpp"
+#include "host/model/measurement_import.hpp"
+
+namespace kincal::cli {
+
+namespace {
+
+struct ImportArgs {
+  std::string in, out, separator, joint_unit, position_unit, angle_unit = "deg", euler;
+  std::vector<std::string> joints, position, position_std, orientation, orientation_std;
+};
+
+std::array<std::string, 3> three(const std::vector<std::string>& names, const char* option) {
+  if (names.size() != 3)
+    throw model::InputError(std::string(option) + ": expected three column names separated by commas, got " +
+                            std::to_string(names.size()));
+  return {names[0], names[1], names[2]};
+}
+
+int run_import(const ImportArgs& a) {
+  try {
+    model::ImportOptions o;
+    if (!a.separator.empty()) {
+      if (a.separator == "tab" || a.separator == "\\t") {
+        o.separator = '\t';
+      } else if (a.separator.size() == 1) {
+        o.separator = a.separator[0];
+      } else {
+        throw model::InputError("--separator '" + a.separator + "': expected one character or 'tab'");
+      }
+    }
+    o.joints = a.joints;
+    o.joint_unit = model::parse_angle_unit(a.joint_unit);
+    o.position = three(a.position, "--position");
+    o.position_unit = model::parse_length_unit(a.position_unit);
+    if (!a.position_std.empty()) o.position_std = three(a.position_std, "--position-std");
+    if (!a.orientation.empty()) {
+      if (a.euler.empty()) throw model::InputError("--orientation needs --euler (e.g. intrinsic-xyz)");
+      o.angles = three(a.orientation, "--orientation");
+      o.convention = model::parse_euler_convention(a.euler);
+      o.angle_unit = model::parse_angle_unit(a.angle_unit);
+    }
+    if (!a.orientation_std.empty()) o.angle_std = three(a.orientation_std, "--orientation-std");
+    const model::ImportResult r = model::import_measurements_file(a.in, o);
+    std::ofstream file(a.out);
+    if (!file) throw model::InputError(a.out + ": cannot write");
+    model::write_dataset(file, r.data);
+    file.close();
+    if (!file) throw model::InputError(a.out + ": writing failed");
+    std::cout << "kincal import: " << r.data.rows.size() << " rows from " << a.in << " (separator '"
+              << (r.separator == '\t' ? std::string("tab") : std::string(1, r.separator)) << "', decimal "
+              << (r.decimal_comma ? "comma" : "point") << "), " << r.data.joint_count << " joints"
+              << (r.data.has_orientation ? ", position and orientation" : ", positions");
+    if (o.position_std) std::cout << "; median position std " << r.median_position_std_m * 1e3 << " mm (covariance)";
+    if (o.angle_std)
+      std::cout << "; median orientation std " << r.median_angle_std_rad * 180.0 / std::numbers::pi
+                << " deg (not written: the dataset format has no orientation covariance; identify estimates the "
+                   "orientation noise)";
+    std::cout << "\nwrote " << a.out << '\n';
+    return 0;
+  } catch (const model::InputError& e) {
+    std::cerr << "kincal import: " << e.what() << '\n';
+    return 1;
+  }
+}
+
+}  // namespace
+
+void add_import_command(CLI::App& app, int& status) {
+  auto a = std::make_shared<ImportArgs>();
+  auto* cmd = app.add_subcommand("import", "Turn a measurement export (CSV) into a kincal dataset");
+  cmd->add_option("export", a->in, "the measurement export (CSV with one header row)")->required();
+  cmd->add_option("--out,-o", a->out, "the dataset to write (kincal CSV, SI units)")->required();
+  cmd->add_option("--separator", a->separator, "field separator: one character or 'tab' (default: detected)");
+  cmd->add_option("--joints", a->joints, "header names of the joint readings, in the model's order")
+      ->delimiter(',')
+      ->required();
+  cmd->add_option("--joint-unit", a->joint_unit, "unit of the joint readings")
+      ->check(CLI::IsMember({"rad", "deg"}))
+      ->required();
+  cmd->add_option("--position", a->position, "header names of x, y, z")->delimiter(',')->required();
+  cmd->add_option("--position-unit", a->position_unit, "unit of the positions and their std")
+      ->check(CLI::IsMember({"m", "mm"}))
+      ->required();
+  cmd->add_option("--position-std", a->position_std, "header names of the std of x, y, z (-> covariance columns)")
+      ->delimiter(',');
+  cmd->add_option("--orientation", a->orientation, "header names of the three Euler angles, in the convention's order")
+      ->delimiter(',');
+  cmd->add_option("--euler", a->euler,
+                  "Euler convention: intrinsic-xyz (R = Rx Ry Rz), extrinsic-xyz (R = Rz Ry Rx), ...");
+  cmd->add_option("--angle-unit", a->angle_unit, "unit of the Euler angles and their std (default deg)")
+      ->check(CLI::IsMember({"rad", "deg"}));
+  cmd->add_option("--orientation-std", a->orientation_std,
+                  "header names of the Euler angles' std (checked, summarized)")
+      ->delimiter(',');
+  cmd->callback([a, &status] { status = run_import(*a); });
+}
+
+}  // namespace kincal::cli

@@ -1,0 +1,231 @@
+#include "host/model/measurement_import.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <istream>
+#include <map>
+#include <numbers>
+
+namespace kincal::model {
+
+namespace {
+
+constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+
+std::string trim(std::string_view s) {
+  std::size_t b = 0, e = s.size();
+  while (b < e && (s[b] == ' ' || s[b] == '\t' || s[b] == '\r' || s[b] == '"')) ++b;
+  while (e > b && (s[e - 1] == ' ' || s[e - 1] == '\t' || s[e - 1] == '\r' || s[e - 1] == '"')) --e;
+  return std::string(s.substr(b, e - b));
+}
+
+std::vector<std::string> split(const std::string& line, char separator) {
+  std::vector<std::string> fields;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t at = line.find(separator, start);
+    fields.push_back(
+        trim(std::string_view(line).substr(start, at == std::string::npos ? std::string::npos : at - start)));
+    if (at == std::string::npos) break;
+    start = at + 1;
+  }
+  return fields;
+}
+
+char detect_separator(const std::string& header) {
+  char best = ',';
+  long most = 0;
+  for (char c : {';', '\t', ','}) {
+    const long count = std::count(header.begin(), header.end(), c);
+    if (count > most) {
+      most = count;
+      best = c;
+    }
+  }
+  return best;
+}
+
+[[noreturn]] void fail(const std::string& source, int line, std::size_t column, const std::string& what) {
+  throw InputError(source + ":" + std::to_string(line) + ":" + std::to_string(column + 1) + ": " + what);
+}
+
+struct Table {
+  const std::string& source;
+  std::map<std::string, std::size_t> index;
+  std::vector<std::string> names;
+  int header_line = 0;
+  char decimal = '.';
+
+  std::size_t column(const std::string& name) const {
+    const auto it = index.find(name);
+    if (it == index.end()) {
+      std::string known;
+      for (const std::string& n : names) known += (known.empty() ? "'" : ", '") + n + "'";
+      fail(source, header_line, names.size(), "no column named '" + name + "' in the header (it has " + known + ")");
+    }
+    return it->second;
+  }
+
+  double number(const std::vector<std::string>& fields, std::size_t c, int line) const {
+    std::string text = fields[c];
+    if (decimal == ',') std::replace(text.begin(), text.end(), ',', '.');
+    double v = 0.0;
+    const char* first = text.data();
+    const char* last = text.data() + text.size();
+    if (first != last && *first == '+') ++first;
+    const auto [end, ec] = std::from_chars(first, last, v);
+    if (text.empty()) fail(source, line, c, "column '" + names[c] + "' is empty");
+    if (ec != std::errc() || end != last)
+      fail(source, line, c, "column '" + names[c] + "': '" + fields[c] + "' is not a number");
+    if (!std::isfinite(v)) fail(source, line, c, "column '" + names[c] + "' is not finite");
+    return v;
+  }
+};
+
+std::array<std::size_t, 3> columns(const Table& t, const std::array<std::string, 3>& names) {
+  return {t.column(names[0]), t.column(names[1]), t.column(names[2])};
+}
+
+double median_of(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+}  // namespace
+
+EulerConvention parse_euler_convention(const std::string& text) {
+  EulerConvention c;
+  const auto dash = text.find('-');
+  const std::string kind = text.substr(0, dash);
+  const std::string order = dash == std::string::npos ? "" : text.substr(dash + 1);
+  const bool good_kind = kind == "intrinsic" || kind == "extrinsic";
+  bool good_order = order.size() == 3;
+  for (std::size_t i = 0; good_order && i < 3; ++i) {
+    const char a = order[i];
+    good_order = a == 'x' || a == 'y' || a == 'z';
+    if (good_order) c.axes[i] = a - 'x';
+    if (good_order && i > 0) good_order = order[i] != order[i - 1];
+  }
+  if (!good_kind || !good_order)
+    throw InputError(
+        "Euler convention '" + text +
+        "': expected intrinsic-ABC or extrinsic-ABC with axes x, y, z (e.g. intrinsic-xyz, extrinsic-zyx)");
+  c.intrinsic = kind == "intrinsic";
+  return c;
+}
+
+LengthUnit parse_length_unit(const std::string& text) {
+  if (text == "m") return LengthUnit::m;
+  if (text == "mm") return LengthUnit::mm;
+  throw InputError("length unit '" + text + "': expected m or mm");
+}
+
+AngleUnit parse_angle_unit(const std::string& text) {
+  if (text == "rad") return AngleUnit::rad;
+  if (text == "deg") return AngleUnit::deg;
+  throw InputError("angle unit '" + text + "': expected rad or deg");
+}
+
+Eigen::Matrix3d rotation_from_euler(const EulerConvention& c, const Eigen::Vector3d& angles_rad) {
+  Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
+  for (int k = 0; k < 3; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    const Eigen::Matrix3d step = Eigen::AngleAxisd(angles_rad(k), Eigen::Vector3d::Unit(c.axes[i])).toRotationMatrix();
+    r = c.intrinsic ? Eigen::Matrix3d(r * step) : Eigen::Matrix3d(step * r);
+  }
+  return r;
+}
+
+ImportResult import_measurements(std::istream& in, const std::string& source, const ImportOptions& o) {
+  if (o.joints.empty()) throw InputError(source + ": no joint columns named");
+  ImportResult result;
+  result.data.source = source;
+  result.data.joint_count = static_cast<int>(o.joints.size());
+  result.data.has_orientation = o.angles.has_value();
+  result.data.noise = o.position_std ? NoiseColumns::covariance : NoiseColumns::none;
+  const double length = o.position_unit == LengthUnit::mm ? 1e-3 : 1.0;
+  const double joint_angle = o.joint_unit == AngleUnit::deg ? kRadPerDeg : 1.0;
+  const double angle = o.angle_unit == AngleUnit::deg ? kRadPerDeg : 1.0;
+
+  Table t{source, {}, {}, 0, '.'};
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (!trim(line).empty()) break;
+  }
+  if (trim(line).empty()) throw InputError(source + ": empty file (expected a header row)");
+  t.header_line = number;
+  result.separator = o.separator != 0 ? o.separator : detect_separator(line);
+  t.names = split(line, result.separator);
+  for (std::size_t i = 0; i < t.names.size(); ++i)
+    if (!t.names[i].empty() && !t.index.emplace(t.names[i], i).second)
+      fail(source, number, i, "header: column '" + t.names[i] + "' appears twice");
+  std::vector<std::size_t> joint_columns;
+  for (const std::string& j : o.joints) joint_columns.push_back(t.column(j));
+  const auto position = columns(t, o.position);
+  const auto position_std = o.position_std ? std::optional(columns(t, *o.position_std)) : std::nullopt;
+  const auto angles = o.angles ? std::optional(columns(t, *o.angles)) : std::nullopt;
+  const auto angle_std = o.angle_std ? std::optional(columns(t, *o.angle_std)) : std::nullopt;
+  if (angle_std && !angles) throw InputError(source + ": orientation standard deviations without orientation columns");
+
+  std::vector<double> position_stds, angle_stds;
+  while (std::getline(in, line)) {
+    ++number;
+    if (trim(line).empty()) continue;
+    const std::vector<std::string> fields = split(line, result.separator);
+    if (fields.size() != t.names.size())
+      fail(source, number, std::min(fields.size(), t.names.size()),
+           "expected " + std::to_string(t.names.size()) + " fields as in the header, found " +
+               std::to_string(fields.size()));
+    if (result.separator != ',' && t.decimal == '.')
+      for (const std::string& f : fields)
+        if (f.find(',') != std::string::npos) t.decimal = ',';
+    Measurement m;
+    m.line = number;
+    for (std::size_t c : joint_columns) m.q.push_back(t.number(fields, c, number) * joint_angle);
+    for (int k = 0; k < 3; ++k)
+      m.position(k) = t.number(fields, position[static_cast<std::size_t>(k)], number) * length;
+    if (position_std) {
+      Matrix3 c = Matrix3::Zero();
+      for (int k = 0; k < 3; ++k) {
+        const std::size_t col = (*position_std)[static_cast<std::size_t>(k)];
+        const double s = t.number(fields, col, number) * length;
+        if (!(s > 0.0)) fail(source, number, col, "column '" + t.names[col] + "': a standard deviation must be > 0");
+        c(k, k) = s * s;
+        position_stds.push_back(s);
+      }
+      m.covariance = c;
+    }
+    if (angles) {
+      Eigen::Vector3d a;
+      for (int k = 0; k < 3; ++k) a(k) = t.number(fields, (*angles)[static_cast<std::size_t>(k)], number) * angle;
+      m.orientation = Eigen::Quaterniond(rotation_from_euler(o.convention, a));
+      if (angle_std) {
+        for (std::size_t col : *angle_std) {
+          const double s = t.number(fields, col, number) * angle;
+          if (!(s > 0.0)) fail(source, number, col, "column '" + t.names[col] + "': a standard deviation must be > 0");
+          angle_stds.push_back(s);
+        }
+      }
+    }
+    result.data.rows.push_back(std::move(m));
+  }
+  if (result.data.rows.empty()) throw InputError(source + ": no data rows after the header");
+  result.decimal_comma = t.decimal == ',';
+  result.median_position_std_m = median_of(position_stds);
+  result.median_angle_std_rad = median_of(angle_stds);
+  return result;
+}
+
+ImportResult import_measurements_file(const std::string& path, const ImportOptions& options) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open the measurement export");
+  return import_measurements(in, path, options);
+}
+
+}  // namespace kincal::model

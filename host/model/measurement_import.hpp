@@ -1,0 +1,77 @@
+// Measurement exports as they come (laser-tracker software, spreadsheets) into a kincal dataset
+// (dataset.hpp): what `kincal import` runs.
+//
+// The user names everything that cannot be guessed safely: which header names hold the joint
+// readings, the position and (optionally) the orientation; the unit of each (mm or m; deg or rad);
+// the Euler convention of the orientation; optionally the per-component standard deviations.
+// Guessed only where no ambiguity exists: the separator (the header line's most frequent of ';',
+// tab and ','; or given), and the decimal separator (a comma in a field is a decimal comma unless
+// ',' separates the fields).
+//
+// Euler conventions: "intrinsic-ABC" or "extrinsic-ABC" with ABC three axis letters (x, y, z, no
+// two neighbours equal), the angles given in the order of the letters:
+//   intrinsic-xyz  R = Rx(a) * Ry(b) * Rz(c)   (rotate about x, then the new y, then the new z)
+//   extrinsic-xyz  R = Rz(c) * Ry(b) * Rx(a)   (rotate about the fixed x, then fixed y, then z)
+// R is device_R_tool (the tool's axes in the device frame), as the dataset's quaternion.
+//
+// Standard deviations: the position's three become the diagonal covariance columns (m^2). The
+// dataset format carries no orientation covariance, so orientation standard deviations are read,
+// checked and summarized (ImportResult) but not written; identify estimates the orientation noise.
+//
+// Errors (InputError "FILE:LINE:COLUMN: what", COLUMN 1-based, the header name in the message):
+// a named column missing or named twice in the header, a row with the wrong number of fields, a
+// field that is not a finite number, a standard deviation <= 0, a bad unit or convention name.
+#pragma once
+
+#include <array>
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "host/model/dataset.hpp"
+
+namespace kincal::model {
+
+enum class LengthUnit { m, mm };
+
+struct EulerConvention {
+  bool intrinsic = true;
+  std::array<int, 3> axes{0, 1, 2};  // 0 = x, 1 = y, 2 = z
+};
+
+// "intrinsic-xyz" etc.; throws InputError naming the text.
+EulerConvention parse_euler_convention(const std::string& text);
+LengthUnit parse_length_unit(const std::string& text);  // "m" or "mm"
+AngleUnit parse_angle_unit(const std::string& text);    // "rad" or "deg"
+
+// device_R_tool from three angles (rad) in the convention's order.
+Eigen::Matrix3d rotation_from_euler(const EulerConvention& convention, const Eigen::Vector3d& angles_rad);
+
+struct ImportOptions {
+  char separator = 0;                        // 0: detect from the header line
+  std::vector<std::string> joints;           // header names, in the model's joint order
+  AngleUnit joint_unit = AngleUnit::rad;     // revolute joints (all joints treated alike)
+  std::array<std::string, 3> position;       // x, y, z
+  LengthUnit position_unit = LengthUnit::m;  // also the unit of position_std
+  std::optional<std::array<std::string, 3>> position_std;
+  std::optional<std::array<std::string, 3>> angles;  // in the convention's order
+  EulerConvention convention;
+  AngleUnit angle_unit = AngleUnit::rad;  // also the unit of angle_std
+  std::optional<std::array<std::string, 3>> angle_std;
+};
+
+struct ImportResult {
+  Dataset data;
+  char separator = ',';
+  bool decimal_comma = false;
+  double median_position_std_m = 0.0;  // over rows and components; 0 without std columns
+  double median_angle_std_rad = 0.0;   // read, not written (see above)
+};
+
+ImportResult import_measurements(std::istream& in, const std::string& source, const ImportOptions& options);
+ImportResult import_measurements_file(const std::string& path, const ImportOptions& options);
+
+}  // namespace kincal::model
