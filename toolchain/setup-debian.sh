@@ -4,7 +4,7 @@
 set -eu
 
 packages="
-  cmake ninja-build g++ python3 clang-format
+  cmake ninja-build g++ ccache python3 clang-format
   libeigen3-dev libcli11-dev doctest-dev
   gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib libnewlib-arm-none-eabi qemu-system-arm
   libopencv-dev nlohmann-json3-dev opencv-doc clang libclang-rt-14-dev

@@ -9,10 +9,14 @@ mount -t sysfs sys /sys
 mount -t devtmpfs dev /dev
 mount -t tmpfs tmp /tmp
 export ASAN_OPTIONS=detect_leaks=0  # leaks are checked by the native test run; LSan needs ptrace here
+# Progress on the console as it happens, with seconds since boot, so a run cut off by its timeout
+# shows the step it stopped in.
+step() { echo "VMTEST step $1 at $(cut -d' ' -f1 /proc/uptime) s"; }
 ok() { echo "VMTEST ok $1"; }
 bad() { echo "VMTEST FAIL $1"; }
 show() { echo "---- $1"; cat "$1"; echo "----"; }
 
+step "init: loading the CAN modules"
 for m in can can-raw can-isotp can-dev vcan; do insmod /modules/$m.ko || bad "insmod_$m"; done
 ip link add dev vcan0 type vcan && ip link set vcan0 mtu 72 && ip link set up vcan0 && ok vcan0_up || bad vcan0_up
 
@@ -39,13 +43,16 @@ expect_frame() {
 }
 
 # 1. Our platform and our client through the whole scenario, classic CAN then CAN FD; candump logs.
+step "1: platform and client, classic CAN then CAN FD"
 candump -L vcan0 >/tmp/session.log &
 CANDUMP=$!
 platform
+step "1a: kincal exercise, classic CAN"
 kincal exercise --can vcan0 --measurements 10 --corrections 200 --correction-timeout-ms 3000 >/tmp/ex1.txt 2>&1 && ok scenario_classic ||
   { show /tmp/ex1.txt; bad scenario_classic; }
 stop_platform platform_stops_cleanly
 platform --fd
+step "1b: kincal exercise, CAN FD"
 kincal exercise --can vcan0 --fd --measurements 10 --corrections 200 --correction-timeout-ms 3000 >/tmp/ex2.txt 2>&1 && ok scenario_fd ||
   { show /tmp/ex2.txt; bad scenario_fd; }
 # The parameters uploaded in round 1 were loaded from storage by the restarted platform:
@@ -59,6 +66,7 @@ head -3 /tmp/ex1.txt
 grep "median round trip" /tmp/ex1.txt /tmp/ex2.txt
 
 # 2. candump's log decodes with our reader and monitor, completely.
+step "2: the candump log through our reader and monitor"
 kincal monitor --replay /tmp/session.log >/tmp/monitor.txt 2>&1 && tail -1 /tmp/monitor.txt | grep -q " 0 malformed" &&
   [ "$(wc -l </tmp/session.log)" -gt 800 ] && ok candump_log_decodes || { tail -5 /tmp/monitor.txt; bad candump_log_decodes; }
 grep -q "MeasurementReport seq=" /tmp/monitor.txt && grep -q "ParameterWrite block=4" /tmp/monitor.txt &&
@@ -66,6 +74,7 @@ grep -q "MeasurementReport seq=" /tmp/monitor.txt && grep -q "ParameterWrite blo
 echo "candump log: $(wc -l </tmp/session.log) frames; $(tail -1 /tmp/monitor.txt)"
 
 # 3. can-utils as independent ISO-TP peers of the firmware's ISO-TP (padding 0xCC).
+step "3: can-utils ISO-TP peers"
 platform
 expect_frame isotpsend_to_platform 130:7FF "130#01" sh -c "isotpsend -s 150 -d 158 -p CC vcan0 </vm/intrinsics_write.hex"
 timeout 5 isotprecv -s 150 -d 158 -p CC vcan0 >/tmp/recv.txt &
@@ -77,6 +86,7 @@ grep -q "^82 01 02 00 28 00" /tmp/recv.txt && ok platform_to_isotprecv || { show
 cmp -s /tmp/recv.txt /vm/intrinsics_data.txt && ok isotprecv_bytes_exact || { show /tmp/recv.txt; bad isotprecv_bytes_exact; }
 
 # 4. Injected frames get defined responses (ErrorReport 0x140, reason in the first byte).
+step "4: injected frames"
 expect_frame wrong_length 140:7FF "140#02" cansend vcan0 100#0100
 expect_frame unknown_id 140:7FF "140#01" cansend vcan0 17E#00
 expect_frame reserved_bits 140:7FF "140#04" cansend vcan0 100#80
@@ -92,6 +102,7 @@ wait $C
 grep -q "140#" /tmp/other.txt && bad foreign_ids_ignored || ok foreign_ids_ignored
 
 # 5. A flood of 20,000 malformed frames: reports stay rate-limited, the platform keeps working.
+step "5: a flood of malformed frames"
 candump -L vcan0,140:7FF >/tmp/flood.txt &
 C=$!
 start=$(date +%s)
@@ -107,5 +118,6 @@ kincal exercise --can vcan0 --measurements 2 --corrections 20 --correction-timeo
   { show /tmp/ex3.txt; bad platform_alive_after_flood; }
 stop_platform platform_stops_cleanly_after_flood
 
+step done
 echo "VMTEST DONE"
 poweroff -f

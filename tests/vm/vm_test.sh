@@ -4,8 +4,9 @@
 # libraries, the CAN modules, our binaries and tests/vm/init.sh as /init), then reads the
 # VMTEST lines init.sh prints on the serial console.
 #   vm_test.sh PLATFORM_BINARY KINCAL_BINARY WORK_DIR
-# Exit 0 when every check passed; otherwise 1 and the console log. Bounded by KINCAL_VM_TIMEOUT
-# (seconds, default 170).
+# Exit 0 when every check passed; otherwise 1 and the console log. Progress lines (VMTEST step)
+# are printed as the VM runs. Bounded by KINCAL_VM_TIMEOUT (seconds, default 540: about 100 s on
+# an idle 2-core machine, 2-3x that when another program keeps a core busy).
 set -euo pipefail
 platform=$1 kincal=$2 work=$3
 here=$(cd "$(dirname "$0")" && pwd)
@@ -57,14 +58,18 @@ PY
 
 (cd "$root" && find . | cpio -o -H newc --quiet | gzip -1) >"$work/initramfs.gz"
 log=$work/console.log
+timeout_s=${KINCAL_VM_TIMEOUT:-540}
+echo "vm_test: initramfs ready after $SECONDS s; booting $kernel (TCG, timeout $timeout_s s)"
+# The console goes to the log and, as it comes, the progress and result lines to our output: a
+# run cut off by ctest's timeout still shows how far it got.
 set +e
-timeout --kill-after=5 "${KINCAL_VM_TIMEOUT:-170}" qemu-system-x86_64 -accel tcg -m 2048 -smp 1 -nographic \
+timeout --kill-after=5 "$timeout_s" qemu-system-x86_64 -accel tcg -m 2048 -smp 1 -nographic \
   -no-reboot -kernel "$kernel" -initrd "$work/initramfs.gz" \
-  -append "console=ttyS0 quiet loglevel=3 panic=-1 rdinit=/init" >"$log" 2>&1
-qemu_status=$?
+  -append "console=ttyS0 quiet loglevel=3 panic=-1 rdinit=/init" 2>&1 |
+  sed -u 's/\r$//' | tee "$log.txt" | grep --line-buffered -E "^(VMTEST|flood:|candump log:|scenario:|/tmp/ex)"
+qemu_status=${PIPESTATUS[0]}
 set -e
-tr -d '\r' <"$log" >"$log.txt"
-grep -E "^(VMTEST|flood:|candump log:|scenario:|/tmp/ex)" "$log.txt" || true
+echo "vm_test: the VM ended after $SECONDS s (qemu exit $qemu_status)"
 if [ $qemu_status -ne 0 ] || ! grep -q "^VMTEST DONE" "$log.txt" || grep -q "^VMTEST FAIL" "$log.txt"; then
   echo "vm_test: FAILED (qemu exit $qemu_status); console log $log.txt:"
   cat "$log.txt"
