@@ -1,33 +1,45 @@
 // Circle-point analysis (after Kapucu & Baysec, done with the statistics they left out):
 // single-joint sweeps in the data -> one 3-D circle (revolute) or line (prismatic) per joint ->
-// joint axes -> a DH/Doty model (model/axes.hpp).
+// joint axes -> a DH/Doty model (model/axes.hpp). The same sweep fits serve `kincal discover`
+// (discover.hpp), which has no model and takes each joint's type from the test below.
 //
-// Sweeps: maximal runs of consecutive rows in which exactly one joint's reading changes, with
-// at least 4 rows (the test below needs 3 m - 9 > 0). With several sweeps of a joint the longest
-// is used (noted).
+// Sweeps: maximal runs of consecutive rows in which exactly one joint's reading changes (by more
+// than still_tolerance), with at least 4 rows. With several sweeps of a joint the longest is used
+// (noted). Steps may be uneven, larger than half a turn, and a sweep may span several turns:
+// every fit uses the joint readings q_k as the known angles (stroke), never the order of the arc.
 //
-// Per sweep, with the readings q_k of the moving joint (the commanded increments):
-//   classify  fit p = c + v q and p = c + v q + w q^2 by weighted least squares; the joint
-//             moves on a curve if the quadratic term is significant: chi-square test of the
-//             drop in whitened residual (3 dof) when every point has a covariance, F test
-//             (3, 3m - 9) otherwise; significance 1e-3. A result that contradicts the model's
-//             joint type is an error (the message gives the p-value).
-//   revolute  p_k = c + r R [cos q_k, sin q_k, 0]^T over all points: linear weighted least
-//             squares of p = c + a cos q + b sin q for a start, then Ceres (automatic
-//             derivatives) on the constrained model -- centre c, rotation R (angle-axis), radius
-//             r -- with each point whitened by its covariance and a Huber loss. The axis is
-//             R's z through c, signed so positive q turns counter-clockwise about it.
-//   prismatic p_k = c + u q_k, |u| = 1 (metres of travel per metre of reading), the same way.
-//   outliers  points whose whitened squared residual exceeds the chi-square(3) quantile
-//             1 - outlier_probability are dropped and the sweep refitted, until none is (at
-//             most 5 rounds; a sweep must keep 4 points). Without covariances the noise is the
-//             residual RMS (median-based while rejecting), so rejection is scale-free.
-// Axes measured with earlier joints away from zero are carried back to all-zero readings by
-// the inverse joint motions about/along the axes already found (product of exponentials), and
-// the tool point (frame) at zero readings is the mean of every sweep point carried back the same
-// way. chain_from_axes() then writes the model (Doty where consecutive axes are nearly parallel).
+// Per sweep, with each point whitened by its covariance (or by sigma_m, or by 1: the scale is
+// always estimated from the data, the covariance gives only its shape):
+//   screen    the general model p = c + v q + a cos q + b sin q (12 parameters, linear) holds
+//             for both joint types. Points are judged by their studentized deleted residual
+//             under it (leverage included; F(3, dof - 3), Bonferroni over the sweep): the worst
+//             is dropped while its family-wise p-value is below outlier_probability, at most
+//             max_rejected_fraction of the sweep. Needs 6 points; smaller sweeps are not screened.
+//   type      two tests against the general model, exact F tests for Gaussian noise:
+//             p_line   H0 prismatic: the points are affine in q (p = c + v q);
+//             p_circle H0 revolute: the points lie on a circle at angle q (7 parameters; nonlinear,
+//                      so the F distribution holds to first order).
+//             With too few points for an F test (dof 0) and a known noise level (covariance on
+//             every row, or sigma_m) the drop in whitened residual is taken as chi-square. The
+//             verdict is revolute when only the line is rejected at `significance`, prismatic
+//             when only the circle is; otherwise (both fit: a short sweep; or neither) the smaller
+//             Akaike criterion decides and the verdict is marked inconclusive.
+//   fit       revolute: p_k = c + r R [cos q_k, sin q_k, 0]^T (linear start, then Ceres on centre,
+//             rotation, radius); the axis is R's z through c, signed so positive q turns
+//             counter-clockwise about it. prismatic: p_k = c + u q_k, |u| = 1 (metres of travel
+//             per metre of reading). Weighted least squares on the screened points.
+//   spread    the fit's covariance (Gauss-Newton, scaled by the residual variance over its dof)
+//             gives the axis direction's and position's standard deviations and the radius's.
+// Axes measured with earlier joints away from zero are carried back to all-zero readings by the
+// inverse joint motions about/along the axes already found (product of exponentials), and the
+// tool point (frame) at zero readings is the mean of every sweep point carried back the same way.
+//
+// A joint type that disagrees with the model file is never a refusal: cpa fits the declared type
+// and notes the evidence (both p-values).
 #pragma once
 
+#include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -42,25 +54,68 @@ struct Sweep {
   std::vector<int> rows;  // indices into the dataset, in file order
 };
 
-std::vector<Sweep> find_sweeps(const model::Dataset& data);
+// A joint whose reading changes by no more than still_tolerance (rad or m) counts as still.
+std::vector<Sweep> find_sweeps(const model::Dataset& data, double still_tolerance = 0.0);
 
 struct CpaOptions {
-  double sigma_m = 0.0;  // for rows without covariance; 0: estimate per sweep
-  double outlier_probability = 1e-3;
-  double significance = 1e-3;
+  double sigma_m = 0.0;                // for rows without covariance (shape only: the scale is estimated)
+  double outlier_probability = 1e-3;   // family-wise per sweep
+  double max_rejected_fraction = 0.2;  // of a sweep's points
+  double significance = 0.01;          // of the joint-type tests
   double parallel_tolerance_rad = 0.1;
+  double still_tolerance = 0.0;
+};
+
+struct TypeTest {
+  bool tested = false;    // false: too few points and unknown noise; the verdict is by fit only
+  double p_line = 1.0;    // of "affine in q" (prismatic)
+  double p_circle = 1.0;  // of "on a circle at angle q" (revolute)
+  int residual_dof = 0;   // of the general model
+  core::JointType verdict = core::JointType::revolute;
+  bool conclusive = false;  // exactly one of the two hypotheses rejected
 };
 
 struct SweepFit {
   int joint = 0;
-  bool curved = false;    // the classification
-  double p_value = 1.0;   // of "no curvature"
-  model::AxisLine axis;   // as measured, device frame
-  double radius_m = 0.0;  // revolute
+  core::JointType type = core::JointType::revolute;  // fitted (declared, or the verdict)
+  bool curved = false;                               // type == revolute
+  double p_value = 1.0;                              // test.p_line
+  TypeTest test;
+  bool contradicts_model = false;  // cpa: the declared type's hypothesis rejected
+  model::AxisLine axis;            // as measured (device frame, the sweep's other readings)
+  double radius_m = 0.0;           // revolute
+  // 1-sigma spreads: angle of the direction, position of the line normal to it, radius.
+  double direction_stddev_rad = 0.0, position_stddev_m = 0.0, radius_stddev_m = 0.0;
+  // The axis's covariance in the basis (position along n1, n2; direction along n1, n2), where
+  // n1, n2 are the columns of normal_basis, both normal to the direction.
+  Eigen::Matrix4d axis_covariance = Eigen::Matrix4d::Zero();
+  Eigen::Matrix<double, 3, 2> normal_basis = Eigen::Matrix<double, 3, 2>::Zero();
+  double noise_scale = 1.0;         // residual RMS in whitened units (1: the stated covariance holds)
+  double rms_m = 0.0;               // of the fit's residuals
+  double q_min = 0.0, q_max = 0.0;  // readings swept (range of mobility observed)
+  int first_line = 0, last_line = 0;
   int used = 0;
   std::vector<int> rejected_lines;
-  double rms_m = 0.0;  // of the fit's residuals
 };
+
+// Every joint's sweep fitted (declared[j], or the test's verdict where it is empty), the axes
+// carried back to all-zero readings and the tool at zero readings.
+struct SweepAnalysis {
+  std::vector<SweepFit> fits;                       // one per joint
+  std::vector<std::vector<double>> sweep_readings;  // the other joints' readings during each sweep
+  std::vector<model::AxisLine> zero_axes;
+  model::Transform tool_home;  // device_T_tool at all-zero readings (rotation: identity without orientations)
+  std::vector<std::string> notes;
+};
+
+// Throws model::InputError naming the joint without a sweep.
+SweepAnalysis analyse_sweeps(const model::Dataset& data, std::span<const std::optional<core::JointType>> declared,
+                             bool use_orientation, const CpaOptions& options);
+
+// Axes measured during sweeps (measured[j] with the readings sweep_readings[j]) carried back to
+// all-zero readings.
+std::vector<model::AxisLine> axes_at_zero(std::span<const model::AxisLine> measured,
+                                          std::span<const std::vector<double>> sweep_readings);
 
 struct CpaResult {
   RobotModel model;
@@ -68,7 +123,10 @@ struct CpaResult {
   std::vector<std::string> notes;
 };
 
-// Throws model::InputError (no sweep of a joint, a sweep that contradicts the joint type).
+// Throws model::InputError (no sweep of a joint, joint count).
 CpaResult circle_point_analysis(const RobotModel& nominal, const model::Dataset& data, const CpaOptions& options);
+
+// One line about a sweep fit for printouts: type, p-values, points, radius, spreads, rejections.
+std::string describe(const SweepFit& fit);
 
 }  // namespace kincal::identify
