@@ -11,6 +11,7 @@ packages="
   python3-canmatrix can-utils busybox-static cpio qemu-system-x86 linux-image-amd64
   openocd chromium
   libceres-dev libyaml-cpp-dev
+  libtinyxml2-dev liburdfdom-dev liburdfdom-tools
 "
 
 missing=""
