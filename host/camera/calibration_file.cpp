@@ -5,19 +5,20 @@
 
 #include <opencv2/core/eigen.hpp>
 
+#include "host/files/output_file.hpp"
+
 namespace kincal::camera {
 
 namespace {
 
-cv::FileStorage open_file(const std::string& path, int mode) {
+cv::FileStorage open_for_reading(const std::string& path) {
   cv::FileStorage fs;
   try {
-    fs.open(path, mode | cv::FileStorage::FORMAT_YAML);
+    fs.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);
   } catch (const cv::Exception& e) {
     throw CalibrationError(path + ": not an OpenCV YAML file (" + e.what() + ")");
   }
-  if (!fs.isOpened())
-    throw CalibrationError(path + (mode == cv::FileStorage::READ ? ": cannot read" : ": cannot write"));
+  if (!fs.isOpened()) throw CalibrationError(path + ": cannot read");
   return fs;
 }
 
@@ -95,10 +96,19 @@ std::uint16_t to_u16(int v, const char* name) {
   return static_cast<std::uint16_t>(v);
 }
 
+// Every calibration file is composed in memory and written whole (host/files/output_file.hpp).
+void write_storage(cv::FileStorage& fs, const std::string& path) {
+  try {
+    files::write_file_atomically(path, fs.releaseAndGetString());
+  } catch (const files::OutputError& e) {
+    throw CalibrationError(e.what());
+  }
+}
+
 }  // namespace
 
 void save_camera(const std::string& path, const IntrinsicCalibration& c, const std::string& board_text) {
-  cv::FileStorage fs = open_file(path, cv::FileStorage::WRITE);
+  cv::FileStorage fs(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
   fs << "image_width" << c.camera.image_size.width << "image_height" << c.camera.image_size.height;
   fs << "board" << board_text;
   fs << "nr_of_frames" << c.views_used;
@@ -111,17 +121,18 @@ void save_camera(const std::string& path, const IntrinsicCalibration& c, const s
   }
   fs << "per_view_reprojection_errors" << cv::Mat(per_view, true);
   fs << "std_deviations_intrinsics" << cv::Mat(cv::Matx<double, 1, 9>(c.std_dev.data()));
+  write_storage(fs, path);
 }
 
 CameraModel load_camera(const std::string& path) {
-  cv::FileStorage fs = open_file(path, cv::FileStorage::READ);
+  cv::FileStorage fs = open_for_reading(path);
   const cv::Mat k = read_matrix(fs, path, "camera_matrix", 3, 3);
   const cv::Mat d = read_matrix(fs, path, "distortion_coefficients", 1, 5);
   return camera_from(k, d, read_size(fs, path));
 }
 
 void save_stereo(const std::string& path, const StereoCalibration& c) {
-  cv::FileStorage fs = open_file(path, cv::FileStorage::WRITE);
+  cv::FileStorage fs(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
   fs << "image_width" << c.left.image_size.width << "image_height" << c.left.image_size.height;
   fs << "M1" << cv::Mat(c.left.camera_matrix) << "D1" << c.left.distortion_mat();
   fs << "M2" << cv::Mat(c.right.camera_matrix) << "D2" << c.right.distortion_mat();
@@ -131,10 +142,11 @@ void save_stereo(const std::string& path, const StereoCalibration& c) {
   fs << "P1" << cv::Mat(c.projection_left) << "P2" << cv::Mat(c.projection_right);
   fs << "Q" << cv::Mat(c.disparity_to_depth);
   fs << "baseline_m" << c.baseline_m << "avg_reprojection_error" << c.rms_px;
+  write_storage(fs, path);
 }
 
 StereoCalibration load_stereo(const std::string& path) {
-  cv::FileStorage fs = open_file(path, cv::FileStorage::READ);
+  cv::FileStorage fs = open_for_reading(path);
   const cv::Size size = read_size(fs, path);
   StereoCalibration c;
   const cv::Mat m1 = read_matrix(fs, path, "M1", 3, 3), d1 = read_matrix(fs, path, "D1", 1, 5);
@@ -156,16 +168,17 @@ StereoCalibration load_stereo(const std::string& path) {
 }
 
 void save_hand_eye(const std::string& path, const HandEyeCalibration& c) {
-  cv::FileStorage fs = open_file(path, cv::FileStorage::WRITE);
+  cv::FileStorage fs(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
   fs << "gripper_T_camera" << matrix_of(c.gripper_T_camera);
   fs << "base_T_target" << matrix_of(c.base_T_target);
   fs << "method" << c.start_method;
   fs << "reprojection_rms_before_px" << c.rms_before_px << "reprojection_rms_after_px" << c.rms_after_px;
   fs << "poses" << c.poses_used;
+  write_storage(fs, path);
 }
 
 HandEyeCalibration load_hand_eye(const std::string& path) {
-  cv::FileStorage fs = open_file(path, cv::FileStorage::READ);
+  cv::FileStorage fs = open_for_reading(path);
   HandEyeCalibration c;
   c.gripper_T_camera = isometry_of(read_matrix(fs, path, "gripper_T_camera", 4, 4), path, "gripper_T_camera");
   c.base_T_target = isometry_of(read_matrix(fs, path, "base_T_target", 4, 4), path, "base_T_target");

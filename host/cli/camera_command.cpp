@@ -13,6 +13,8 @@
 #include "host/camera/stereo.hpp"
 #include "host/capture/frame_source.hpp"
 #include "host/capture/stereo_source.hpp"
+#include "host/cli/number_options.hpp"
+#include "host/files/output_file.hpp"
 #include "host/model/dataset.hpp"
 
 namespace kincal::cli {
@@ -26,6 +28,18 @@ struct CameraArgs {
   double tolerance_s = 0.5;
   int min_corners = 6;
 };
+
+// Refuses an output over any input (host/files/output_file.hpp) before any work.
+void refuse_overwriting_inputs(const CameraArgs& a) {
+  std::vector<files::NamedPath> inputs{{"--camera", a.camera},
+                                       {"--poses", a.poses},
+                                       {"--left-camera", a.left_camera},
+                                       {"--right-camera", a.right_camera}};
+  for (const std::string& p : a.images) inputs.push_back({"image", p});
+  for (const std::string& p : a.left) inputs.push_back({"--left", p});
+  for (const std::string& p : a.right) inputs.push_back({"--right", p});
+  files::refuse_overwriting({{"-o", a.out}}, inputs);
+}
 
 std::vector<camera::BoardDetection> detect_all(const camera::Board& board, const std::vector<std::string>& inputs,
                                                int min_corners) {
@@ -109,8 +123,9 @@ int run_hand_eye(const CameraArgs& a) {
 
 // Runs a command, turning every error into a message on stderr and exit status 1.
 template <typename F>
-void guarded(const char* name, int& status, F&& run) {
+void guarded(const char* name, int& status, const CameraArgs& a, F&& run) {
   try {
+    refuse_overwriting_inputs(a);
     status = run();
   } catch (const std::exception& e) {
     std::cerr << "kincal camera " << name << ": " << e.what() << "\n";
@@ -135,7 +150,7 @@ void add_camera_command(CLI::App& app, int& status) {
   CLI::App* calibrate = camera->add_subcommand("calibrate", "Intrinsic calibration from images of a board");
   add_common(calibrate, *args);
   calibrate->add_option("images", args->images, "image files, a directory or a video")->required();
-  calibrate->callback([args, &status] { guarded("calibrate", status, [&] { return run_calibrate(*args); }); });
+  calibrate->callback([args, &status] { guarded("calibrate", status, *args, [&] { return run_calibrate(*args); }); });
 
   CLI::App* stereo = camera->add_subcommand("stereo", "Stereo calibration from image pairs of a board");
   add_common(stereo, *args);
@@ -145,9 +160,9 @@ void add_camera_command(CLI::App& app, int& status) {
   stereo->add_option("--right-camera", args->right_camera, "right camera (YAML; default: calibrate from the images)");
   stereo->add_flag("--refine-intrinsics", args->refine_intrinsics, "refine both cameras jointly with the pose");
   stereo->add_option("--tolerance", args->tolerance_s, "largest time difference of a pair (s)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(finite_non_negative())
       ->capture_default_str();
-  stereo->callback([args, &status] { guarded("stereo", status, [&] { return run_stereo(*args); }); });
+  stereo->callback([args, &status] { guarded("stereo", status, *args, [&] { return run_stereo(*args); }); });
 
   CLI::App* hand_eye = camera->add_subcommand("hand-eye", "Hand-eye calibration of a camera on the gripper");
   add_common(hand_eye, *args);
@@ -158,7 +173,7 @@ void add_camera_command(CLI::App& app, int& status) {
   hand_eye->add_option("--convention", args->convention, "what the poses are: base_T_gripper or gripper_T_base")
       ->check(CLI::IsMember({"gripper2base", "base2gripper"}))
       ->capture_default_str();
-  hand_eye->callback([args, &status] { guarded("hand-eye", status, [&] { return run_hand_eye(*args); }); });
+  hand_eye->callback([args, &status] { guarded("hand-eye", status, *args, [&] { return run_hand_eye(*args); }); });
 }
 
 }  // namespace kincal::cli

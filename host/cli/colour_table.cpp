@@ -1,12 +1,13 @@
 #include "host/cli/colour_table.hpp"
 
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "host/cli/number_options.hpp"
+#include "host/files/output_file.hpp"
 #include "host/vision/colour_table_builder.hpp"
 #include "host/vision/image_labeling.hpp"
 
@@ -28,6 +29,10 @@ void add_pixels(const std::string& path, std::vector<cv::Vec3b>& out) {
 }
 
 int run_colour_table(const ColourTableOptions& o) {
+  std::vector<files::NamedPath> inputs;
+  for (const std::string& p : o.positive) inputs.push_back({"--positive", p});
+  for (const std::string& p : o.negative) inputs.push_back({"--negative", p});
+  files::refuse_overwriting({{"-o", o.output}}, inputs);
   vision::ColourTableSamples samples;
   for (const std::string& p : o.positive) add_pixels(p, samples.positive_bgr);
   for (const std::string& p : o.negative) add_pixels(p, samples.negative_bgr);
@@ -35,9 +40,7 @@ int run_colour_table(const ColourTableOptions& o) {
   const core::ColourClassTable table = vision::build_colour_table(samples, space, o.max_distance);
   std::array<std::uint8_t, core::kColourTableBlockBytes> block{};
   core::serialize_colour_table(table, block);
-  std::ofstream out(o.output, std::ios::binary);
-  out.write(reinterpret_cast<const char*>(block.data()), static_cast<std::streamsize>(block.size()));
-  if (!out) throw std::runtime_error(o.output + ": cannot write");
+  files::write_file_atomically(o.output, std::string_view(reinterpret_cast<const char*>(block.data()), block.size()));
   std::size_t cells = 0;
   for (const std::uint8_t s : table.score) cells += s > table.threshold ? 1 : 0;
   std::cout << "colour table " << o.output << ": " << o.space << ", " << cells << " of " << core::kColourCells
@@ -58,7 +61,7 @@ void add_colour_table_command(CLI::App& app, int& status) {
       ->check(CLI::IsMember({"rgb565", "yuv422"}))
       ->capture_default_str();
   cmd->add_option("--max-distance", options->max_distance, "Class boundary, in standard deviations of the samples")
-      ->check(CLI::Range(0.5, 10.0))
+      ->check(finite_in(0.5, 10.0))
       ->capture_default_str();
   cmd->add_option("-o,--output", options->output, "Parameter block to write")->required();
   cmd->callback([options, &status] {

@@ -1,10 +1,11 @@
 #include "host/cli/dbc_command.hpp"
 
-#include <fstream>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include "host/can/dbc.hpp"
+#include "host/files/output_file.hpp"
 
 namespace kincal::cli {
 
@@ -18,14 +19,15 @@ void add_dbc_command(CLI::App& app, int& status) {
       status = 0;
       return;
     }
-    std::ofstream out(*path);
-    if (!out) {
-      std::cerr << "kincal dbc: cannot create " << *path << "\n";
-      status = 1;
-      return;
-    }
+    std::ostringstream out;
     can::write_dbc(out);
-    status = out ? 0 : 1;
+    try {
+      files::write_file_atomically(*path, out.str());
+      status = 0;
+    } catch (const files::OutputError& e) {
+      std::cerr << "kincal dbc: " << e.what() << "\n";
+      status = 1;
+    }
   });
 }
 

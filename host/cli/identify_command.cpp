@@ -6,7 +6,10 @@
 #include <numbers>
 #include <sstream>
 
+#include "host/cli/number_options.hpp"
+#include "host/files/output_file.hpp"
 #include "host/identify/identify.hpp"
+#include "host/identify/plausibility.hpp"
 #include "host/model/dataset.hpp"
 #include "host/model/model_file.hpp"
 #include "host/model/urdf.hpp"
@@ -19,7 +22,7 @@ struct IdentifyArgs {
   std::string model, data, out, method = "full", start = "nominal", validate, urdf;
   std::vector<std::string> fix, params;
   double sigma_m = 0.0, orientation_sigma_deg = 0.0, outlier_probability = 1e-4;
-  bool no_robust = false;
+  bool no_robust = false, accept_implausible = false;
 };
 
 int run_identify(const IdentifyArgs& a) {
@@ -35,8 +38,12 @@ int run_identify(const IdentifyArgs& a) {
   options.robust = !a.no_robust;
   options.outlier_probability = a.outlier_probability;
   try {
+    files::refuse_overwriting({{"--out", a.out}, {"--urdf", a.urdf}},
+                              {{"--model", a.model}, {"--data", a.data}, {"--validate", a.validate}});
     const model::RobotModel nominal = model::load_model(a.model);
     const model::Dataset data = model::read_dataset(a.data);
+    if (!a.accept_implausible)
+      identify::require_plausible(nominal, data, "--accept-implausible", {.noise_given = a.sigma_m > 0});
     identify::IdentifyResult result = identify::identify(nominal, data, options);
     std::cout << "kincal identify: " << nominal.name << " from " << a.data << '\n' << identify::format_report(result);
     if (!a.validate.empty()) {
@@ -65,13 +72,11 @@ int run_identify(const IdentifyArgs& a) {
     model::save_model(result.model, a.out);
     std::cout << "wrote " << a.out << '\n';
     if (!a.urdf.empty()) {
-      std::ofstream u(a.urdf);
-      u << model::write_urdf(result.model);
-      if (!u) throw model::InputError(a.urdf + ": cannot write the URDF file");
+      files::write_file_atomically(a.urdf, model::write_urdf(result.model));
       std::cout << "wrote " << a.urdf << '\n';
     }
     return 0;
-  } catch (const model::InputError& e) {
+  } catch (const std::exception& e) {
     std::cerr << "kincal identify: " << e.what() << '\n';
     return 1;
   }
@@ -96,14 +101,16 @@ void add_identify_command(CLI::App& app, int& status) {
   cmd->add_option("--params", a->params, "identify exactly these parameters (error if the data cannot)")
       ->delimiter(',');
   cmd->add_option("--sigma", a->sigma_m, "position noise (m) of rows without covariance (default: estimated)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_positive());
   cmd->add_option("--orientation-sigma-deg", a->orientation_sigma_deg,
                   "orientation noise (deg) of pose measurements (default: estimated)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_in(1e-9, 180.0));
   cmd->add_option("--outlier-probability", a->outlier_probability,
                   "reject measurements beyond this chi-square tail probability (default 1e-4)")
-      ->check(CLI::Range(1e-12, 0.5));
+      ->check(finite_in(1e-12, 0.5));
   cmd->add_flag("--no-robust", a->no_robust, "plain least squares (no Huber loss)");
+  cmd->add_flag("--accept-implausible", a->accept_implausible,
+                "solve even when the data look wrong for the model (units, quaternion order, limits)");
   cmd->add_option("--urdf", a->urdf, "also write the calibrated model as URDF");
   cmd->callback([a, &status] { status = run_identify(*a); });
 }

@@ -7,6 +7,7 @@
 #include "host/can/candump_log.hpp"
 #include "host/can/monitor.hpp"
 #include "host/can/socketcan.hpp"
+#include "host/cli/number_options.hpp"
 
 namespace kincal::cli {
 
@@ -62,7 +63,7 @@ void add_monitor_command(CLI::App& app, int& status) {
   cmd->add_flag("--fd", options->fd, "also receive CAN FD frames");
   cmd->add_option("--log", options->log, "also write what is received as a candump -L log");
   cmd->add_option("--duration-s", options->duration_s, "stop after this many seconds (0 = until interrupted)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(finite_non_negative());
   cmd->callback([options, &status, can_opt, replay_opt] {
     if (can_opt->count() == 0 && replay_opt->count() == 0)
       throw CLI::ValidationError("--can/--replay", "monitor needs --can IFACE or --replay FILE");

@@ -1,10 +1,11 @@
 #include "host/cli/plan_command.hpp"
 
 #include <charconv>
-#include <fstream>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
+#include "host/files/output_file.hpp"
 #include "host/identify/plan.hpp"
 #include "host/model/model_file.hpp"
 
@@ -21,6 +22,7 @@ struct PlanArgs {
 
 int run_plan(const PlanArgs& a) {
   try {
+    files::refuse_overwriting({{"-o", a.out}}, {{"--model", a.model}});
     const model::RobotModel m = model::load_model(a.model);
     identify::PlanOptions options;
     options.count = a.count;
@@ -28,12 +30,7 @@ int run_plan(const PlanArgs& a) {
     options.seed = a.seed;
     options.orientation = a.orientation;
     const identify::PlanResult r = identify::plan_configurations(m, options);
-    std::ofstream file;
-    if (!a.out.empty()) {
-      file.open(a.out);
-      if (!file) throw model::InputError(a.out + ": cannot write");
-    }
-    std::ostream& out = a.out.empty() ? std::cout : file;
+    std::ostringstream out;
     // The summary as comment lines, which the dataset reader skips.
     char line[1024];
     std::snprintf(line, sizeof line,
@@ -54,8 +51,12 @@ int run_plan(const PlanArgs& a) {
         out << std::string(buffer, ec == std::errc() ? end : buffer) << (j + 1 < q.size() ? "," : "\n");
       }
     }
-    return out ? 0 : 1;
-  } catch (const model::InputError& e) {
+    if (a.out.empty())
+      std::cout << out.str();
+    else
+      files::write_file_atomically(a.out, out.str());
+    return std::cout ? 0 : 1;
+  } catch (const std::exception& e) {
     std::cerr << "kincal plan: " << e.what() << '\n';
     return 1;
   }

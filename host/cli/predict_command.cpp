@@ -4,9 +4,11 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include <Eigen/Geometry>
 
+#include "host/files/output_file.hpp"
 #include "host/model/dataset.hpp"
 #include "host/model/model_file.hpp"
 
@@ -23,17 +25,13 @@ std::string number_text(double v) {
 
 int run_predict(const std::string& model_path, const std::string& joints_path, const std::string& out_path) {
   try {
+    files::refuse_overwriting({{"-o", out_path}}, {{"--model", model_path}, {"--joints", joints_path}});
     const model::RobotModel m = model::load_model(model_path);
     std::ifstream in(joints_path);
     if (!in) throw model::InputError(joints_path + ": cannot open the joints file");
     const std::vector<std::vector<double>> rows = model::parse_joints(in, joints_path);
     if (!rows.empty()) model::check_joint_count(m, static_cast<int>(rows.front().size()), joints_path);
-    std::ofstream file;
-    if (!out_path.empty()) {
-      file.open(out_path);
-      if (!file) throw model::InputError(out_path + ": cannot write");
-    }
-    std::ostream& out = out_path.empty() ? std::cout : file;
+    std::ostringstream out;
     const bool pose = m.tool == model::ToolKind::frame;
     for (int j = 1; j <= m.joint_count(); ++j) out << 'q' << j << ',';
     out << "x,y,z" << (pose ? ",qw,qx,qy,qz" : "") << '\n';
@@ -50,8 +48,12 @@ int run_predict(const std::string& model_path, const std::string& joints_path, c
       }
       out << '\n';
     }
-    return out ? 0 : 1;
-  } catch (const model::InputError& e) {
+    if (out_path.empty())
+      std::cout << out.str();
+    else
+      files::write_file_atomically(out_path, out.str());
+    return std::cout ? 0 : 1;
+  } catch (const std::exception& e) {
     std::cerr << "kincal predict: " << e.what() << '\n';
     return 1;
   }

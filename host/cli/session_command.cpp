@@ -17,13 +17,14 @@
 #include <unistd.h>
 
 #include <cmath>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <random>
 #include <sstream>
 
 #include "host/can/socketcan.hpp"
+#include "host/files/output_file.hpp"
+#include "host/identify/plausibility.hpp"
 #include "host/model/model_file.hpp"
 #include "host/report/report.hpp"
 #include "host/session/online_correction.hpp"
@@ -41,7 +42,7 @@ struct SessionArgs {
                      journal = "session.journal";
   std::string out, report, dataset;
   int sweeps = 0, poses = 40, validation = 20, squares = 8;
-  bool fd = false, resume = false;
+  bool fd = false, resume = false, accept_implausible = false;
   std::uint64_t seed = 1;
 };
 
@@ -60,7 +61,30 @@ std::vector<double> mid_range(const model::RobotModel& m) {
   return q;
 }
 
+// `count` random configurations the simulated rig can measure, drawn within the joint limits. The
+// draws are bounded: a robot whose workspace the rig cannot see fails with the numbers instead of
+// drawing forever.
+std::vector<std::vector<double>> random_observable(const model::RobotModel& nominal, const session::SimulatedRig& rig,
+                                                   int count, std::mt19937_64& rng, const char* what) {
+  const long attempts = 1000 + 200L * count;
+  std::vector<std::vector<double>> poses;
+  for (long i = 0; i < attempts && static_cast<int>(poses.size()) < count; ++i) {
+    std::vector<double> q = sim::random_configuration(nominal, rng);
+    if (rig.observable(q)) poses.push_back(std::move(q));
+  }
+  if (static_cast<int>(poses.size()) < count)
+    throw model::InputError(std::string(what) + ": " + std::to_string(poses.size()) + " of " +
+                            std::to_string(attempts) + " random configurations of " + nominal.name +
+                            " within its joint limits are in view of the simulated rig, " + std::to_string(count) +
+                            " needed: the rig cannot see this robot's workspace (give --plan/--validation-plan "
+                            "with poses it can see, or fewer poses)");
+  return poses;
+}
+
 int run(const SessionArgs& a) {
+  files::refuse_overwriting(
+      {{"--out", a.out}, {"--report", a.report}, {"--dataset", a.dataset}},
+      {{"--journal", a.journal}, {"--model", a.model}, {"--plan", a.plan}, {"--validation-plan", a.validation_plan}});
   const model::RobotModel file = model::load_model(a.model);
   const bool simulated = a.robot == "sim" && a.robot_cmd.empty();
   const bool platform = a.rig == "platform";
@@ -106,18 +130,12 @@ int run(const SessionArgs& a) {
     const std::vector<double> home = a.home.empty() ? mid_range(nominal) : parse_home(a.home, nominal);
     plan.calibration = session::single_joint_sweeps(nominal, home, a.sweeps > 0 ? a.sweeps : 10, 0.4);
   } else {
-    while (static_cast<int>(plan.calibration.size()) < a.poses) {
-      std::vector<double> q = sim::random_configuration(nominal, rng);
-      if (rig->observable(q)) plan.calibration.push_back(std::move(q));
-    }
+    plan.calibration = random_observable(nominal, *rig, a.poses, rng, "--poses");
   }
   if (!a.validation_plan.empty()) {
     plan.validation = session::read_plan(nominal, a.validation_plan);
   } else if (rig) {
-    while (static_cast<int>(plan.validation.size()) < a.validation) {
-      std::vector<double> q = sim::random_configuration(nominal, rng);
-      if (rig->observable(q)) plan.validation.push_back(std::move(q));
-    }
+    plan.validation = random_observable(nominal, *rig, a.validation, rng, "--validation");
   }
 
   session::SessionOptions options;
@@ -131,13 +149,14 @@ int run(const SessionArgs& a) {
   options.identity = identity.str();
   const session::SessionData data = session::run_session(nominal, plan, robot, measure, options, std::cerr);
   if (!a.dataset.empty()) {
-    std::ofstream csv(a.dataset);
+    std::ostringstream csv;
     model::Dataset all = data.calibration;
     all.rows.insert(all.rows.end(), data.validation.rows.begin(), data.validation.rows.end());
     model::write_dataset(csv, all);
-    if (!csv) throw model::InputError(a.dataset + ": cannot write the dataset");
+    files::write_file_atomically(a.dataset, csv.str());
   }
 
+  if (!a.accept_implausible) identify::require_plausible(nominal, data.calibration, "--accept-implausible");
   identify::IdentifyOptions io;
   if (!platform) io.start = identify::Start::cpa;
   const session::Calibration calibration = session::calibrate(nominal, data, io);
@@ -204,6 +223,8 @@ void add_session_command(CLI::App& app, int& status) {
   cmd->add_option("--out", a->out, "write the identified model here (YAML)");
   cmd->add_option("--report", a->report, "write the HTML report here");
   cmd->add_option("--dataset", a->dataset, "write the measurements here (dataset CSV)");
+  cmd->add_flag("--accept-implausible", a->accept_implausible,
+                "identify even when the measurements look wrong for the model (units, quaternion order)");
   cmd->add_option("--seed", a->seed, "seed of the simulated robot's hidden errors and noise")->capture_default_str();
   cmd->callback([a, &status] {
     try {

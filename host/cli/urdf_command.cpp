@@ -1,9 +1,9 @@
 #include "host/cli/urdf_command.hpp"
 
-#include <fstream>
 #include <iostream>
 #include <memory>
 
+#include "host/files/output_file.hpp"
 #include "host/model/model_file.hpp"
 #include "host/model/urdf.hpp"
 
@@ -17,16 +17,14 @@ void add_urdf_command(CLI::App& app, int& status) {
   cmd->add_option("-o,--out", *out_path, "output file (default: standard output)");
   cmd->callback([=, &status] {
     try {
+      files::refuse_overwriting({{"-o", *out_path}}, {{"--model", *model_path}});
       const std::string text = model::write_urdf(model::load_model(*model_path));
-      if (out_path->empty()) {
+      if (out_path->empty())
         std::cout << text;
-      } else {
-        std::ofstream out(*out_path);
-        out << text;
-        if (!out) throw model::InputError(*out_path + ": cannot write");
-      }
+      else
+        files::write_file_atomically(*out_path, text);
       status = 0;
-    } catch (const model::InputError& e) {
+    } catch (const std::exception& e) {
       std::cerr << "kincal urdf: " << e.what() << '\n';
       status = 1;
     }

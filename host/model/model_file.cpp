@@ -1,5 +1,7 @@
 #include "host/model/model_file.hpp"
 
+#include "host/files/output_file.hpp"
+
 #include <yaml-cpp/yaml.h>
 
 #include <charconv>
@@ -342,10 +344,11 @@ std::string write_model(const RobotModel& model) {
 }
 
 void save_model(const RobotModel& model, const std::string& path) {
-  std::ofstream out(path);
-  if (!out) throw InputError(path + ": cannot write the model file");
-  out << write_model(model);
-  if (!out) throw InputError(path + ": write failed");
+  try {
+    files::write_file_atomically(path, write_model(model));
+  } catch (const files::OutputError& e) {
+    throw InputError(e.what());
+  }
 }
 
 }  // namespace kincal::model

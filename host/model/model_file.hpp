@@ -41,7 +41,8 @@ RobotModel load_model(const std::string& path);
 RobotModel parse_model(const std::string& text, const std::string& source);
 
 std::string write_model(const RobotModel& model);
-// Throws InputError when the file cannot be written.
+// Writes whole or not at all (host/files/output_file.hpp); throws InputError when the file
+// cannot be written.
 void save_model(const RobotModel& model, const std::string& path);
 
 }  // namespace kincal::model

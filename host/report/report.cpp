@@ -9,6 +9,7 @@
 
 #include <Eigen/Geometry>
 
+#include "host/files/output_file.hpp"
 #include "host/report/svg_plot.hpp"
 
 namespace kincal::report {
@@ -420,10 +421,11 @@ std::string render_html(const Report& report) {
 
 void write_html(const Report& report, const std::string& path) {
   const std::string html = render_html(report);
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out << html;
-  out.close();
-  if (!out) throw ReportError(path + ": cannot write the report");
+  try {
+    files::write_file_atomically(path, html);
+  } catch (const files::OutputError& e) {
+    throw ReportError(std::string(e.what()) + " (the report)");
+  }
 }
 
 }  // namespace kincal::report

@@ -1,0 +1,122 @@
+#include "host/files/output_file.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <system_error>
+#include <vector>
+
+namespace kincal::files {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+bool takes_part(const NamedPath& p) { return !p.path.empty() && p.path != "-"; }
+
+// The same file: equal resolved paths, or (both existing) the same inode through another name.
+bool same_file(const std::string& a, const std::string& b) {
+  std::error_code ea, eb;
+  const fs::path ca = fs::weakly_canonical(fs::absolute(a), ea);
+  const fs::path cb = fs::weakly_canonical(fs::absolute(b), eb);
+  if (!ea && !eb && ca == cb) return true;
+  std::error_code ee;
+  return fs::exists(a, ee) && fs::exists(b, ee) && fs::equivalent(a, b, ee) && !ee;
+}
+
+std::string describe(const NamedPath& p) { return p.option + " " + p.path; }
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+  throw OutputError(path + ": " + what + " (" + std::strerror(errno) + ")");
+}
+
+// Closes a descriptor and removes the temporary file unless the rename consumed it.
+class Temporary {
+ public:
+  explicit Temporary(std::string pattern) : name_(std::move(pattern)) {
+    std::vector<char> buffer(name_.begin(), name_.end());
+    buffer.push_back('\0');
+    fd_ = ::mkstemp(buffer.data());
+    if (fd_ >= 0) name_ = buffer.data();
+  }
+  Temporary(const Temporary&) = delete;
+  Temporary& operator=(const Temporary&) = delete;
+  ~Temporary() {
+    if (fd_ >= 0) ::close(fd_);
+    if (!renamed_) ::unlink(name_.c_str());
+  }
+  int fd() const { return fd_; }
+  const std::string& name() const { return name_; }
+  void close_checked(const std::string& path) {
+    const int fd = fd_;
+    fd_ = -1;
+    if (::close(fd) != 0) fail(path, "cannot write");
+  }
+  void renamed() { renamed_ = true; }
+
+ private:
+  std::string name_;
+  int fd_ = -1;
+  bool renamed_ = false;
+};
+
+}  // namespace
+
+void refuse_overwriting(const std::vector<NamedPath>& outputs, const std::vector<NamedPath>& inputs) {
+  const auto refuse = [](const NamedPath& out, const NamedPath& other, const char* kind) {
+    throw OutputError(describe(out) + " is the same file as " + describe(other) + ": refusing to overwrite " + kind +
+                      " (choose another path for " + out.option + ")");
+  };
+  for (auto o = outputs.begin(); o != outputs.end(); ++o) {
+    if (!takes_part(*o)) continue;
+    for (const NamedPath& in : inputs)
+      if (takes_part(in) && same_file(o->path, in.path)) refuse(*o, in, "an input");
+    for (auto later = o + 1; later != outputs.end(); ++later)
+      if (takes_part(*later) && same_file(o->path, later->path)) refuse(*later, *o, "another output");
+  }
+}
+
+void write_file_atomically(const std::string& path, std::string_view content) {
+  const fs::path target(path);
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  Temporary tmp((dir / ("." + target.filename().string() + ".kincal-XXXXXX")).string());
+  if (tmp.fd() < 0) fail(path, "cannot create a temporary file beside it");
+
+  struct stat existing {};
+  mode_t mode = 0;
+  if (::stat(path.c_str(), &existing) == 0) {
+    if (S_ISDIR(existing.st_mode)) throw OutputError(path + ": is a directory, not a file");
+    mode = existing.st_mode & 07777;
+  } else {
+    const mode_t mask = ::umask(0);
+    ::umask(mask);
+    mode = 0666 & ~mask;
+  }
+  if (::fchmod(tmp.fd(), mode) != 0) fail(path, "cannot set the permissions of its temporary file");
+
+  const char* data = content.data();
+  std::size_t left = content.size();
+  while (left > 0) {
+    const ssize_t n = ::write(tmp.fd(), data, left);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) fail(path, "cannot write");
+    data += n;
+    left -= static_cast<std::size_t>(n);
+  }
+  if (::fsync(tmp.fd()) != 0) fail(path, "cannot flush to disk");
+  tmp.close_checked(path);
+  if (::rename(tmp.name().c_str(), path.c_str()) != 0) fail(path, "cannot replace");
+  tmp.renamed();
+  // The rename itself is durable once the directory is flushed; a failure here loses nothing.
+  const int dir_fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dir_fd >= 0) {
+    ::fsync(dir_fd);
+    ::close(dir_fd);
+  }
+}
+
+}  // namespace kincal::files

@@ -1,0 +1,220 @@
+#include "host/identify/plausibility.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <optional>
+
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+
+namespace kincal::identify {
+
+namespace {
+
+constexpr double kDegreesPerRadian = 180.0 / std::numbers::pi;
+
+std::string number(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", v);
+  return text;
+}
+
+double median(std::vector<double> v) {
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+bool inside(double q, double lower, double upper) {
+  const double tolerance = 0.01 * (upper - lower) + 1e-9;
+  return q >= lower - tolerance && q <= upper + tolerance;
+}
+
+void check_joints(const model::RobotModel& m, const model::Dataset& data, std::vector<std::string>& found) {
+  for (std::size_t j = 0; j < m.joints.size(); ++j) {
+    const model::Joint& joint = m.joints[j];
+    const bool revolute = joint.type == core::JointType::revolute;
+    const bool limited = std::isfinite(joint.lower) && std::isfinite(joint.upper);
+    const double lower = limited ? joint.lower : -4 * std::numbers::pi;
+    const double upper = limited ? joint.upper : 4 * std::numbers::pi;
+    if (!limited && !revolute) continue;
+    const double scale = revolute ? kDegreesPerRadian : 1000.0;
+    int outside = 0, scaled_inside = 0;
+    double largest = 0.0;
+    for (const model::Measurement& r : data.rows) {
+      const double q = r.q[j];
+      largest = std::max(largest, std::abs(q));
+      if (!inside(q, lower, upper)) ++outside;
+      if (inside(q / scale, lower, upper)) ++scaled_inside;
+    }
+    if (outside == 0) continue;
+    std::string what = "joint " + std::to_string(j + 1) + " (" + joint.name + "): " + std::to_string(outside) + " of " +
+                       std::to_string(data.rows.size()) + " readings outside " + (limited ? "its limits [" : "[") +
+                       number(lower) + ", " + number(upper) + (revolute ? "] rad" : "] m") + " (largest magnitude " +
+                       number(largest) + ")";
+    if (scaled_inside == static_cast<int>(data.rows.size()))
+      what += revolute ? ": likely degrees given as radians" : ": likely millimetres given as metres";
+    found.push_back(what);
+  }
+}
+
+struct Predicted {
+  std::vector<model::Vector3> position_m;
+  std::vector<model::Matrix3> rotation;
+};
+
+Predicted predict(const model::RobotModel& m, const model::Dataset& data) {
+  Predicted p;
+  for (const model::Measurement& r : data.rows) {
+    const model::Transform t = model::forward_kinematics(m, r.q);
+    p.position_m.push_back(t.translation);
+    p.rotation.push_back(t.rotation);
+  }
+  return p;
+}
+
+model::Vector3 median_point(const std::vector<model::Vector3>& points) {
+  model::Vector3 m;
+  for (int axis = 0; axis < 3; ++axis) {
+    std::vector<double> v;
+    for (const model::Vector3& x : points) v.push_back(x[axis]);
+    m[axis] = median(v);
+  }
+  return m;
+}
+
+void check_far_points(const model::Dataset& data, const Predicted& p, std::vector<std::string>& found) {
+  const model::Vector3 predicted_centre = median_point(p.position_m);
+  double spread = 0.0;
+  for (const model::Vector3& x : p.position_m) spread = std::max(spread, (x - predicted_centre).norm());
+  std::vector<model::Vector3> measured;
+  for (const model::Measurement& r : data.rows) measured.push_back(r.position);
+  const model::Vector3 centre = median_point(measured);
+  const double limit = 2 * spread + 0.5;
+  int far = 0;
+  std::string first;
+  for (const model::Measurement& r : data.rows) {
+    const double distance = (r.position - centre).norm();
+    if (distance <= limit) continue;  // NaN cannot occur: the reader takes finite numbers only
+    if (far++ == 0) first = "line " + std::to_string(r.line) + ": " + number(distance) + " m";
+  }
+  if (far > 0)
+    found.push_back(std::to_string(far) + " measured points lie farther than " + number(limit) +
+                    " m (twice the model's spread of " + number(spread) + " m, plus 0.5 m) from the median point (" +
+                    first + "): typing errors or wrong units");
+}
+
+void check_positions(const model::Dataset& data, const Predicted& p, std::vector<std::string>& found) {
+  std::vector<double> ratios;
+  for (std::size_t i = 1; i < data.rows.size(); ++i) {
+    const double predicted = (p.position_m[i] - p.position_m[i - 1]).norm();
+    if (predicted > 0.01) ratios.push_back((data.rows[i].position - data.rows[i - 1].position).norm() / predicted);
+  }
+  if (ratios.size() < 3) return;
+  const double ratio = median(ratios);
+  if (ratio >= 0.7 && ratio <= 1.4) return;
+  std::string what = "the measured points move " + number(ratio) +
+                     " times as far between rows as the model predicts (median over " + std::to_string(ratios.size()) +
+                     " pairs of rows)";
+  if (ratio > 500 && ratio < 2000)
+    what += ": likely millimetres given as metres";
+  else if (ratio > 0.0005 && ratio < 0.002)
+    what += ": likely metres where the model's millimetres were meant, or the model in mm";
+  else
+    what += ": wrong units, wrong joint readings, or not this robot";
+  found.push_back(what);
+}
+
+// The rotation between consecutive rows, measured M_k = R_i R_(i-1)^T and predicted P_k, must be
+// M_k = B P_k B^T for the one unknown registration rotation B. B is fitted to the pairs' rotation
+// vectors (Kabsch), and the median angle of M_k^T B P_k B^T is returned (rad), or nothing when too
+// few pairs turn by 5..150 degrees to compare. (The angles alone cannot tell the quaternion order:
+// a permutation of the four components keeps every angle between quaternions.)
+std::optional<double> orientation_mismatch(const std::vector<Eigen::Quaterniond>& measured, const Predicted& p) {
+  std::vector<model::Matrix3> seen, predicted;
+  Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 1; i < measured.size(); ++i) {
+    const model::Matrix3 pk = p.rotation[i] * p.rotation[i - 1].transpose();
+    const Eigen::AngleAxisd turn(pk);
+    if (turn.angle() < 5.0 / kDegreesPerRadian || turn.angle() > 150.0 / kDegreesPerRadian) continue;
+    const model::Matrix3 mk = (measured[i] * measured[i - 1].conjugate()).toRotationMatrix();
+    const Eigen::AngleAxisd seen_turn(mk);
+    h += (turn.angle() * turn.axis()) * (seen_turn.angle() * seen_turn.axis()).transpose();
+    seen.push_back(mk);
+    predicted.push_back(pk);
+  }
+  if (seen.size() < 3) return std::nullopt;
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
+  const Eigen::Matrix3d b = svd.matrixV() * d * svd.matrixU().transpose();
+  std::vector<double> residuals;
+  for (std::size_t k = 0; k < seen.size(); ++k)
+    residuals.push_back(Eigen::AngleAxisd(seen[k].transpose() * b * predicted[k] * b.transpose()).angle());
+  return median(residuals);
+}
+
+void check_orientations(const model::Dataset& data, const Predicted& p, std::vector<std::string>& found) {
+  if (!data.has_orientation) return;
+  std::vector<Eigen::Quaterniond> as_given, as_xyzw;
+  for (const model::Measurement& r : data.rows) {
+    if (!r.orientation) return;
+    const Eigen::Quaterniond& q = *r.orientation;  // read as w,x,y,z
+    as_given.push_back(q);
+    as_xyzw.emplace_back(q.z(), q.w(), q.x(), q.y());  // the columns were x,y,z,w
+  }
+  const std::optional<double> given = orientation_mismatch(as_given, p);
+  if (!given || *given <= 10.0 / kDegreesPerRadian) return;
+  std::string what = "the measured orientations turn between rows differently from the model's, by " +
+                     number(*given * kDegreesPerRadian) + " degrees (median after the best registration)";
+  const std::optional<double> swapped = orientation_mismatch(as_xyzw, p);
+  if (swapped && *swapped < 0.25 * *given)
+    what +=
+        ": likely quaternions in x,y,z,w order (the columns qw,qx,qy,qz are w first; read as x,y,z,w they "
+        "differ by " +
+        number(*swapped * kDegreesPerRadian) + " degrees)";
+  else
+    what += ": wrong orientation columns or not this robot";
+  found.push_back(what);
+}
+
+void check_exact_fit(const model::Dataset& data, const Predicted& p, const PlausibilityOptions& options,
+                     std::vector<std::string>& found) {
+  if (options.noise_given || data.noise != model::NoiseColumns::none || data.rows.empty()) return;
+  double largest = 0.0;
+  for (std::size_t i = 0; i < data.rows.size(); ++i)
+    largest = std::max(largest, (data.rows[i].position - p.position_m[i]).norm());
+  if (largest > 1e-9) return;
+  found.push_back("the nominal model reproduces every measured point within " + number(largest) +
+                  " m: data without noise (made by `kincal predict`?) give no noise level and no uncertainty; "
+                  "state the instrument noise (--sigma) if the data are real");
+}
+
+}  // namespace
+
+std::vector<std::string> implausibilities(const model::RobotModel& nominal, const model::Dataset& data,
+                                          const PlausibilityOptions& options) {
+  std::vector<std::string> found;
+  if (data.joint_count != nominal.joint_count()) return found;  // check_joint_count says so
+  check_joints(nominal, data, found);
+  const Predicted p = predict(nominal, data);
+  check_far_points(data, p, found);
+  check_positions(data, p, found);
+  check_orientations(data, p, found);
+  check_exact_fit(data, p, options, found);
+  return found;
+}
+
+void require_plausible(const model::RobotModel& nominal, const model::Dataset& data, const std::string& override_flag,
+                       const PlausibilityOptions& options) {
+  const std::vector<std::string> found = implausibilities(nominal, data, options);
+  if (found.empty()) return;
+  std::string message = data.source + ": implausible for " + nominal.name + ":";
+  for (const std::string& f : found) message += "\n  - " + f;
+  message += "\n  (" + override_flag + " proceeds anyway)";
+  throw model::InputError(message);
+}
+
+}  // namespace kincal::identify

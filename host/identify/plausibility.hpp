@@ -1,0 +1,47 @@
+// The plausibility gate before any solve (issue #16): a dataset in the wrong units or the wrong
+// quaternion order is still made of finite numbers, and a least-squares solve "converges" on it
+// into an absurd model. These checks compare the data with the nominal model in ways that do
+// not depend on the unknown registration (base_T_frame0) or tool (flange_T_tool):
+//
+//   joints        readings against the model's limits (1 % of the range tolerance); revolute
+//                 readings beyond +-4 pi without limits. Likely cause named when the readings /
+//                 (180/pi) (degrees given as radians) or / 1000 (mm given as m) would fit.
+//   positions     the distance between consecutive rows, measured over predicted, median over
+//                 the pairs the model moves by more than 1 cm: outside [0.7, 1.4] is implausible
+//                 (1000: millimetres given as metres). A rigid registration keeps distances.
+//   orientations  the rotation between consecutive rows, measured M against predicted P, must be
+//                 M = B P B^T for one registration rotation B: B is fitted (Kabsch on the rotation
+//                 vectors of the pairs turning 5..150 degrees) and a median misfit above 10
+//                 degrees is implausible; the quaternions read as x,y,z,w are tried and named
+//                 when they fit. (Unit norm is checked by the dataset reader.)
+//   far points    a measured point farther from the median point than twice the model's own
+//                 spread plus 0.5 m (a typing error, 1e308): named by its line.
+//   exact fit     the nominal model reproduces every point within 1e-9 m and the data carry no
+//                 noise (no sigma/covariance columns, no --sigma): no noise level or uncertainty
+//                 can be estimated from it (data made by `kincal predict`?).
+//
+// Cost: one forward kinematics per row. Finds nothing on data too short to compare (< 3 pairs).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "host/model/dataset.hpp"
+#include "host/model/robot_model.hpp"
+
+namespace kincal::identify {
+
+struct PlausibilityOptions {
+  bool noise_given = false;  // the user stated the instrument noise (--sigma)
+};
+
+// What looks wrong, one sentence each with the numbers and the likely cause; empty: plausible.
+std::vector<std::string> implausibilities(const model::RobotModel& nominal, const model::Dataset& data,
+                                          const PlausibilityOptions& options = {});
+
+// Throws model::InputError "FILE: implausible data: ..." listing every finding and naming
+// `override_flag` (e.g. "--accept-implausible") to proceed deliberately.
+void require_plausible(const model::RobotModel& nominal, const model::Dataset& data, const std::string& override_flag,
+                       const PlausibilityOptions& options = {});
+
+}  // namespace kincal::identify
