@@ -6,6 +6,7 @@
 #include "host/cli/camera_command.hpp"
 #include "host/cli/colour_table.hpp"
 #include "host/cli/dbc_command.hpp"
+#include "host/cli/discover_command.hpp"
 #include "host/cli/demo.hpp"
 #include "host/cli/exercise.hpp"
 #include "host/cli/fiducials.hpp"
@@ -33,6 +34,7 @@ int main(int argc, char** argv) {
   kincal::cli::add_colour_table_command(app, status);
 
   kincal::cli::add_identify_command(app, status);
+  kincal::cli::add_discover_command(app, status);
   kincal::cli::add_import_command(app, status);
   kincal::cli::add_predict_command(app, status);
   kincal::cli::add_plan_command(app, status);

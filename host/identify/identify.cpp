@@ -2,6 +2,8 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
@@ -55,17 +57,112 @@ std::vector<int> all_rows(const model::Dataset& data) {
   return rows;
 }
 
-// Whitened squared residual norms per row (position part, orientation part).
-void row_norms(const Parameterization& p, const model::Dataset& data, const Weights& w, std::vector<double>& position,
-               std::vector<double>& orientation) {
-  position.clear();
-  orientation.clear();
-  double r[6];
-  for (std::size_t i = 0; i < data.rows.size(); ++i) {
-    row_residual(p, data.rows[i], w.position[i], w.orientation, r, nullptr);
-    position.push_back(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-    orientation.push_back(w.orientation > 0 ? r[3] * r[3] + r[4] * r[4] + r[5] * r[5] : 0.0);
+// The instrument's position covariance of each row: its own, sigma_m^2 I, or zero.
+std::vector<Eigen::Matrix3d> instrument_covariances(const model::Dataset& data, double sigma_m) {
+  std::vector<Eigen::Matrix3d> c;
+  for (const model::Measurement& m : data.rows)
+    c.push_back(m.covariance ? *m.covariance : Eigen::Matrix3d(Eigen::Matrix3d::Identity() * sigma_m * sigma_m));
+  return c;
+}
+
+// The model-error variance components s_p^2 (m^2) and s_o^2 (rad^2).
+struct Components {
+  double position2 = 0.0;
+  double orientation2 = 0.0;
+};
+
+// The smallest variance a component takes (it stays positive so the weights stay finite).
+constexpr double kVarianceFloor = 1e-20;
+
+// Weights of the noise model V_i = instrument_i + s_p^2 I (position), s_given^2 + s_o^2 (orientation).
+Weights noise_weights(const std::vector<Eigen::Matrix3d>& instrument, double orientation_given2, const Components& c,
+                      bool orientation_used) {
+  Weights w;
+  for (const Eigen::Matrix3d& ci : instrument) {
+    const Eigen::Matrix3d factor =
+        Eigen::LLT<Eigen::Matrix3d>(ci + Eigen::Matrix3d::Identity() * c.position2).matrixL();
+    w.position.push_back(factor.inverse());
   }
+  w.orientation = orientation_used ? 1.0 / std::sqrt(orientation_given2 + c.orientation2) : 0.0;
+  return w;
+}
+
+// Unwhitened residuals e and Jacobian J of the rows at the current point (r(d) ~ e + J d).
+void linearize(const Parameterization& p, const model::Dataset& data, const std::vector<int>& rows,
+               bool orientation_used, Eigen::VectorXd& e, Eigen::MatrixXd& j) {
+  Weights unit;
+  unit.position.assign(data.rows.size(), Eigen::Matrix3d::Identity());
+  unit.orientation = orientation_used ? 1.0 : 0.0;
+  stacked(p, data, unit, rows, e, &j);
+}
+
+// The weighted linear fit of e + J d at weights w: whitened residuals after the step, the thin Q
+// and R of the whitened Jacobian (the hat matrix is Q Q^T).
+struct WhitenedFit {
+  Eigen::VectorXd residual;
+  Eigen::MatrixXd q;
+  Eigen::MatrixXd r;
+};
+
+WhitenedFit whitened_fit(const Eigen::VectorXd& e, const Eigen::MatrixXd& j, const Weights& w,
+                         const std::vector<int>& rows, int size) {
+  Eigen::VectorXd ew = e;
+  Eigen::MatrixXd jw = j;
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const auto at = static_cast<Eigen::Index>(k) * size;
+    const Eigen::Matrix3d& l = w.position[static_cast<std::size_t>(rows[k])];
+    ew.segment<3>(at) = l * e.segment<3>(at);
+    jw.middleRows<3>(at) = l * j.middleRows<3>(at);
+    if (size == 6) {
+      ew.segment<3>(at + 3) *= w.orientation;
+      jw.middleRows<3>(at + 3) *= w.orientation;
+    }
+  }
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(jw);
+  WhitenedFit f;
+  f.q = qr.householderQ() * Eigen::MatrixXd::Identity(jw.rows(), jw.cols());
+  f.r = qr.matrixQR().topRows(jw.cols()).triangularView<Eigen::Upper>();
+  f.residual = ew - f.q * (f.q.transpose() * ew);
+  return f;
+}
+
+// REML for the model-error components at a fixed linearization (see identify.hpp): the fixed
+// point s_k^2 <- s_k^2 (r^T V^-1 V_k V^-1 r) / tr(V_k P), evaluated per row block with whitened
+// residuals and the hat matrix's diagonal blocks. A component far below the instrument's
+// variance (1e-8 of it) has converged to zero for every practical purpose and stops there.
+Components reml(const Eigen::VectorXd& e, const Eigen::MatrixXd& j, const std::vector<int>& rows,
+                const std::vector<Eigen::Matrix3d>& instrument, double orientation_given2, Components c,
+                bool estimate_position, bool estimate_orientation, int size, double negligible_position2) {
+  const bool orientation_used = size == 6;
+  for (int iteration = 0; iteration < 200; ++iteration) {
+    const Weights w = noise_weights(instrument, orientation_given2, c, orientation_used);
+    const WhitenedFit f = whitened_fit(e, j, w, rows, size);
+    double num_p = 0, den_p = 0, num_o = 0, den_o = 0;
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      const auto at = static_cast<Eigen::Index>(k) * size;
+      const Eigen::Matrix3d& l = w.position[static_cast<std::size_t>(rows[k])];
+      const Eigen::Matrix3d a = l * l.transpose();  // L V_k L^T for V_k = I on the position block
+      const Eigen::MatrixXd q = f.q.middleRows(at, size);
+      const Eigen::Matrix3d h = q.topRows<3>() * q.topRows<3>().transpose();
+      const Eigen::Vector3d rp = f.residual.segment<3>(at);
+      num_p += rp.dot(a * rp);
+      den_p += a.trace() - a.cwiseProduct(h).sum();
+      if (orientation_used) {
+        const double w2 = w.orientation * w.orientation;
+        num_o += w2 * f.residual.segment<3>(at + 3).squaredNorm();
+        den_o += w2 * (3.0 - q.bottomRows<3>().squaredNorm());
+      }
+    }
+    Components next = c;
+    if (estimate_position && den_p > 0 && c.position2 > negligible_position2)
+      next.position2 = std::max(kVarianceFloor, c.position2 * num_p / den_p);
+    if (estimate_orientation && den_o > 0) next.orientation2 = std::max(kVarianceFloor, c.orientation2 * num_o / den_o);
+    const bool settled = std::abs(next.position2 - c.position2) <= 1e-6 * c.position2 &&
+                         std::abs(next.orientation2 - c.orientation2) <= 1e-6 * c.orientation2;
+    c = next;
+    if (settled) break;
+  }
+  return c;
 }
 
 struct SolveSummary {
@@ -73,18 +170,15 @@ struct SolveSummary {
   std::string termination;
 };
 
+// Plain least squares: outliers are handled by the leverage-aware rejection (a robust loss
+// would bias the variance components the noise model estimates from the same residuals).
 SolveSummary solve_ceres(Parameterization& p, const model::Dataset& data, const Weights& w,
-                         const std::vector<int>& rows, bool robust, int max_iterations, std::vector<double>& delta) {
-  ceres::Problem::Options problem_options;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
+                         const std::vector<int>& rows, int max_iterations, std::vector<double>& delta) {
+  ceres::Problem problem;
   const int size = residual_size(w);
-  std::unique_ptr<ceres::LossFunction> loss;
-  if (robust) loss = std::make_unique<ceres::HuberLoss>(std::sqrt(chi_square_quantile(0.999, size)));
   for (int r : rows) {
     const auto k = static_cast<std::size_t>(r);
-    problem.AddResidualBlock(new RowCost(p, data.rows[k], w.position[k], w.orientation, size), loss.get(),
-                             delta.data());
+    problem.AddResidualBlock(new RowCost(p, data.rows[k], w.position[k], w.orientation, size), nullptr, delta.data());
   }
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::DENSE_QR;
@@ -119,7 +213,8 @@ ParameterIds parse_names(const std::vector<std::string>& names, const RobotModel
 }
 
 bool same_id(core::ParameterId a, core::ParameterId b) {
-  return a.kind == b.kind && (a.kind > core::ParameterKind::link_beta || a.link == b.link);
+  return a.kind == b.kind &&
+         ((a.kind > core::ParameterKind::link_beta && !model::is_joint_map_parameter(a.kind)) || a.link == b.link);
 }
 
 bool contains(const ParameterIds& ids, core::ParameterId id) {
@@ -145,12 +240,6 @@ void check_data(const RobotModel& m, const model::Dataset& data) {
   }
 }
 
-Eigen::VectorXd standard_deviations(const Eigen::MatrixXd& j) {
-  const Eigen::MatrixXd info = j.transpose() * j;
-  const Eigen::MatrixXd cov = info.ldlt().solve(Eigen::MatrixXd::Identity(info.rows(), info.cols()));
-  return cov.diagonal().cwiseMax(0.0).cwiseSqrt();
-}
-
 // Identifiability over 100 random configurations within the limits (revolute joints without
 // limits: [-pi, pi]; prismatic: [-1, 1] m): what no choice of configurations can improve on.
 Identifiability structural_identifiability(const RobotModel& m, const ParameterIds& candidates, bool orientation) {
@@ -170,6 +259,39 @@ Identifiability structural_identifiability(const RobotModel& m, const ParameterI
     j.middleRows(rows * k, rows) = e.topRows(rows);
   }
   return analyze_identifiability(j, candidates);
+}
+
+// A model whose base is far from the data (metres: a placeholder for the device-to-robot
+// registration, as in a laser tracker's frame) starts the solver far from the answer. The rigid
+// motion that best maps the model's tool points onto the measured ones (Umeyama, no scale) is
+// composed into the base first; the solve then refines it with everything else.
+void register_base(RobotModel& start, const model::Dataset& data, std::vector<std::string>& notes) {
+  const auto n = static_cast<Eigen::Index>(data.rows.size());
+  Eigen::Matrix3Xd model_points(3, n), measured(3, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const model::Measurement& row = data.rows[static_cast<std::size_t>(i)];
+    model_points.col(i) = model::forward_kinematics(start, row.q).translation;
+    measured.col(i) = row.position;
+  }
+  const auto rms = [&](const Eigen::Matrix3Xd& points) {
+    return std::sqrt((points - measured).colwise().squaredNorm().mean());
+  };
+  const double before = rms(model_points);
+  if (n < 3 || before < 0.05) return;
+  const Eigen::Matrix4d t = Eigen::umeyama(model_points, measured, false);
+  const Eigen::Matrix3Xd moved = (t.topLeftCorner<3, 3>() * model_points).colwise() + t.topRightCorner<3, 1>();
+  const double after = rms(moved);
+  if (!(after < 0.5 * before)) return;
+  model::Transform device_T_device;
+  device_T_device.rotation = t.topLeftCorner<3, 3>();
+  device_T_device.translation = t.topRightCorner<3, 1>();
+  start.base_T_frame0 = device_T_device * start.base_T_frame0;
+  std::ostringstream note;
+  note.setf(std::ios::fixed);
+  note.precision(1);
+  note << "the model's base was " << before * 1e3 << " mm RMS from the data; registered first (rigid fit of the "
+       << "tool points: " << after * 1e3 << " mm RMS), the base changes below are from there";
+  notes.push_back(note.str());
 }
 
 }  // namespace
@@ -203,6 +325,16 @@ AccuracyStats accuracy(const RobotModel& m, const model::Dataset& data, const st
   return s;
 }
 
+Eigen::Matrix3d prediction_covariance(const IdentifyResult& r, std::span<const double> q) {
+  Parameterization p(r.start, r.identifiability.identified);
+  p.set(std::span<const double>(r.change.data(), static_cast<std::size_t>(r.change.size())));
+  Eigen::MatrixXd j;
+  (void)p.pose(q, &j);
+  const Eigen::MatrixXd jp = j.topRows(3);
+  return jp * r.covariance * jp.transpose() +
+         Eigen::Matrix3d::Identity() * r.model_error_position_m * r.model_error_position_m;
+}
+
 // Candidates in order of preference: base, tool, then link by link (theta, d, a, alpha, beta).
 ParameterIds candidate_parameters(const RobotModel& m) {
   const ParameterIds all = model::all_parameters(m);
@@ -210,9 +342,11 @@ ParameterIds candidate_parameters(const RobotModel& m) {
   for (const auto& id : all)
     if (id.kind >= core::ParameterKind::base_x && id.kind <= core::ParameterKind::base_rz) out.push_back(id);
   for (const auto& id : all)
-    if (id.kind >= core::ParameterKind::tool_x) out.push_back(id);
+    if (id.kind >= core::ParameterKind::tool_x && !model::is_joint_map_parameter(id.kind)) out.push_back(id);
   for (const auto& id : all)
     if (id.kind <= core::ParameterKind::link_beta) out.push_back(id);
+  for (const auto& id : all)
+    if (model::is_joint_map_parameter(id.kind)) out.push_back(id);
   return out;
 }
 
@@ -260,16 +394,23 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
   IdentifyResult result;
   const int n = nominal.joint_count();
 
-  // Noise levels: known from the data, given, or estimated.
+  // Noise: the instrument's (from the data, or given) plus the model error (estimated).
   const bool all_covariance = std::all_of(data.rows.begin(), data.rows.end(),
                                           [](const model::Measurement& r) { return r.covariance.has_value(); });
   result.all_covariance = all_covariance;
-  result.sigma_estimated = !all_covariance && !(options.sigma_m > 0.0);
-  result.sigma_m = options.sigma_m > 0.0 ? options.sigma_m : 1e-3;
+  result.sigma_m = options.sigma_m > 0.0 ? options.sigma_m : 0.0;
   result.orientation_used = data.has_orientation && nominal.tool == model::ToolKind::frame;
-  const bool orientation_estimated = result.orientation_used && !(options.orientation_sigma_rad > 0.0);
-  result.orientation_estimated = orientation_estimated;
-  result.orientation_sigma_rad = options.orientation_sigma_rad > 0.0 ? options.orientation_sigma_rad : 1e-3;
+  result.orientation_sigma_rad = options.orientation_sigma_rad > 0.0 ? options.orientation_sigma_rad : 0.0;
+  const bool estimate_position = options.model_error || !(all_covariance || result.sigma_m > 0.0);
+  const bool estimate_orientation =
+      result.orientation_used && (options.model_error || !(result.orientation_sigma_rad > 0.0));
+  result.model_error_estimated = estimate_position || estimate_orientation;
+  const std::vector<Eigen::Matrix3d> instrument = instrument_covariances(data, result.sigma_m);
+  {
+    std::vector<double> sigmas;
+    for (const Eigen::Matrix3d& c : instrument) sigmas.push_back(std::sqrt(c.trace() / 3.0));
+    result.median_instrument_sigma_m = median(sigmas);
+  }
   if (data.has_orientation && nominal.tool == model::ToolKind::point)
     result.notes.push_back("the data has orientations but the model's tool is a point: positions only");
 
@@ -308,8 +449,14 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
   } else {
     result.start = reparameterize_for_identification(nominal, options.parallel_tolerance_rad, &result.notes);
   }
+  const bool base_free = std::none_of(options.fixed.begin(), options.fixed.end(),
+                                      [](const std::string& f) { return f.starts_with("base"); });
+  if (base_free && options.requested.empty()) register_base(result.start, data, result.notes);
 
-  Weights weights = make_weights(data, result.sigma_m, result.orientation_used ? result.orientation_sigma_rad : 0.0);
+  const double orientation_given2 = result.orientation_sigma_rad * result.orientation_sigma_rad;
+  // Start: 1 mm and 1 mrad of model error (the scale of real arms), refined from the residuals.
+  Components components{estimate_position ? 1e-6 : 0.0, estimate_orientation ? 1e-6 : 0.0};
+  Weights weights = noise_weights(instrument, orientation_given2, components, result.orientation_used);
   const int size = residual_size(weights);
 
   // Candidates and identifiability at the start.
@@ -323,7 +470,8 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
       if (!contains(fixed, id)) candidates.push_back(id);
   }
   for (const auto& id : candidates)
-    if (id.kind >= core::ParameterKind::tool_rx && result.start.tool == model::ToolKind::point)
+    if (id.kind >= core::ParameterKind::tool_rx && !model::is_joint_map_parameter(id.kind) &&
+        result.start.tool == model::ToolKind::point)
       throw InputError(model::parameter_name(id) + ": the model's tool is a point, which has no orientation");
   std::vector<int> rows = all_rows(data);
   // What the robot's structure allows at all: the same analysis over random configurations.
@@ -346,7 +494,7 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
   const int p = static_cast<int>(ids.size());
   const int p_structural = static_cast<int>(structural.identified.size());
   const int equations = static_cast<int>(data.rows.size()) * (result.orientation_used ? 6 : 3);
-  const int needed = p_structural + (result.sigma_estimated ? 1 : 0) + (orientation_estimated ? 1 : 0);
+  const int needed = p_structural + (estimate_position ? 1 : 0) + (estimate_orientation ? 1 : 0);
   if (equations < needed) {
     throw InputError(data.source + ": too few measurements: " + std::to_string(data.rows.size()) + " give " +
                      std::to_string(equations) + " equations for " + std::to_string(p_structural) +
@@ -365,106 +513,118 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
 
   Parameterization param(result.start, ids);
   std::vector<double> delta(static_cast<std::size_t>(p), 0.0);
-  const double orientation_scale = result.orientation_used ? 1.0 : 0.0;
+  const double negligible_position2 = 1e-8 * result.median_instrument_sigma_m * result.median_instrument_sigma_m;
 
-  if (options.method == Method::first_order) {
-    // Doty's eps = E psi, one weighted least-squares step at the nominal model.
-    Eigen::VectorXd r;
+  // Solve, estimate the model error from the residuals (REML), re-weight, until it settles.
+  const auto fit = [&] {
+    for (int pass = 0; pass < 20; ++pass) {
+      weights = noise_weights(instrument, orientation_given2, components, result.orientation_used);
+      if (options.method == Method::first_order) {
+        // Doty's eps = E psi, one weighted least-squares step at the nominal model.
+        std::fill(delta.begin(), delta.end(), 0.0);
+        param.set(delta);
+        Eigen::VectorXd r;
+        Eigen::MatrixXd j;
+        stacked(param, data, weights, rows, r, &j);
+        const Eigen::VectorXd step = j.colPivHouseholderQr().solve(-r);
+        for (int k = 0; k < p; ++k) delta[static_cast<std::size_t>(k)] = step(k);
+        param.set(delta);
+        result.iterations = 1;
+        result.termination = "one linear step (first-order model)";
+      } else {
+        const SolveSummary s = solve_ceres(param, data, weights, rows, options.max_iterations, delta);
+        result.iterations += s.iterations;
+        result.termination = s.termination;
+      }
+      ++result.noise_passes;
+      if (!result.model_error_estimated) return;
+      Eigen::VectorXd e;
+      Eigen::MatrixXd j;
+      linearize(param, data, rows, result.orientation_used, e, j);
+      const Components next = reml(e, j, rows, instrument, orientation_given2, components, estimate_position,
+                                   estimate_orientation, size, negligible_position2);
+      const auto moved = [](double a2, double b2) {
+        return std::abs(std::sqrt(a2) - std::sqrt(b2)) > 1e-3 * std::sqrt(std::max(a2, b2));
+      };
+      const bool settled =
+          !moved(next.position2, components.position2) && !moved(next.orientation2, components.orientation2);
+      components = next;
+      if (settled) break;
+      if (pass == 19) result.notes.push_back("the model-error estimate did not settle in 20 passes");
+    }
+    weights = noise_weights(instrument, orientation_given2, components, result.orientation_used);
+  };
+  fit();
+  result.model_error_before_rejection_m = std::sqrt(components.position2);
+
+  // Outliers: studentized residuals against a robust scale, capped (see identify.hpp).
+  const int total = static_cast<int>(data.rows.size());
+  const int cap = std::min(static_cast<int>(options.max_rejected_fraction * total), total - (needed + size - 1) / size);
+  for (int round = 0; options.method == Method::full && options.robust && round < 8; ++round) {
+    const int room = cap - static_cast<int>(result.rejections.size());
+    if (room <= 0) break;
+    Eigen::VectorXd e;
     Eigen::MatrixXd j;
-    stacked(param, data, weights, rows, r, &j);
-    const Eigen::VectorXd step = j.colPivHouseholderQr().solve(-r);
-    for (int k = 0; k < p; ++k) delta[static_cast<std::size_t>(k)] = step(k);
-    param.set(delta);
-    result.iterations = 1;
-    result.termination = "one linear step (first-order model)";
-    if (result.sigma_estimated || orientation_estimated) {
-      // Noise from the residuals of the linear fit.
-      std::vector<double> pos, ori;
-      row_norms(param, data, weights, pos, ori);
-      double sp = 0, so = 0;
-      for (std::size_t i = 0; i < pos.size(); ++i) {
-        sp += pos[i];
-        so += ori[i];
-      }
-      const double dof_each = std::max(1.0, (equations - p) / (result.orientation_used ? 2.0 : 1.0));
-      if (result.sigma_estimated) result.sigma_m *= std::sqrt(sp / dof_each);
-      if (orientation_estimated) result.orientation_sigma_rad *= std::sqrt(so / dof_each);
-      weights = make_weights(data, result.sigma_m, result.orientation_sigma_rad * orientation_scale);
+    linearize(param, data, rows, result.orientation_used, e, j);
+    const WhitenedFit f = whitened_fit(e, j, weights, rows, size);
+    std::vector<double> t(rows.size());
+    std::vector<Eigen::VectorXd> scaled(rows.size());  // (I - H_ii)^-1 r_i
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      const auto at = static_cast<Eigen::Index>(k) * size;
+      const Eigen::MatrixXd q = f.q.middleRows(at, size);
+      const Eigen::MatrixXd i_minus_h = Eigen::MatrixXd::Identity(size, size) - q * q.transpose();
+      scaled[k] = i_minus_h.ldlt().solve(Eigen::VectorXd(f.residual.segment(at, size)));
+      t[k] = f.residual.segment(at, size).dot(scaled[k]);
     }
-  } else {
-    // Full nonlinear: estimate unknown noise, reject outliers, solve again.
-    bool robust = options.robust && !(result.sigma_estimated || orientation_estimated);
-    std::vector<int> previous_outliers{-1};
-    for (int pass = 0; pass < 6; ++pass) {
-      const SolveSummary s = solve_ceres(param, data, weights, rows, robust, options.max_iterations, delta);
-      result.iterations += s.iterations;
-      result.termination = s.termination;
-      std::vector<double> pos, ori;
-      row_norms(param, data, weights, pos, ori);
-      bool rescaled = false;
-      if (result.sigma_estimated || orientation_estimated) {
-        // Median-based while outliers may be in; sum of squares over the inliers once settled.
-        std::vector<double> pin, oin;
-        for (int r : rows) {
-          pin.push_back(pos[static_cast<std::size_t>(r)]);
-          oin.push_back(ori[static_cast<std::size_t>(r)]);
-        }
-        double fp = 1.0, fo = 1.0;
-        if (pass == 0) {
-          fp = median(pin) / chi_square_quantile(0.5, 3);
-          fo = median(oin) / chi_square_quantile(0.5, 3);
-        } else {
-          const double dof_each =
-              std::max(1.0, (static_cast<double>(rows.size()) * size - p) / (result.orientation_used ? 2.0 : 1.0));
-          double sp = 0, so = 0;
-          for (std::size_t i = 0; i < pin.size(); ++i) {
-            sp += pin[i];
-            so += oin[i];
-          }
-          fp = sp / dof_each;
-          fo = so / dof_each;
-        }
-        if (result.sigma_estimated && fp > 0 && std::abs(std::sqrt(fp) - 1.0) > 1e-3) {
-          result.sigma_m *= std::sqrt(fp);
-          rescaled = true;
-        }
-        if (orientation_estimated && fo > 0 && std::abs(std::sqrt(fo) - 1.0) > 1e-3) {
-          result.orientation_sigma_rad *= std::sqrt(fo);
-          rescaled = true;
-        }
-        weights = make_weights(data, result.sigma_m, result.orientation_sigma_rad * orientation_scale);
-        row_norms(param, data, weights, pos, ori);
-        robust = options.robust;
-      }
-      // Outliers: the whole row's whitened squared residual against its chi-square quantile.
-      std::vector<int> outliers;
-      rows.clear();
-      const double threshold = chi_square_quantile(1.0 - options.outlier_probability, size);
-      for (std::size_t i = 0; i < pos.size(); ++i) {
-        if (pos[i] + ori[i] > threshold) {
-          outliers.push_back(static_cast<int>(i));
-        } else {
-          rows.push_back(static_cast<int>(i));
-        }
-      }
-      if (static_cast<int>(rows.size()) * size < needed) {
-        throw InputError(data.source + ": after rejecting " + std::to_string(outliers.size()) +
-                         " outliers too few measurements remain; the model is probably far from the robot, or the "
-                         "noise level too small (the dataset's sigma or covariance columns, or identify --sigma)");
-      }
-      if (outliers == previous_outliers && !rescaled && pass > 0) break;
-      previous_outliers = outliers;
-      if (pass == 5) result.notes.push_back("outlier rejection did not settle in 6 passes");
+    // At least a tenth of what V says: where a given instrument sigma overstates the noise
+    // (noise-free data) the median goes to zero, and rounding must not become outliers.
+    const double scale = std::max(0.1, median(t) / chi_square_quantile(0.5, size));
+    const double threshold = chi_square_quantile(1.0 - options.outlier_probability / total, size);
+    std::vector<std::size_t> over;
+    for (std::size_t k = 0; k < rows.size(); ++k)
+      if (t[k] > scale * threshold) over.push_back(k);
+    if (over.empty()) break;
+    std::sort(over.begin(), over.end(), [&](std::size_t a, std::size_t b) { return t[a] > t[b]; });
+    // Only the clearly worst this round (within a factor 2 of the largest residual): a blunder
+    // pulls the fit and inflates the scale, so its neighbours' residuals mean little until it is out.
+    const double worst = t[over.front()];
+    while (t[over.back()] < 0.25 * worst) over.pop_back();
+    if (static_cast<int>(over.size()) > room) over.resize(static_cast<std::size_t>(room));
+    std::vector<bool> drop(rows.size(), false);
+    for (std::size_t k : over) {
+      const auto at = static_cast<Eigen::Index>(k) * size;
+      Rejection rejection;
+      rejection.line = data.rows[static_cast<std::size_t>(rows[k])].line;
+      rejection.residual_m = e.segment<3>(at).norm();
+      rejection.statistic_ratio = t[k] / (scale * threshold);
+      // Removing row k changes the parameters by R^-1 Q_k^T (I - H_kk)^-1 r_k (first order).
+      const Eigen::VectorXd shift =
+          f.r.triangularView<Eigen::Upper>().solve(Eigen::VectorXd(f.q.middleRows(at, size).transpose() * scaled[k]));
+      for (std::size_t m = 0; m < rows.size(); ++m)
+        rejection.tool_shift_max_m =
+            std::max(rejection.tool_shift_max_m, (j.middleRows<3>(static_cast<Eigen::Index>(m) * size) * shift).norm());
+      result.rejections.push_back(rejection);
+      drop[k] = true;
     }
-    for (int i : previous_outliers)
-      if (i >= 0) result.outlier_lines.push_back(data.rows[static_cast<std::size_t>(i)].line);
+    std::vector<int> kept;
+    for (std::size_t k = 0; k < rows.size(); ++k)
+      if (!drop[k]) kept.push_back(rows[k]);
+    rows = kept;
+    fit();
   }
+  for (const Rejection& r : result.rejections) result.outlier_lines.push_back(r.line);
+  result.model_error_position_m = std::sqrt(components.position2);
+  result.model_error_orientation_rad = std::sqrt(components.orientation2);
 
   // Standard deviations and the chi-square of the fit.
   Eigen::VectorXd r;
   Eigen::MatrixXd j;
   stacked(param, data, weights, rows, r, &j);
-  result.stddev = standard_deviations(j);
+  {
+    const Eigen::MatrixXd info = j.transpose() * j;
+    result.covariance = info.ldlt().solve(Eigen::MatrixXd::Identity(info.rows(), info.cols()));
+    result.stddev = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  }
   result.change = Eigen::Map<Eigen::VectorXd>(delta.data(), p);
   const double dof = static_cast<double>(r.size()) - p;
   result.chi_square_per_dof = dof > 0 ? r.squaredNorm() / dof : 0.0;
@@ -510,29 +670,44 @@ std::string format_report(const IdentifyResult& r) {
         << std::fixed << '\n';
     for (const HeldFixed& h : r.identifiability.held_fixed)
       out << "  held fixed: " << model::parameter_name(h.id) << " (" << h.reason << ")\n";
-    out << "noise: position ";
+    out << "noise: position: instrument ";
     if (r.all_covariance) {
-      out << "covariance of each measurement from the data";
+      out << "covariance of each row (median sigma " << std::setprecision(4) << r.median_instrument_sigma_m * 1e3
+          << " mm)";
+    } else if (r.sigma_m > 0.0) {
+      out << "sigma " << std::setprecision(4) << r.sigma_m * 1e3 << " mm (given)";
     } else {
-      out << "sigma " << std::setprecision(4) << r.sigma_m * 1e3 << " mm"
-          << (r.sigma_estimated ? " (estimated from the residuals)" : " (given)");
+      out << "unknown";
     }
-    if (r.orientation_used)
-      out << ", orientation sigma " << r.orientation_sigma_rad * kDegPerRad << " deg"
-          << (r.orientation_estimated ? " (estimated)" : " (given)");
-    out << "; chi-square per degree of freedom " << r.chi_square_per_dof << '\n';
+    if (r.model_error_estimated)
+      out << " + model error " << std::setprecision(4) << r.model_error_position_m * 1e3 << " mm per axis (REML)";
+    if (r.orientation_used) {
+      out << "; orientation: instrument ";
+      if (r.orientation_sigma_rad > 0.0) {
+        out << "sigma " << r.orientation_sigma_rad * kDegPerRad << " deg (given)";
+      } else {
+        out << "unknown";
+      }
+      if (r.model_error_estimated)
+        out << " + model error " << r.model_error_orientation_rad * kDegPerRad << " deg per axis (REML)";
+    }
+    out << "; chi-square per degree of freedom " << r.chi_square_per_dof << "; the standard deviations below include "
+        << (r.model_error_estimated ? "the model error" : "the instrument noise only") << '\n';
+    for (const Rejection& x : r.rejections)
+      out << "  rejected line " << x.line << ": residual " << x.residual_m * 1e3 << " mm, studentized statistic "
+          << x.statistic_ratio << " x the threshold; removing it moves the predicted tool by up to "
+          << x.tool_shift_max_m * 1e3 << " mm over the data\n";
+    if (!r.rejections.empty())
+      out << "  model error before rejection " << r.model_error_before_rejection_m * 1e3 << " mm, after "
+          << r.model_error_position_m * 1e3 << " mm\n";
     out << "parameter        change          stddev\n";
     for (std::size_t k = 0; k < r.identifiability.identified.size(); ++k) {
       const core::ParameterId id = r.identifiability.identified[k];
-      const bool angle = id.kind == core::ParameterKind::link_theta || id.kind == core::ParameterKind::link_alpha ||
-                         id.kind == core::ParameterKind::link_beta ||
-                         (id.kind >= core::ParameterKind::base_rx && id.kind <= core::ParameterKind::base_rz) ||
-                         id.kind >= core::ParameterKind::tool_rx;
-      const double s = angle ? kDegPerRad : 1e3;
+      const model::DisplayUnit u = model::display_unit(r.model, id);
       const auto i = static_cast<Eigen::Index>(k);
       char line[160];
       std::snprintf(line, sizeof line, "  %-10s %12.5f %-4s %10.5f %s\n", model::parameter_name(id).c_str(),
-                    r.change(i) * s, angle ? "deg" : "mm", r.stddev(i) * s, angle ? "deg" : "mm");
+                    r.change(i) * u.per_si, u.name, r.stddev(i) * u.per_si, u.name);
       out << line;
     }
   }

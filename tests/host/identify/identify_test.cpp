@@ -200,9 +200,9 @@ TEST_CASE("full identification with noise: outliers rejected by line, noise esti
   d.rows[10].position.z() += 0.01;
   const identify::IdentifyResult r = identify::identify(nominal, d, {});
   CHECK(r.outlier_lines == std::vector<int>{d.rows[10].line});
-  CHECK(r.sigma_estimated);
-  CHECK(r.sigma_m == doctest::Approx(5e-5).epsilon(0.15));
-  CHECK(r.orientation_sigma_rad == doctest::Approx(1e-4).epsilon(0.15));
+  CHECK(r.model_error_estimated);
+  CHECK(r.model_error_position_m == doctest::Approx(5e-5).epsilon(0.15));
+  CHECK(r.model_error_orientation_rad == doctest::Approx(1e-4).epsilon(0.15));
   const auto held_out = sim::random_configurations(nominal, 100, rng);
   CHECK(simulation::prediction_rms(r.model, truth, held_out) < 1e-4);
   // The standard deviations describe the errors: the tool point error is within a few sigma.

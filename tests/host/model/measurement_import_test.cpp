@@ -2,6 +2,7 @@
 // Euler conventions, standard deviations, errors naming file:line:column, and the shared real
 // UR10 laser-tracker export read as it is.
 #include "host/model/measurement_import.hpp"
+#include "tests/host/model/ur10_realdata.hpp"
 
 #include <doctest/doctest.h>
 
@@ -105,19 +106,7 @@ TEST_CASE("tabs and points; errors name file, line and column") {
 }
 
 TEST_CASE("the real UR10 laser-tracker export, read as it is") {
-  model::ImportOptions o;
-  o.joints = {"shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
-              "wrist_1_joint",      "wrist_2_joint",       "wrist_3_joint"};
-  o.joint_unit = model::AngleUnit::rad;
-  o.position = {"measurement_x", "measurement_y", "measurement_z"};
-  o.position_unit = model::LengthUnit::mm;
-  o.position_std = {"measurement_std_x", "measurement_std_y", "measurement_std_z"};
-  o.angles = {"measurement_rx", "measurement_ry", "measurement_rz"};
-  o.convention = model::parse_euler_convention("intrinsic-xyz");
-  o.angle_unit = model::AngleUnit::deg;
-  o.angle_std = {"measurement_std_rx", "measurement_std_ry", "measurement_std_rz"};
-  const model::ImportResult r = model::import_measurements_file(
-      KINCAL_REALDATA_DIR "/ur10-laser-tracker/measurements_joint_configurations.csv", o);
+  const model::ImportResult r = kincal::realdata::import_ur10(KINCAL_REALDATA_DIR);
   CHECK(r.separator == ';');
   CHECK(r.decimal_comma);
   REQUIRE(r.data.rows.size() == 1495);
