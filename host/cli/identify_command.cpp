@@ -6,7 +6,9 @@
 #include <numbers>
 #include <sstream>
 
+#include "host/cli/model_option.hpp"
 #include "host/cli/number_options.hpp"
+#include "host/cli/urdf_command.hpp"
 #include "host/files/output_file.hpp"
 #include "host/identify/identify.hpp"
 #include "host/identify/plausibility.hpp"
@@ -19,7 +21,8 @@ namespace kincal::cli {
 namespace {
 
 struct IdentifyArgs {
-  std::string model, data, out, method = "full", start = "nominal", validate, urdf;
+  ModelOption model;
+  std::string data, out, method = "full", start = "nominal", validate, urdf;
   std::vector<std::string> fix, params;
   double sigma_m = 0.0, orientation_sigma_deg = 0.0, outlier_probability = 1e-4;
   bool no_robust = false, accept_implausible = false;
@@ -39,8 +42,8 @@ int run_identify(const IdentifyArgs& a) {
   options.outlier_probability = a.outlier_probability;
   try {
     files::refuse_overwriting({{"--out", a.out}, {"--urdf", a.urdf}},
-                              {{"--model", a.model}, {"--data", a.data}, {"--validate", a.validate}});
-    const model::RobotModel nominal = model::load_model(a.model);
+                              {{"--model", a.model.path}, {"--data", a.data}, {"--validate", a.validate}});
+    const model::RobotModel nominal = a.model.load();
     const model::Dataset data = model::read_dataset(a.data);
     if (!a.accept_implausible)
       identify::require_plausible(nominal, data, "--accept-implausible", {.noise_given = a.sigma_m > 0});
@@ -72,8 +75,19 @@ int run_identify(const IdentifyArgs& a) {
     model::save_model(result.model, a.out);
     std::cout << "wrote " << a.out << '\n';
     if (!a.urdf.empty()) {
-      files::write_file_atomically(a.urdf, model::write_urdf(result.model));
-      std::cout << "wrote " << a.urdf << '\n';
+      if (model::is_urdf_path(a.model.path)) {  // the robot's own URDF, calibrated
+        std::ifstream in(a.model.path);
+        std::ostringstream original;
+        original << in.rdbuf();
+        const model::CalibratedUrdf c =
+            model::write_calibrated_urdf(original.str(), a.model.path, a.model.ends, result.model);
+        files::write_file_atomically(a.urdf, c.text);
+        std::cout << "wrote " << a.urdf << " (" << a.model.path << " with the calibrated joint origins)\n"
+                  << print_registration(c);
+      } else {
+        files::write_file_atomically(a.urdf, model::write_urdf(result.model));
+        std::cout << "wrote " << a.urdf << '\n';
+      }
     }
     return 0;
   } catch (const std::exception& e) {
@@ -87,7 +101,7 @@ int run_identify(const IdentifyArgs& a) {
 void add_identify_command(CLI::App& app, int& status) {
   auto a = std::make_shared<IdentifyArgs>();
   auto* cmd = app.add_subcommand("identify", "Identify a robot's kinematic parameters from measurements");
-  cmd->add_option("--model", a->model, "nominal model (YAML)")->required();
+  add_model_option(*cmd, a->model, "nominal model");
   cmd->add_option("--data", a->data, "measurements (CSV: q1..qN,x,y,z[,qw,qx,qy,qz][,cxx..czz|,sigma])")->required();
   cmd->add_option("--out", a->out, "calibrated model to write (YAML, same schema)")->required();
   cmd->add_option("--method", a->method,
@@ -111,7 +125,9 @@ void add_identify_command(CLI::App& app, int& status) {
   cmd->add_flag("--no-robust", a->no_robust, "plain least squares (no Huber loss)");
   cmd->add_flag("--accept-implausible", a->accept_implausible,
                 "solve even when the data look wrong for the model (units, quaternion order, limits)");
-  cmd->add_option("--urdf", a->urdf, "also write the calibrated model as URDF");
+  cmd->add_option(
+      "--urdf", a->urdf,
+      "also write the calibrated model as URDF (a URDF --model: that URDF with the calibrated joint origins)");
   cmd->callback([a, &status] { status = run_identify(*a); });
 }
 

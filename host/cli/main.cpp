@@ -9,6 +9,7 @@
 #include "host/cli/discover_command.hpp"
 #include "host/cli/demo.hpp"
 #include "host/cli/exercise.hpp"
+#include "host/cli/export_command.hpp"
 #include "host/cli/fiducials.hpp"
 #include "host/cli/identify_command.hpp"
 #include "host/cli/import_command.hpp"
@@ -39,6 +40,7 @@ int main(int argc, char** argv) {
   kincal::cli::add_predict_command(app, status);
   kincal::cli::add_plan_command(app, status);
   kincal::cli::add_urdf_command(app, status);
+  kincal::cli::add_export_command(app, status);
   kincal::cli::add_camera_command(app, status);
 
   CLI11_PARSE(app, argc, argv);

@@ -5,6 +5,7 @@
 #include <memory>
 #include <sstream>
 
+#include "host/cli/model_option.hpp"
 #include "host/files/output_file.hpp"
 #include "host/identify/plan.hpp"
 #include "host/model/model_file.hpp"
@@ -14,7 +15,8 @@ namespace kincal::cli {
 namespace {
 
 struct PlanArgs {
-  std::string model, out;
+  ModelOption model;
+  std::string out;
   int count = 30, pool = 1000;
   std::uint64_t seed = 1;
   bool orientation = false;
@@ -22,8 +24,8 @@ struct PlanArgs {
 
 int run_plan(const PlanArgs& a) {
   try {
-    files::refuse_overwriting({{"-o", a.out}}, {{"--model", a.model}});
-    const model::RobotModel m = model::load_model(a.model);
+    files::refuse_overwriting({{"-o", a.out}}, {{"--model", a.model.path}});
+    const model::RobotModel m = a.model.load();
     identify::PlanOptions options;
     options.count = a.count;
     options.pool = a.pool;
@@ -67,7 +69,7 @@ int run_plan(const PlanArgs& a) {
 void add_plan_command(CLI::App& app, int& status) {
   auto a = std::make_shared<PlanArgs>();
   auto* cmd = app.add_subcommand("plan", "Propose calibration configurations that maximize observability");
-  cmd->add_option("--model", a->model, "model (YAML) with joint limits")->required();
+  add_model_option(*cmd, a->model, "model with joint limits");
   cmd->add_option("-n,--count", a->count, "number of configurations (default 30)")->check(CLI::Range(1, 100000));
   cmd->add_option("--pool", a->pool, "random candidate configurations to choose from (default 1000)")
       ->check(CLI::Range(1, 1000000));

@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 
+#include "host/cli/model_option.hpp"
 #include "host/files/output_file.hpp"
 #include "host/model/dataset.hpp"
 #include "host/model/model_file.hpp"
@@ -23,10 +24,10 @@ std::string number_text(double v) {
   return ec == std::errc() ? std::string(buffer, end) : std::string("nan");
 }
 
-int run_predict(const std::string& model_path, const std::string& joints_path, const std::string& out_path) {
+int run_predict(const ModelOption& model_option, const std::string& joints_path, const std::string& out_path) {
   try {
-    files::refuse_overwriting({{"-o", out_path}}, {{"--model", model_path}, {"--joints", joints_path}});
-    const model::RobotModel m = model::load_model(model_path);
+    files::refuse_overwriting({{"-o", out_path}}, {{"--model", model_option.path}, {"--joints", joints_path}});
+    const model::RobotModel m = model_option.load();
     std::ifstream in(joints_path);
     if (!in) throw model::InputError(joints_path + ": cannot open the joints file");
     const std::vector<std::vector<double>> rows = model::parse_joints(in, joints_path);
@@ -62,15 +63,15 @@ int run_predict(const std::string& model_path, const std::string& joints_path, c
 }  // namespace
 
 void add_predict_command(CLI::App& app, int& status) {
-  auto model_path = std::make_shared<std::string>();
+  auto model_option = std::make_shared<ModelOption>();
   auto joints_path = std::make_shared<std::string>();
   auto out_path = std::make_shared<std::string>();
   auto* cmd = app.add_subcommand("predict", "Predict the tool point (pose) of a model for rows of joint readings");
-  cmd->add_option("--model", *model_path, "model (YAML)")->required();
+  add_model_option(*cmd, *model_option, "model");
   cmd->add_option("--joints", *joints_path, "joint readings (CSV with header q1..qN; other columns ignored)")
       ->required();
   cmd->add_option("-o,--out", *out_path, "output CSV (default: standard output)");
-  cmd->callback([=, &status] { status = run_predict(*model_path, *joints_path, *out_path); });
+  cmd->callback([=, &status] { status = run_predict(*model_option, *joints_path, *out_path); });
 }
 
 }  // namespace kincal::cli

@@ -23,6 +23,7 @@
 #include <sstream>
 
 #include "host/can/socketcan.hpp"
+#include "host/cli/model_option.hpp"
 #include "host/files/output_file.hpp"
 #include "host/identify/plausibility.hpp"
 #include "host/model/model_file.hpp"
@@ -38,8 +39,8 @@ namespace kincal::cli {
 namespace {
 
 struct SessionArgs {
-  std::string model, rig = "platform", plan, validation_plan, home, robot = "sim", robot_cmd, can,
-                     journal = "session.journal";
+  ModelOption model;
+  std::string rig = "platform", plan, validation_plan, home, robot = "sim", robot_cmd, can, journal = "session.journal";
   std::string out, report, dataset;
   int sweeps = 0, poses = 40, validation = 20, squares = 8;
   bool fd = false, resume = false, accept_implausible = false;
@@ -82,10 +83,12 @@ std::vector<std::vector<double>> random_observable(const model::RobotModel& nomi
 }
 
 int run(const SessionArgs& a) {
-  files::refuse_overwriting(
-      {{"--out", a.out}, {"--report", a.report}, {"--dataset", a.dataset}},
-      {{"--journal", a.journal}, {"--model", a.model}, {"--plan", a.plan}, {"--validation-plan", a.validation_plan}});
-  const model::RobotModel file = model::load_model(a.model);
+  files::refuse_overwriting({{"--out", a.out}, {"--report", a.report}, {"--dataset", a.dataset}},
+                            {{"--journal", a.journal},
+                             {"--model", a.model.path},
+                             {"--plan", a.plan},
+                             {"--validation-plan", a.validation_plan}});
+  const model::RobotModel file = a.model.load();
   const bool simulated = a.robot == "sim" && a.robot_cmd.empty();
   const bool platform = a.rig == "platform";
 
@@ -143,8 +146,9 @@ int run(const SessionArgs& a) {
   options.resume = a.resume;
   options.progress_terminal = ::isatty(STDERR_FILENO) != 0;
   std::ostringstream identity;
-  identity << "model=" << a.model << " rig=" << a.rig << " robot=" << (simulated ? "sim" : "real") << " seed=" << a.seed
-           << " plan=" << (a.plan.empty() ? "generated" : a.plan) << " sweeps=" << a.sweeps << " home=" << a.home
+  identity << "model=" << a.model.path << " rig=" << a.rig << " robot=" << (simulated ? "sim" : "real")
+           << " seed=" << a.seed << " plan=" << (a.plan.empty() ? "generated" : a.plan) << " sweeps=" << a.sweeps
+           << " home=" << a.home
            << " validation=" << (a.validation_plan.empty() ? std::to_string(a.validation) : a.validation_plan);
   options.identity = identity.str();
   const session::SessionData data = session::run_session(nominal, plan, robot, measure, options, std::cerr);
@@ -195,7 +199,7 @@ int run(const SessionArgs& a) {
 void add_session_command(CLI::App& app, int& status) {
   auto a = std::make_shared<SessionArgs>();
   auto* cmd = app.add_subcommand("session", "Run a calibration session: move, measure, journal, identify, upload");
-  cmd->add_option("--model", a->model, "robot model file (YAML)")->required()->check(CLI::ExistingFile);
+  add_model_option(*cmd, a->model, "robot model");
   cmd->add_option("--rig", a->rig, "platform (camera + rangers over CAN) or stereo (beacon and stereo pair)")
       ->check(CLI::IsMember({"platform", "stereo"}))
       ->capture_default_str();

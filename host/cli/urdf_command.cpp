@@ -1,34 +1,78 @@
 #include "host/cli/urdf_command.hpp"
 
+#include <fstream>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
+#include "host/cli/model_option.hpp"
 #include "host/files/output_file.hpp"
 #include "host/model/model_file.hpp"
 #include "host/model/urdf.hpp"
 
 namespace kincal::cli {
 
-void add_urdf_command(CLI::App& app, int& status) {
-  auto model_path = std::make_shared<std::string>();
-  auto out_path = std::make_shared<std::string>();
-  auto* cmd = app.add_subcommand("urdf", "Export a model as URDF (geometry in the joint origins)");
-  cmd->add_option("--model", *model_path, "model (YAML)")->required();
-  cmd->add_option("-o,--out", *out_path, "output file (default: standard output)");
-  cmd->callback([=, &status] {
-    try {
-      files::refuse_overwriting({{"-o", *out_path}}, {{"--model", *model_path}});
-      const std::string text = model::write_urdf(model::load_model(*model_path));
-      if (out_path->empty())
-        std::cout << text;
-      else
-        files::write_file_atomically(*out_path, text);
-      status = 0;
-    } catch (const std::exception& e) {
-      std::cerr << "kincal urdf: " << e.what() << '\n';
-      status = 1;
+namespace {
+
+struct UrdfArgs {
+  ModelOption model;
+  std::string original, out;
+};
+
+int run_urdf(const UrdfArgs& a) {
+  try {
+    files::refuse_overwriting({{"-o", a.out}}, {{"--model", a.model.path}, {"--original", a.original}});
+    std::string text;
+    if (a.original.empty()) {
+      text = model::write_urdf(a.model.load());
+    } else {
+      // The chain options name the original's chain; a YAML model has none.
+      const model::RobotModel m =
+          model::load_model(a.model.path, model::is_urdf_path(a.model.path) ? a.model.ends : model::UrdfChainEnds{});
+      std::ifstream in(a.original);
+      if (!in) throw model::InputError(a.original + ": cannot open the URDF file");
+      std::ostringstream original;
+      original << in.rdbuf();
+      const model::CalibratedUrdf c = model::write_calibrated_urdf(original.str(), a.original, a.model.ends, m);
+      text = c.text;
+      std::ostream& report = a.out.empty() ? std::cerr : std::cout;
+      report << print_registration(c);
     }
-  });
+    if (a.out.empty()) {
+      std::cout << text;
+    } else {
+      files::write_file_atomically(a.out, text);
+      std::cout << "wrote " << a.out << '\n';
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "kincal urdf: " << e.what() << '\n';
+    return 1;
+  }
+}
+
+}  // namespace
+
+std::string print_registration(const model::CalibratedUrdf& c) {
+  const model::Vector3 rpy = model::rpy_from_rotation(c.device_T_base_link.rotation);
+  std::ostringstream out;
+  out.precision(6);
+  out << "the base link in the measuring device's frame (device_T_base_link): xyz "
+      << c.device_T_base_link.translation.x() << ' ' << c.device_T_base_link.translation.y() << ' '
+      << c.device_T_base_link.translation.z() << " m, rpy " << rpy.x() << ' ' << rpy.y() << ' ' << rpy.z() << " rad\n";
+  for (const std::string& note : c.notes) out << "note: " << note << '\n';
+  return out.str();
+}
+
+void add_urdf_command(CLI::App& app, int& status) {
+  auto a = std::make_shared<UrdfArgs>();
+  auto* cmd = app.add_subcommand("urdf", "Write a model as URDF, or into the robot's own URDF (--original)");
+  add_model_option(*cmd, a->model, "the model to write");
+  cmd->add_option("--original", a->original,
+                  "the robot's URDF: keep it all (names, meshes, inertias) and put the model's geometry into the "
+                  "joint origins of its chain (--base-link, --tip-link)");
+  cmd->add_option("-o,--out", a->out, "output file (default: standard output)");
+  cmd->callback([a, &status] { status = run_urdf(*a); });
 }
 
 }  // namespace kincal::cli

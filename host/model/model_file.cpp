@@ -264,7 +264,10 @@ RobotModel parse_model(const std::string& text, const std::string& source) {
   }
 }
 
-RobotModel load_model(const std::string& path) {
+RobotModel load_model(const std::string& path, const UrdfChainEnds& ends) {
+  if (is_urdf_path(path)) return model_from_urdf(read_urdf_chain(path, ends));
+  if (!ends.base_link.empty() || !ends.tip_link.empty())
+    throw InputError(path + ": --base-link and --tip-link are for URDF models (*.urdf)");
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot open the model file");
   std::ostringstream text;

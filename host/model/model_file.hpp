@@ -32,11 +32,13 @@
 #include <string>
 
 #include "host/model/robot_model.hpp"
+#include "host/model/urdf_chain.hpp"
 
 namespace kincal::model {
 
-// Throws InputError (file missing, YAML syntax, schema).
-RobotModel load_model(const std::string& path);
+// Throws InputError (file missing, YAML syntax, schema). A path ending in .urdf is read as a
+// URDF: the chain between `ends` (urdf_chain.hpp); `ends` is for URDF files only.
+RobotModel load_model(const std::string& path, const UrdfChainEnds& ends = {});
 // `source` names the text in messages.
 RobotModel parse_model(const std::string& text, const std::string& source);
 

@@ -1,26 +1,24 @@
 #include "host/model/urdf.hpp"
 
+#include <tinyxml2.h>
+
 #include <cmath>
-#include <cstdio>
 #include <sstream>
 
+#include "host/model/axes.hpp"
+#include "host/model/number_text.hpp"
 #include "host/model/xml_text.hpp"
 
 namespace kincal::model {
 
 namespace {
 
-std::string num(double v) {
-  if (v == 0.0) v = 0.0;
-  char buffer[40];
-  std::snprintf(buffer, sizeof buffer, "%.17g", v);
-  return buffer;
-}
+std::string num(double v) { return shortest_number_text(v); }
+
+std::string triple(const Vector3& v) { return num(v.x()) + " " + num(v.y()) + " " + num(v.z()); }
 
 std::string origin(const Transform& t) {
-  const Vector3 rpy = rpy_from_rotation(t.rotation);
-  return "<origin xyz=\"" + num(t.translation.x()) + " " + num(t.translation.y()) + " " + num(t.translation.z()) +
-         "\" rpy=\"" + num(rpy.x()) + " " + num(rpy.y()) + " " + num(rpy.z()) + "\"/>";
+  return "<origin xyz=\"" + triple(t.translation) + "\" rpy=\"" + triple(rpy_from_rotation(t.rotation)) + "\"/>";
 }
 
 Transform rx(double angle) {
@@ -85,6 +83,135 @@ std::string write_urdf(const RobotModel& model) {
   out << "    " << origin(previous_s * chain.flange_T_tool) << "\n  </joint>\n";
   out << "</robot>\n";
   return out.str();
+}
+
+namespace {
+
+// `body_T_link` frame of a link a movable joint carries, moved onto the joint's calibrated axis
+// line (point, unit direction) with `axis_in_link` along it: the smallest turn and, for a
+// revolute joint, the slide along the axis to the foot of the perpendicular.
+Transform onto_axis(const Transform& estimate, const Vector3& axis_in_link, const AxisLine& axis) {
+  Transform t = estimate;
+  const Vector3 direction = axis.direction.normalized();
+  t.rotation = Eigen::Quaterniond::FromTwoVectors(estimate.rotation * axis_in_link, direction).toRotationMatrix() *
+               estimate.rotation;
+  if (axis.type == core::JointType::revolute)
+    t.translation = axis.point + (estimate.translation - axis.point).dot(direction) * direction;
+  return t;
+}
+
+tinyxml2::XMLElement* find_joint(tinyxml2::XMLElement& robot, const std::string& name) {
+  for (tinyxml2::XMLElement* e = robot.FirstChildElement("joint"); e; e = e->NextSiblingElement("joint"))
+    if (const char* n = e->Attribute("name"); n != nullptr && name == n) return e;
+  return nullptr;
+}
+
+void set_origin(tinyxml2::XMLDocument& doc, tinyxml2::XMLElement& joint, const Transform& t) {
+  tinyxml2::XMLElement* o = joint.FirstChildElement("origin");
+  if (o == nullptr) {
+    o = doc.NewElement("origin");
+    joint.InsertEndChild(o);
+  }
+  o->SetAttribute("xyz", triple(t.translation).c_str());
+  o->SetAttribute("rpy", triple(rpy_from_rotation(t.rotation)).c_str());
+}
+
+std::string millimetres(double m) {
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  out.precision(3);
+  out << m * 1e3 << " mm";
+  return out.str();
+}
+
+}  // namespace
+
+CalibratedUrdf write_calibrated_urdf(const std::string& original_text, const std::string& source,
+                                     const UrdfChainEnds& ends, const RobotModel& calibrated) {
+  const UrdfChain chain = parse_urdf_chain(original_text, source, ends);
+  const RobotModel nominal = model_from_urdf(chain);
+  const int n = nominal.joint_count();
+  if (calibrated.joint_count() != n)
+    throw InputError(source + ": the chain " + chain.base_link + " -> " + chain.tip_link + " has " + std::to_string(n) +
+                     " movable joints, the calibrated model " + std::to_string(calibrated.joint_count()));
+  for (std::size_t i = 0; i < nominal.joints.size(); ++i)
+    if (nominal.joints[i].type != calibrated.joints[i].type)
+      throw InputError(source + ": joint '" + nominal.joints[i].name + "' and the calibrated model's joint " +
+                       std::to_string(i + 1) + " are not of the same type");
+
+  CalibratedUrdf result;
+  // Register: the calibrated frame 0 is put where the URDF's is.
+  result.device_T_base_link = calibrated.base_T_frame0 * nominal.base_T_frame0.inverse();
+  RobotModel registered = calibrated;
+  registered.base_T_frame0 = nominal.base_T_frame0;
+  const std::vector<double> zero(static_cast<std::size_t>(n), 0.0);
+  // The calibrated geometry in the nominal's conventions, so that frame i means the same
+  // place on body i in both.
+  const RobotModel cal =
+      chain_from_axes(nominal, joint_axes(registered, zero), zero, forward_kinematics(registered, zero));
+  const std::vector<AxisLine> cal_axes = joint_axes(cal, zero);
+  const core::ChainFrames<double> nominal_frames = chain_at_joints(nominal, zero).frames;
+  const core::ChainFrames<double> cal_frames = chain_at_joints(cal, zero).frames;
+  const Transform cal_tool = forward_kinematics(cal, zero);
+  const auto body_moved = [&](int body, const Transform& nominal_pose) {
+    const auto b = static_cast<std::size_t>(body);
+    return cal_frames.base_T_frame[b] * nominal_frames.base_T_frame[b].inverse() * nominal_pose;
+  };
+
+  const std::vector<Transform> nominal_poses = urdf_link_poses(chain, zero);
+  std::vector<Transform> poses(chain.joints.size());
+  std::vector<bool> rewrite(chain.joints.size(), false);
+  int body = 0;
+  for (std::size_t k = 0; k < chain.joints.size(); ++k) {
+    const UrdfJoint& j = chain.joints[k];
+    const Transform parent = k == 0 ? Transform{} : poses[k - 1];
+    const bool last = k + 1 == chain.joints.size();
+    if (j.type != UrdfJointType::fixed) {
+      ++body;
+      poses[k] = onto_axis(body_moved(body, nominal_poses[k]), j.axis, cal_axes[static_cast<std::size_t>(body - 1)]);
+      rewrite[k] = true;
+      if (last) {
+        const Transform off = poses[k].inverse() * cal_tool;
+        const double angle = Eigen::AngleAxisd(off.rotation).angle();
+        if (off.translation.norm() > 1e-9 || (calibrated.tool == ToolKind::frame && angle > 1e-9))
+          result.notes.push_back("the tip link '" + chain.tip_link + "' is the child of joint '" + j.name +
+                                 "': the calibrated tool (" + millimetres(off.translation.norm()) +
+                                 " from it) is not in the URDF; add a fixed joint to a tool link");
+      }
+    } else if (last) {
+      poses[k] = calibrated.tool == ToolKind::frame ? cal_tool : body_moved(body, nominal_poses[k]);
+      poses[k].translation = cal_tool.translation;
+      rewrite[k] = true;
+    } else {
+      poses[k] = parent * j.parent_T_joint;
+    }
+  }
+
+  tinyxml2::XMLDocument doc;
+  doc.Parse(original_text.c_str(), original_text.size());  // parse_urdf_chain checked it
+  tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
+  for (std::size_t k = 0; k < chain.joints.size(); ++k) {
+    if (!rewrite[k]) continue;
+    const Transform parent = k == 0 ? Transform{} : poses[k - 1];
+    set_origin(doc, *find_joint(*robot, chain.joints[k].name), parent.inverse() * poses[k]);
+  }
+  const Transform& r = result.device_T_base_link;
+  std::string comment = " kincal: calibrated joint origins of the chain " + chain.base_link + " -> " + chain.tip_link +
+                        " (model '" + calibrated.name + "'); the measuring device's frame to " + chain.base_link +
+                        ": xyz=\"" + triple(r.translation) + "\" rpy=\"" + triple(rpy_from_rotation(r.rotation)) +
+                        "\" ";
+  for (const std::string& note : result.notes) comment += "; note: " + note + " ";
+  for (std::size_t p = comment.find("--"); p != std::string::npos; p = comment.find("--")) comment.replace(p, 2, "- ");
+  tinyxml2::XMLNode* first = doc.FirstChild();
+  tinyxml2::XMLComment* c = doc.NewComment(comment.c_str());
+  if (first != nullptr && first->ToDeclaration() != nullptr)
+    doc.InsertAfterChild(first, c);
+  else
+    doc.InsertFirstChild(c);
+  tinyxml2::XMLPrinter printer;
+  doc.Print(&printer);
+  result.text = printer.CStr();
+  return result;
 }
 
 }  // namespace kincal::model

@@ -1,6 +1,8 @@
-// URDF export: the model's geometry, calibrated or not, in the joint origins themselves (no
-// <calibration> tags, which most consumers ignore), so any URDF consumer (robot_state_publisher,
-// MoveIt, Pinocchio) computes the same tool pose as forward_kinematics() for the same readings.
+// URDF out, two ways.
+//
+// write_urdf: a URDF made from the model alone. The model's geometry, calibrated or not, in the joint origins
+// themselves (no <calibration> tags, which most consumers ignore), so any URDF consumer (robot_state_publisher, MoveIt,
+// Pinocchio) computes the same tool pose as forward_kinematics() for the same readings.
 //
 // Every link of link_model.hpp factors as P_i * M_i(q) * S_i with M_i = Rz(q) (revolute) or
 // Tz(q) (prismatic): standard DH and Doty have P_i = I and S_i the whole link at q = 0 (the
@@ -11,14 +13,49 @@
 // values are the controller's readings. Revolute joints without limits become "continuous";
 // prismatic joints without limits get +-1e9 m (URDF requires a limit). effort and velocity,
 // which URDF requires and kinematics does not know, are written as 0.
+//
+// write_calibrated_urdf: the robot's own URDF with the calibrated geometry in its joint origins
+// and everything else kept (link and joint names, meshes, inertias, limits, axes, other
+// branches, comments). Which frames move and why:
+//   - The calibrated model (any conventions) is registered to the URDF: device_T_base_link =
+//     calibrated base_T_frame0 * (nominal base_T_frame0)^-1, nominal = model_from_urdf of the
+//     same chain. So the base link keeps its nominal place relative to the first joint axis;
+//     the device-to-robot registration (e.g. tracker to base) is returned and written in a
+//     comment, not into the robot.
+//   - Each link frame that a movable joint carries stays where it sits on its own body: its
+//     nominal pose relative to the body's kincal frame (the frame on the next joint axis, or
+//     the flange), carried over to the calibrated body, then slid along and turned about its
+//     own calibrated joint axis only as much as needed to lie on that axis with the URDF's
+//     <axis> unchanged. The DH drift of nearly parallel axes (d of metres that cancel) never
+//     reaches the link frames, so meshes stay on their bodies (the reason UR's description
+//     moves offsets along the joint axes).
+//   - Fixed joints keep their origins, except the last one before the tip link, which takes
+//     the calibrated tool (a frame tool: the whole pose; a point tool: the position). When the
+//     tip link is the last movable joint's child, the tool's calibration cannot be written and
+//     a note says how far it is off.
+// Forward kinematics of the written URDF, mapped by device_T_base_link, equal the calibrated
+// model's for every reading (tests/host/model/urdf_test.cpp, to 1e-9 m).
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "host/model/robot_model.hpp"
+#include "host/model/urdf_chain.hpp"
 
 namespace kincal::model {
 
 std::string write_urdf(const RobotModel& model);
+
+struct CalibratedUrdf {
+  std::string text;
+  Transform device_T_base_link{};  // the registration the model's base transform held
+  std::vector<std::string> notes;  // what the URDF could not carry
+};
+
+// Throws InputError when the URDF is bad (urdf_chain.hpp) or its chain does not match the model
+// (joint count or types).
+CalibratedUrdf write_calibrated_urdf(const std::string& original_text, const std::string& source,
+                                     const UrdfChainEnds& ends, const RobotModel& calibrated);
 
 }  // namespace kincal::model

@@ -1,0 +1,345 @@
+#include "host/model/urdf_chain.hpp"
+
+#include <tinyxml2.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "host/model/axes.hpp"
+
+namespace kincal::model {
+
+namespace {
+
+[[noreturn]] void fail(const std::string& source, int line, const std::string& what) {
+  throw InputError(source + ":" + std::to_string(line) + ": " + what);
+}
+
+// Three numbers separated by white space ("0 0.1 -2e-3").
+Vector3 parse_triple(const char* text, const std::string& source, int line, const std::string& what) {
+  Vector3 v = Vector3::Zero();
+  const char* p = text;
+  const char* end = text + std::char_traits<char>::length(text);
+  for (int i = 0; i < 3; ++i) {
+    while (p != end && std::isspace(static_cast<unsigned char>(*p))) ++p;
+    if (p != end && *p == '+') ++p;
+    double value = 0.0;
+    const auto [next, ec] = std::from_chars(p, end, value);
+    if (ec != std::errc() || !std::isfinite(value))
+      fail(source, line, what + " '" + text + "' is not three finite numbers");
+    v[i] = value;
+    p = next;
+  }
+  while (p != end && std::isspace(static_cast<unsigned char>(*p))) ++p;
+  if (p != end) fail(source, line, what + " '" + text + "' is not three finite numbers");
+  return v;
+}
+
+double parse_number(const char* text, const std::string& source, int line, const std::string& what) {
+  const char* end = text + std::char_traits<char>::length(text);
+  const char* p = text;
+  while (p != end && std::isspace(static_cast<unsigned char>(*p))) ++p;
+  if (p != end && *p == '+') ++p;
+  double value = 0.0;
+  const auto [next, ec] = std::from_chars(p, end, value);
+  const char* rest = next;
+  while (rest != end && std::isspace(static_cast<unsigned char>(*rest))) ++rest;
+  if (ec != std::errc() || rest != end || !std::isfinite(value))
+    fail(source, line, what + " '" + text + "' is not a finite number");
+  return value;
+}
+
+std::string required_attribute(const tinyxml2::XMLElement& e, const char* name, const std::string& source) {
+  const char* value = e.Attribute(name);
+  if (value == nullptr || *value == '\0')
+    fail(source, e.GetLineNum(), std::string("<") + e.Name() + "> without a '" + name + "' attribute");
+  return value;
+}
+
+Transform parse_origin(const tinyxml2::XMLElement* origin, const std::string& source) {
+  Transform t;
+  if (origin == nullptr) return t;
+  if (const char* xyz = origin->Attribute("xyz"))
+    t.translation = parse_triple(xyz, source, origin->GetLineNum(), "xyz");
+  if (const char* rpy = origin->Attribute("rpy"))
+    t.rotation = rotation_from_rpy(parse_triple(rpy, source, origin->GetLineNum(), "rpy"));
+  return t;
+}
+
+UrdfJoint parse_joint(const tinyxml2::XMLElement& e, const std::string& source) {
+  UrdfJoint j;
+  j.line = e.GetLineNum();
+  j.name = required_attribute(e, "name", source);
+  const std::string type = required_attribute(e, "type", source);
+  const std::string where = "joint '" + j.name + "'";
+  if (type == "revolute") {
+    j.type = UrdfJointType::revolute;
+  } else if (type == "continuous") {
+    j.type = UrdfJointType::continuous;
+  } else if (type == "prismatic") {
+    j.type = UrdfJointType::prismatic;
+  } else if (type == "fixed") {
+    j.type = UrdfJointType::fixed;
+  } else {
+    j.type = UrdfJointType::fixed;
+    j.lower = j.upper = std::numeric_limits<double>::quiet_NaN();  // marks "not a chain joint"
+  }
+  const tinyxml2::XMLElement* parent = e.FirstChildElement("parent");
+  const tinyxml2::XMLElement* child = e.FirstChildElement("child");
+  if (parent == nullptr || child == nullptr) fail(source, j.line, where + " needs <parent> and <child>");
+  j.parent_link = required_attribute(*parent, "link", source);
+  j.child_link = required_attribute(*child, "link", source);
+  j.parent_T_joint = parse_origin(e.FirstChildElement("origin"), source);
+  if (const tinyxml2::XMLElement* axis = e.FirstChildElement("axis")) {
+    if (const char* xyz = axis->Attribute("xyz")) {
+      const Vector3 v = parse_triple(xyz, source, axis->GetLineNum(), where + ": axis");
+      if (v.norm() < 1e-12 && j.type != UrdfJointType::fixed) fail(source, axis->GetLineNum(), where + ": zero axis");
+      if (v.norm() >= 1e-12) j.axis = v.normalized();
+    }
+  }
+  if (j.type == UrdfJointType::revolute || j.type == UrdfJointType::prismatic) {
+    const tinyxml2::XMLElement* limit = e.FirstChildElement("limit");
+    if (limit == nullptr) fail(source, j.line, where + " (" + type + ") needs a <limit>");
+    j.lower = 0.0;
+    j.upper = 0.0;
+    if (const char* v = limit->Attribute("lower")) j.lower = parse_number(v, source, limit->GetLineNum(), "lower");
+    if (const char* v = limit->Attribute("upper")) j.upper = parse_number(v, source, limit->GetLineNum(), "upper");
+    if (j.lower > j.upper) fail(source, limit->GetLineNum(), where + ": lower limit above upper");
+  }
+  return j;
+}
+
+struct Tree {
+  std::map<std::string, int> link_lines;
+  std::map<std::string, UrdfJoint> joint_to_child;  // by child link
+  std::map<std::string, int> mimic_lines;           // by joint name
+  std::map<std::string, std::string> type_names;    // joint name -> type text (for refusals)
+  std::string robot_name;
+};
+
+Tree parse_tree(const std::string& text, const std::string& source) {
+  tinyxml2::XMLDocument doc;
+  if (doc.Parse(text.c_str(), text.size()) != tinyxml2::XML_SUCCESS)
+    fail(source, doc.ErrorLineNum(), std::string("XML: ") + doc.ErrorStr());
+  const tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
+  if (robot == nullptr) fail(source, 1, "no <robot> element: not a URDF");
+  Tree tree;
+  tree.robot_name = robot->Attribute("name") != nullptr ? robot->Attribute("name") : "";
+  for (const tinyxml2::XMLElement* l = robot->FirstChildElement("link"); l; l = l->NextSiblingElement("link")) {
+    const std::string name = required_attribute(*l, "name", source);
+    if (!tree.link_lines.emplace(name, l->GetLineNum()).second)
+      fail(source, l->GetLineNum(), "link '" + name + "' defined twice");
+  }
+  std::set<std::string> joint_names;
+  for (const tinyxml2::XMLElement* e = robot->FirstChildElement("joint"); e; e = e->NextSiblingElement("joint")) {
+    UrdfJoint j = parse_joint(*e, source);
+    if (!joint_names.insert(j.name).second) fail(source, j.line, "joint '" + j.name + "' defined twice");
+    for (const std::string* link : {&j.parent_link, &j.child_link})
+      if (!tree.link_lines.contains(*link))
+        fail(source, j.line, "joint '" + j.name + "' names link '" + *link + "', which is not defined");
+    if (e->FirstChildElement("mimic") != nullptr)
+      tree.mimic_lines[j.name] = e->FirstChildElement("mimic")->GetLineNum();
+    tree.type_names[j.name] = e->Attribute("type");
+    const std::string child = j.child_link;
+    if (tree.joint_to_child.contains(child))
+      fail(source, j.line, "link '" + child + "' is the child of two joints: not a tree");
+    tree.joint_to_child.emplace(child, std::move(j));
+  }
+  if (tree.link_lines.empty()) fail(source, robot->GetLineNum(), "the robot has no links");
+  return tree;
+}
+
+// The joints from `base` down to `tip` (empty when tip == base); nullopt-like empty result with
+// found = false when base is not above tip.
+bool path_between(const Tree& tree, const std::string& base, const std::string& tip, std::vector<UrdfJoint>& out) {
+  out.clear();
+  std::string link = tip;
+  std::set<std::string> seen;
+  while (link != base) {
+    if (!seen.insert(link).second) return false;  // a cycle
+    const auto it = tree.joint_to_child.find(link);
+    if (it == tree.joint_to_child.end()) return false;
+    out.push_back(it->second);
+    link = it->second.parent_link;
+  }
+  std::reverse(out.begin(), out.end());
+  return true;
+}
+
+int movable(const std::vector<UrdfJoint>& joints) {
+  return static_cast<int>(
+      std::count_if(joints.begin(), joints.end(), [](const UrdfJoint& j) { return j.type != UrdfJointType::fixed; }));
+}
+
+}  // namespace
+
+int UrdfChain::movable_count() const { return movable(joints); }
+
+UrdfChain parse_urdf_chain(const std::string& text, const std::string& source, const UrdfChainEnds& ends) {
+  const Tree tree = parse_tree(text, source);
+  UrdfChain chain;
+  chain.source = source;
+  chain.robot_name = tree.robot_name;
+
+  std::vector<std::string> roots;
+  for (const auto& [name, line] : tree.link_lines)
+    if (!tree.joint_to_child.contains(name)) roots.push_back(name);
+  if (!ends.base_link.empty()) {
+    if (!tree.link_lines.contains(ends.base_link))
+      fail(source, 1, "no link named '" + ends.base_link + "' (--base-link)");
+    chain.base_link = ends.base_link;
+  } else {
+    if (roots.size() != 1) {
+      std::string list;
+      for (const std::string& r : roots) list += (list.empty() ? "" : ", ") + r;
+      fail(source, 1,
+           "the links form no single tree (roots: " + list + "): choose the chain's first link with --base-link");
+    }
+    chain.base_link = roots.front();
+  }
+
+  std::vector<UrdfJoint> path;
+  if (!ends.tip_link.empty()) {
+    if (!tree.link_lines.contains(ends.tip_link)) fail(source, 1, "no link named '" + ends.tip_link + "' (--tip-link)");
+    if (!path_between(tree, chain.base_link, ends.tip_link, path))
+      fail(source, tree.link_lines.at(ends.tip_link),
+           "link '" + ends.tip_link + "' is not below link '" + chain.base_link + "'");
+    chain.tip_link = ends.tip_link;
+  } else {
+    std::set<std::string> parents;
+    for (const auto& [child, j] : tree.joint_to_child) parents.insert(j.parent_link);
+    struct Candidate {
+      std::string tip;
+      int joints;
+    };
+    std::vector<Candidate> leaves;
+    for (const auto& [name, line] : tree.link_lines) {
+      if (parents.contains(name)) continue;
+      if (path_between(tree, chain.base_link, name, path)) leaves.push_back({name, movable(path)});
+    }
+    int best = -1;
+    for (const Candidate& c : leaves) best = std::max(best, c.joints);
+    std::vector<std::string> best_tips;
+    for (const Candidate& c : leaves)
+      if (c.joints == best) best_tips.push_back(c.tip);
+    if (best_tips.size() != 1) {
+      std::string list;
+      for (const Candidate& c : leaves)
+        list += "\n  " + chain.base_link + " -> " + c.tip + " (" + std::to_string(c.joints) + " movable joints)";
+      fail(source, 1, "which chain? choose one with --tip-link (and --base-link):" + list);
+    }
+    chain.tip_link = best_tips.front();
+    path_between(tree, chain.base_link, chain.tip_link, path);
+  }
+  for (const UrdfJoint& j : path) {
+    if (std::isnan(j.lower))
+      fail(source, j.line,
+           "joint '" + j.name + "' is of type '" + tree.type_names.at(j.name) +
+               "': a serial chain has revolute, continuous, prismatic and fixed joints only");
+    if (tree.mimic_lines.contains(j.name) && j.type != UrdfJointType::fixed)
+      fail(source, tree.mimic_lines.at(j.name),
+           "joint '" + j.name +
+               "' mimics another joint: chains with mimic joints are not supported "
+               "(calibrate the chain without it, or make it fixed)");
+  }
+  chain.joints = std::move(path);
+  return chain;
+}
+
+UrdfChain read_urdf_chain(const std::string& path, const UrdfChainEnds& ends) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open the URDF file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_urdf_chain(text.str(), path, ends);
+}
+
+std::vector<Transform> urdf_link_poses(const UrdfChain& chain, std::span<const double> q) {
+  std::vector<Transform> poses;
+  Transform pose;
+  std::size_t k = 0;
+  for (const UrdfJoint& j : chain.joints) {
+    pose = pose * j.parent_T_joint;
+    if (j.type != UrdfJointType::fixed) {
+      const double value = q[k++];
+      Transform motion;
+      if (j.type == UrdfJointType::prismatic) {
+        motion.translation = value * j.axis;
+      } else {
+        motion.rotation = Eigen::AngleAxisd(value, j.axis).toRotationMatrix();
+      }
+      pose = pose * motion;
+    }
+    poses.push_back(pose);
+  }
+  return poses;
+}
+
+RobotModel model_from_urdf(const UrdfChain& chain) {
+  const int n = chain.movable_count();
+  if (n == 0)
+    throw InputError(chain.source + ": no movable joint between '" + chain.base_link + "' and '" + chain.tip_link +
+                     "'");
+  if (n > core::kMaxJoints)
+    throw InputError(chain.source + ": " + std::to_string(n) + " movable joints between '" + chain.base_link +
+                     "' and '" + chain.tip_link + "'; at most " + std::to_string(core::kMaxJoints));
+  const std::vector<double> zero(static_cast<std::size_t>(n), 0.0);
+  const std::vector<Transform> poses = urdf_link_poses(chain, zero);
+
+  RobotModel tmpl;
+  tmpl.name = chain.robot_name.empty() ? chain.tip_link : chain.robot_name;
+  tmpl.tool = ToolKind::frame;
+  std::vector<AxisLine> axes;
+  for (std::size_t k = 0; k < chain.joints.size(); ++k) {
+    const UrdfJoint& j = chain.joints[k];
+    if (j.type == UrdfJointType::fixed) continue;
+    const Transform parent = k == 0 ? Transform{} : poses[k - 1];
+    if (axes.empty()) tmpl.base_T_frame0 = parent;
+    const Transform joint_frame = parent * j.parent_T_joint;
+    const bool prismatic = j.type == UrdfJointType::prismatic;
+    axes.push_back({joint_frame.translation, joint_frame.rotation * j.axis,
+                    prismatic ? core::JointType::prismatic : core::JointType::revolute});
+    Joint joint;
+    joint.name = j.name;
+    joint.type = axes.back().type;
+    joint.lower = j.lower;
+    joint.upper = j.upper;
+    tmpl.joints.push_back(joint);
+  }
+  RobotModel model = chain_from_axes(tmpl, axes, zero, poses.back());
+  for (Joint& j : model.joints) {
+    (j.type == core::JointType::revolute ? j.parameters.theta_rad : j.parameters.d_m) += j.offset;
+    j.offset = 0.0;
+  }
+  // The flange (frame n) slid along the last axis to the last movable joint's child link, as
+  // DH tables put it (a UR's d6): link n has a = alpha = 0 here, so Tz(s) moves to its end.
+  const std::size_t last =
+      static_cast<std::size_t>(std::find_if(chain.joints.rbegin(), chain.joints.rend(),
+                                            [](const UrdfJoint& j) { return j.type != UrdfJointType::fixed; })
+                                   .base() -
+                               chain.joints.begin()) -
+      1;
+  const Transform flange = chain_at_joints(model, zero).frames.base_T_frame[static_cast<std::size_t>(n)];
+  const double s = (poses[last].translation - flange.translation).dot(flange.rotation.col(2));
+  model.joints.back().parameters.d_m += s;
+  Transform slide;
+  slide.translation = Vector3(0, 0, -s);
+  model.flange_T_tool = slide * model.flange_T_tool;
+  return model;
+}
+
+bool is_urdf_path(const std::string& path) {
+  if (path.size() < 5) return false;
+  std::string ext = path.substr(path.size() - 5);
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext == ".urdf";
+}
+
+}  // namespace kincal::model

@@ -1,0 +1,81 @@
+// URDF in: the serial chain between a base link and a tip link of a robot's URDF, and that chain
+// as a kincal model (`--model robot.urdf`), without changing its kinematics.
+//
+// Reading (tinyxml2, so every error names the file and the line): links and joints form a tree;
+// the chain is the path from `base_link` to `tip_link`. Defaults: the base is the tree's root;
+// the tip is the leaf below the base with the most movable joints on its way, when that leaf is
+// unique -- otherwise InputError lists every candidate chain ("base_link -> tool0 (6 joints)")
+// and asks for --tip-link. Joint types: revolute, continuous (no limits), prismatic (movable);
+// fixed (folded into the neighbours); floating and planar are refused, and so is a <mimic> joint
+// on the chain (its value is not a reading of its own). A missing <origin> is the identity, a
+// missing <axis> is (1, 0, 0) as URDF says; the axis is normalized (a zero axis is an error).
+//
+// URDF's kinematics (what urdf_link_poses computes, as robot_state_publisher does): the child
+// link of joint k sits at parent * origin_k * M_k(q_k), M_k a rotation by q_k about axis_k
+// (revolute, continuous) or a translation by q_k along it (prismatic); origin = translation
+// xyz times R = Rz(yaw) Ry(pitch) Rx(roll).
+//
+// The model (model_from_urdf): device frame = the base link's frame; joint i = the i-th movable
+// joint (its name, type and limits); frame 0 = the frame of the first movable joint's parent
+// link, moved onto that joint's axis (for a UR description: base_link_inertia, the controller's
+// base); links by chain_from_axes (axes.hpp: standard DH, Doty's convention where consecutive
+// axes are within 0.1 rad of parallel), joint offsets folded into theta/d so that a reading of 0
+// is the URDF's 0; the tool is a frame: the tip link. Forward kinematics of the model equal the
+// URDF's to rounding (tests/host/model/urdf_test.cpp: 1e-9 m against urdfdom over random
+// readings).
+#pragma once
+
+#include <span>
+#include <string>
+#include <vector>
+
+#include "host/model/robot_model.hpp"
+
+namespace kincal::model {
+
+// Which links the chain runs between; empty: the defaults above.
+struct UrdfChainEnds {
+  std::string base_link;
+  std::string tip_link;
+};
+
+enum class UrdfJointType { revolute, continuous, prismatic, fixed };
+
+struct UrdfJoint {
+  std::string name;
+  UrdfJointType type = UrdfJointType::fixed;
+  std::string parent_link, child_link;
+  Transform parent_T_joint{};                               // <origin>
+  Vector3 axis = Vector3::UnitX();                          // unit, in the joint frame
+  double lower = -std::numeric_limits<double>::infinity();  // rad or m
+  double upper = std::numeric_limits<double>::infinity();
+  int line = 0;  // of the <joint> element
+};
+
+// The joints from the base link to the tip link, in order (fixed ones included).
+struct UrdfChain {
+  std::string source;
+  std::string robot_name;
+  std::string base_link, tip_link;
+  std::vector<UrdfJoint> joints;
+
+  int movable_count() const;
+};
+
+// Throws InputError ("FILE:LINE: what") for XML errors, a broken tree, bad numbers, an
+// unsupported joint type, a mimic joint on the chain, unknown or unconnected base/tip links.
+UrdfChain parse_urdf_chain(const std::string& text, const std::string& source, const UrdfChainEnds& ends = {});
+UrdfChain read_urdf_chain(const std::string& path, const UrdfChainEnds& ends = {});
+
+// base_link_T_(child link of joint k) for every joint of the chain at the movable joints'
+// values q (q.size() == movable_count()).
+std::vector<Transform> urdf_link_poses(const UrdfChain& chain, std::span<const double> q);
+
+// The chain as a model (see the top). Throws InputError for a chain without movable joints or
+// with more than core::kMaxJoints.
+RobotModel model_from_urdf(const UrdfChain& chain);
+
+// True when `path` names a URDF file (extension .urdf, any case).
+bool is_urdf_path(const std::string& path);
+
+}  // namespace kincal::model

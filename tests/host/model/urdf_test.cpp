@@ -1,0 +1,392 @@
+// URDF in and out (issue #15): URDF -> model -> URDF round trips checked against urdfdom (Debian's
+// URDF parser, an implementation independent of ours), the calibrated URDF's link frames, the
+// UR description's kinematics file, and the refusals.
+#include <doctest/doctest.h>
+#include <urdf_parser/urdf_parser.h>
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "host/model/axes.hpp"
+#include "host/model/model_file.hpp"
+#include "host/model/ur_kinematics.hpp"
+#include "host/model/urdf.hpp"
+#include "host/model/urdf_chain.hpp"
+
+namespace {
+
+using namespace kincal::model;
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  REQUIRE(in);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// For check_urdf (CMake runs it on what the tests write here).
+void keep(const std::string& name, const std::string& text) {
+  std::filesystem::create_directories(KINCAL_URDF_OUT_DIR);
+  std::ofstream(std::string(KINCAL_URDF_OUT_DIR) + "/" + name) << text;
+}
+
+Transform from_pose(const urdf::Pose& p) {
+  Transform t;
+  t.translation = Vector3(p.position.x, p.position.y, p.position.z);
+  t.rotation = Eigen::Quaterniond(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z).toRotationMatrix();
+  return t;
+}
+
+// base_T_tip of a URDF at the named joints' values, composed from urdfdom's parse: for each
+// joint from the base down, origin then the motion about/along its axis.
+struct UrdfdomChain {
+  urdf::ModelInterfaceSharedPtr model;
+  std::vector<urdf::JointConstSharedPtr> joints;  // base to tip
+
+  UrdfdomChain(const std::string& text, const std::string& base, const std::string& tip)
+      : model(urdf::parseURDF(text)) {
+    REQUIRE(model);
+    for (urdf::LinkConstSharedPtr link = model->getLink(tip); link && link->name != base; link = link->getParent()) {
+      REQUIRE(link->parent_joint);
+      joints.insert(joints.begin(), link->parent_joint);
+    }
+  }
+  Transform pose(const std::vector<double>& q) const {
+    Transform t;
+    std::size_t k = 0;
+    for (const auto& j : joints) {
+      t = t * from_pose(j->parent_to_joint_origin_transform);
+      const Vector3 axis(j->axis.x, j->axis.y, j->axis.z);
+      Transform motion;
+      if (j->type == urdf::Joint::REVOLUTE || j->type == urdf::Joint::CONTINUOUS) {
+        motion.rotation = Eigen::AngleAxisd(q[k++], axis.normalized()).toRotationMatrix();
+      } else if (j->type == urdf::Joint::PRISMATIC) {
+        motion.translation = q[k++] * axis.normalized();
+      }
+      t = t * motion;
+    }
+    return t;
+  }
+};
+
+std::vector<double> random_q(const RobotModel& m, std::mt19937& rng) {
+  std::vector<double> q;
+  for (const Joint& j : m.joints) {
+    const double lo = std::isfinite(j.lower) ? j.lower : -3.0;
+    const double hi = std::isfinite(j.upper) ? j.upper : 3.0;
+    q.push_back(std::uniform_real_distribution<double>(lo, hi)(rng));
+  }
+  return q;
+}
+
+struct Gap {
+  double position_m = 0.0;
+  double rotation_rad = 0.0;
+};
+Gap gap(const Transform& a, const Transform& b) {
+  return {(a.translation - b.translation).norm(), Eigen::AngleAxisd(a.rotation.transpose() * b.rotation).angle()};
+}
+
+// The largest gap between `device_T_base * urdf(q)` and the model's forward kinematics over
+// random readings.
+Gap worst_gap(const UrdfdomChain& urdf_chain, const RobotModel& m, const Transform& device_T_base, bool orientation,
+              unsigned seed) {
+  std::mt19937 rng(seed);
+  Gap worst;
+  for (int i = 0; i < 200; ++i) {
+    const std::vector<double> q = random_q(m, rng);
+    const Gap g = gap(device_T_base * urdf_chain.pose(q), forward_kinematics(m, q));
+    worst.position_m = std::max(worst.position_m, g.position_m);
+    if (orientation) worst.rotation_rad = std::max(worst.rotation_rad, g.rotation_rad);
+  }
+  return worst;
+}
+
+// Every parameter of `m` off by a few millimetres / milliradians, the base by a registration.
+RobotModel perturbed(const RobotModel& m, unsigned seed, double size = 2e-3) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> normal(0.0, size);
+  const std::vector<kincal::core::ParameterId> ids = all_parameters(m);
+  Eigen::VectorXd errors(static_cast<Eigen::Index>(ids.size()));
+  for (Eigen::Index i = 0; i < errors.size(); ++i) errors(i) = normal(rng);
+  RobotModel out = apply_parameter_errors(m, ids, errors);
+  Transform registration;
+  registration.translation = Vector3(1.5, -3.2, 0.4);
+  registration.rotation = rotation_from_rpy(Vector3(0.1, -0.2, 2.5));
+  out.base_T_frame0 = registration * out.base_T_frame0;
+  return out;
+}
+
+// The whole loop on one URDF: its model agrees with urdfdom; a calibrated model written back
+// into it agrees with urdfdom, keeps every element but the chain's origins, passes check_urdf.
+void round_trip(const std::string& name, const std::string& text, const UrdfChainEnds& ends) {
+  CAPTURE(name);
+  const UrdfChain chain = parse_urdf_chain(text, name, ends);
+  const RobotModel nominal = model_from_urdf(chain);
+  const UrdfdomChain reference(text, chain.base_link, chain.tip_link);
+  const Gap g = worst_gap(reference, nominal, Transform{}, true, 1);
+  CHECK(g.position_m < 1e-9);
+  CHECK(g.rotation_rad < 1e-9);
+
+  // Unchanged model in: the same kinematics out, the registration is the identity.
+  const CalibratedUrdf same = write_calibrated_urdf(text, name, ends, nominal);
+  CHECK(same.device_T_base_link.translation.norm() < 1e-12);
+  const Gap g_same = worst_gap(UrdfdomChain(same.text, chain.base_link, chain.tip_link), nominal, Transform{}, true, 2);
+  CHECK(g_same.position_m < 1e-9);
+  CHECK(g_same.rotation_rad < 1e-9);
+
+  const RobotModel calibrated = perturbed(nominal, 3);
+  const CalibratedUrdf out = write_calibrated_urdf(text, name, ends, calibrated);
+  const Gap g_cal =
+      worst_gap(UrdfdomChain(out.text, chain.base_link, chain.tip_link), calibrated, out.device_T_base_link, true, 4);
+  CHECK(g_cal.position_m < 1e-9);
+  CHECK(g_cal.rotation_rad < 1e-9);
+  CHECK(out.notes.empty());
+
+  // Same names; meshes, inertias and everything off the chain kept.
+  const urdf::ModelInterfaceSharedPtr before = urdf::parseURDF(text);
+  const urdf::ModelInterfaceSharedPtr after = urdf::parseURDF(out.text);
+  REQUIRE(after);
+  CHECK(after->links_.size() == before->links_.size());
+  CHECK(after->joints_.size() == before->joints_.size());
+  for (const auto& [joint_name, joint] : before->joints_) {
+    const urdf::JointConstSharedPtr j = after->getJoint(joint_name);
+    REQUIRE(j);
+    CHECK(j->type == joint->type);
+    CHECK(j->axis.x == joint->axis.x);
+    CHECK(j->axis.z == joint->axis.z);
+    if (joint->limits) CHECK(j->limits->effort == joint->limits->effort);
+  }
+  for (const auto& [link_name, link] : before->links_) {
+    const urdf::LinkConstSharedPtr l = after->getLink(link_name);
+    REQUIRE(l);
+    CHECK(l->visual_array.size() == link->visual_array.size());
+    CHECK(static_cast<bool>(l->inertial) == static_cast<bool>(link->inertial));
+    if (link->inertial) CHECK(l->inertial->mass == link->inertial->mass);
+  }
+  // Link frames stay on their bodies: perturbations of 2 mm / 2 mrad move none by more than
+  // a few millimetres (no DH drift), over arms of up to a metre or two.
+  const std::vector<double> zero(static_cast<std::size_t>(nominal.joint_count()), 0.0);
+  const std::vector<Transform> poses_before = urdf_link_poses(chain, zero);
+  const std::vector<Transform> poses_after = urdf_link_poses(parse_urdf_chain(out.text, name, ends), zero);
+  for (std::size_t k = 0; k < poses_before.size(); ++k) {
+    CAPTURE(chain.joints[k].name);
+    CHECK(gap(poses_before[k], poses_after[k]).position_m < 0.03);
+    CHECK(gap(poses_before[k], poses_after[k]).rotation_rad < 0.03);
+  }
+  keep(name + ".calibrated.urdf", out.text);
+}
+
+const char* const kFixedJointsUrdf = R"(<?xml version="1.0"?>
+<!-- fixed joints between and after the movable ones, a rotated and shifted base link, axes along
+     x, -y and a skew one, a prismatic joint, a tool frame on a branch with a sensor beside it -->
+<robot name="test_arm">
+  <link name="world"/>
+  <link name="pedestal"><visual><geometry><box size="0.3 0.3 0.5"/></geometry></visual></link>
+  <link name="l1"><inertial><mass value="3"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>
+  <link name="l1_mount"/>
+  <link name="l2"><visual><origin xyz="0.2 0 0"/><geometry><mesh filename="package://x/l2.stl"/></geometry></visual></link>
+  <link name="l3"/>
+  <link name="l4"/>
+  <link name="flange"/>
+  <link name="tool"/>
+  <link name="camera"/>
+  <joint name="world_pedestal" type="fixed">
+    <parent link="world"/><child link="pedestal"/>
+    <origin xyz="0.5 -0.2 0.3" rpy="0.3 -0.2 1.1"/>
+  </joint>
+  <joint name="j1" type="revolute">
+    <parent link="pedestal"/><child link="l1"/>
+    <origin xyz="0 0 0.25"/>
+    <axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="10" velocity="1"/>
+  </joint>
+  <joint name="mount" type="fixed">
+    <parent link="l1"/><child link="l1_mount"/>
+    <origin xyz="0.05 0 0.1" rpy="0 0.4 0"/>
+  </joint>
+  <joint name="j2" type="continuous">
+    <parent link="l1_mount"/><child link="l2"/>
+    <origin xyz="0 0.1 0" rpy="1.5707963267948966 0 0"/>
+    <axis xyz="1 0 0"/>
+  </joint>
+  <joint name="j3" type="prismatic">
+    <parent link="l2"/><child link="l3"/>
+    <origin xyz="0.4 0 0.02" rpy="0 0 0.3"/>
+    <axis xyz="0 -1 0"/>
+    <limit lower="-0.2" upper="0.3" effort="10" velocity="1"/>
+  </joint>
+  <joint name="j4" type="revolute">
+    <parent link="l3"/><child link="l4"/>
+    <origin xyz="0.1 0.05 0.3" rpy="-0.2 0.1 0.7"/>
+    <axis xyz="0.6 0 0.8"/>
+    <limit lower="-2" upper="2" effort="10" velocity="1"/>
+  </joint>
+  <joint name="l4_flange" type="fixed">
+    <parent link="l4"/><child link="flange"/>
+    <origin xyz="0 0 0.08" rpy="3.14159 0 0"/>
+  </joint>
+  <joint name="flange_tool" type="fixed">
+    <parent link="flange"/><child link="tool"/>
+    <origin xyz="0.01 0.02 0.15" rpy="0 0.5 0.25"/>
+  </joint>
+  <joint name="flange_camera" type="fixed">
+    <parent link="flange"/><child link="camera"/>
+    <origin xyz="0.05 0 0.02"/>
+  </joint>
+</robot>
+)";
+
+}  // namespace
+
+TEST_CASE("urdf: the four robots written as URDF come back with the same kinematics") {
+  for (const char* robot : {"puma560", "stanford_rrp", "arid_prrr", "ur5"}) {
+    CAPTURE(robot);
+    const RobotModel original = load_model(std::string(KINCAL_ROBOTS_DIR) + "/" + robot + ".yaml");
+    const std::string text = write_urdf(original);
+    keep(std::string(robot) + ".urdf", text);
+    // The written URDF as urdfdom reads it agrees with the YAML model.
+    const Gap g = worst_gap(UrdfdomChain(text, "device", "tool"), original, Transform{}, true, 5);
+    CHECK(g.position_m < 1e-9);
+    CHECK(g.rotation_rad < 1e-9);
+    // URDF -> model: the same kinematics (the default chain is device -> tool).
+    const RobotModel back = model_from_urdf(parse_urdf_chain(text, robot));
+    std::mt19937 rng(6);
+    for (int i = 0; i < 200; ++i) {
+      const std::vector<double> q = random_q(original, rng);
+      const Gap gi = gap(forward_kinematics(back, q), forward_kinematics(original, q));
+      REQUIRE(gi.position_m < 1e-9);
+      REQUIRE(gi.rotation_rad < 1e-9);
+    }
+    round_trip(robot, text, {});
+  }
+}
+
+TEST_CASE("urdf: fixed joints, a rotated base link, a tool frame, a prismatic and a skew axis") {
+  round_trip("fixed_joints", kFixedJointsUrdf, {"world", "tool"});
+  // The default chain: world is the root; tool and camera are leaves with the same joints.
+  CHECK_THROWS_WITH_AS(parse_urdf_chain(kFixedJointsUrdf, "arm.urdf"),
+                       doctest::Contains("world -> camera (4 movable joints)\n  world -> tool (4 movable joints)"),
+                       InputError);
+  const UrdfChain chain = parse_urdf_chain(kFixedJointsUrdf, "arm.urdf", {"pedestal", "flange"});
+  CHECK(chain.joints.size() == 6);
+  CHECK(chain.movable_count() == 4);
+}
+
+TEST_CASE("urdf: UR10 from its description, calibrated and written back with meshes in place") {
+  const std::string path = std::string(KINCAL_ROBOTS_DIR) + "/ur10.urdf";
+  const std::string text = read_text(path);
+  round_trip("ur10", text, {"", "tool0"});
+  // The calibrated model from `kincal identify` may use other conventions than the URDF's:
+  // the same FK, the same frames.
+  const RobotModel nominal = load_model(path, {"", "tool0"});
+  CHECK(nominal.joints[0].name == "shoulder_pan_joint");
+  CHECK(nominal.joints[1].convention == kincal::core::LinkConvention::doty);  // axes 2, 3 parallel
+  // A tilt of the parallel axes by 1 mrad: plain DH would move the common normals by metres.
+  RobotModel tilted = nominal;
+  tilted.joints[1].parameters.beta_rad += 1e-3;
+  tilted.joints[2].parameters.beta_rad -= 1e-3;
+  const CalibratedUrdf out = write_calibrated_urdf(text, path, {"", "tool0"}, tilted);
+  const UrdfChain before = parse_urdf_chain(text, path, {"", "tool0"});
+  const UrdfChain after = parse_urdf_chain(out.text, path, {"", "tool0"});
+  const std::vector<double> zero(6, 0.0);
+  const std::vector<Transform> a = urdf_link_poses(before, zero), b = urdf_link_poses(after, zero);
+  double worst = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k) worst = std::max(worst, gap(a[k], b[k]).position_m);
+  CHECK(worst < 1.5e-3);  // 1 mrad over the 1.2 m arm
+  CHECK(worst > 1e-4);
+}
+
+TEST_CASE("urdf: the tip link on the last joint: the tool's calibration is reported, not lost silently") {
+  const std::string text = read_text(std::string(KINCAL_ROBOTS_DIR) + "/ur10.urdf");
+  const UrdfChainEnds ends{"base_link", "wrist_3_link"};
+  RobotModel m = load_model(std::string(KINCAL_ROBOTS_DIR) + "/ur10.urdf", ends);
+  m.flange_T_tool.translation += Vector3(0, 0, 0.01);
+  const CalibratedUrdf out = write_calibrated_urdf(text, "ur10.urdf", ends, m);
+  REQUIRE(out.notes.size() == 1);
+  CHECK(out.notes[0].find("10.000 mm") != std::string::npos);
+}
+
+TEST_CASE("ur-kinematics: the UR10 description's defaults come back, and the file's FK is the model's") {
+  const RobotModel ur10 = load_model(std::string(KINCAL_ROBOTS_DIR) + "/ur10.urdf", {"", "tool0"});
+  const UrKinematics k = ur_kinematics(ur10);
+  // config/ur10/default_kinematics.yaml of Universal_Robots_ROS2_Description.
+  const double expected[6][3] = {{0, 0, 0.1273},         {0, 0, 0},       {-0.612, 0, 0},
+                                 {-0.5723, 0, 0.163941}, {0, -0.1157, 0}, {0, 0.0922, 0}};
+  for (std::size_t i = 0; i < 6; ++i) {
+    CAPTURE(i);
+    CHECK((k.joint_origins[i].translation - Vector3(expected[i][0], expected[i][1], expected[i][2])).norm() < 1e-9);
+  }
+
+  for (unsigned seed : {7u, 8u}) {
+    const RobotModel calibrated = seed == 7 ? ur10 : perturbed(ur10, seed);
+    const UrKinematics ck = ur_kinematics(calibrated);
+    const std::string text = write_ur_kinematics(ck);
+    keep("ur10_calibration_" + std::to_string(seed) + ".yaml", text);
+    // Compose as ur_macro.xacro does: per joint translate (x, y, z), rotate fixed-axis roll,
+    // pitch, yaw, then the joint's reading about z.
+    const YAML::Node file = YAML::Load(text)["kinematics"];
+    REQUIRE(file["hash"]);
+    const kincal::core::ChainModel<double> chain = to_chain(calibrated);
+    std::mt19937 rng(seed);
+    for (int n = 0; n < 100; ++n) {
+      const std::vector<double> q = random_q(calibrated, rng);
+      Transform t = chain.base_T_frame0;
+      for (std::size_t i = 0; i < 6; ++i) {
+        const YAML::Node s = file[kUrKinematicsSections[i]];
+        Transform origin;
+        origin.translation = Vector3(s["x"].as<double>(), s["y"].as<double>(), s["z"].as<double>());
+        origin.rotation = (Eigen::AngleAxisd(s["yaw"].as<double>(), Vector3::UnitZ()) *
+                           Eigen::AngleAxisd(s["pitch"].as<double>(), Vector3::UnitY()) *
+                           Eigen::AngleAxisd(s["roll"].as<double>(), Vector3::UnitX()))
+                              .toRotationMatrix();
+        Transform joint;
+        joint.rotation = Eigen::AngleAxisd(q[i], Vector3::UnitZ()).toRotationMatrix();
+        t = t * origin * joint;
+      }
+      t = t * ck.wrist_3_T_flange * chain.flange_T_tool;
+      const Gap g = gap(t, forward_kinematics(calibrated, q));
+      REQUIRE(g.position_m < 1e-9);
+      REQUIRE(g.rotation_rad < 1e-9);
+    }
+  }
+  CHECK_THROWS_AS(ur_kinematics(load_model(std::string(KINCAL_ROBOTS_DIR) + "/stanford_rrp.yaml")), InputError);
+}
+
+TEST_CASE("urdf: bad input is refused naming the file, the line and what is wrong") {
+  const auto error = [](const std::string& text, const UrdfChainEnds& ends = {}) {
+    try {
+      parse_urdf_chain(text, "bad.urdf", ends);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string head = "<robot name=\"r\">\n<link name=\"a\"/>\n<link name=\"b\"/>\n<link name=\"c\"/>\n";
+  const std::string j1 =
+      "<joint name=\"j1\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/>"
+      "<limit lower=\"-1\" upper=\"1\" effort=\"0\" velocity=\"0\"/></joint>\n";
+  CHECK(error(head + j1 +
+              "<joint name=\"j2\" type=\"revolute\"><parent link=\"b\"/><child link=\"c\"/>\n"
+              "<mimic joint=\"j1\"/><limit lower=\"-1\" upper=\"1\" effort=\"0\" velocity=\"0\"/></joint></robot>") ==
+        "bad.urdf:7: joint 'j2' mimics another joint: chains with mimic joints are not supported (calibrate the "
+        "chain without it, or make it fixed)");
+  CHECK(
+      error(head + j1 + "<joint name=\"j2\" type=\"floating\"><parent link=\"b\"/><child link=\"c\"/></joint></robot>")
+          .starts_with("bad.urdf:6: joint 'j2' is of type 'floating'"));
+  CHECK(error(head + "<joint name=\"j1\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/>\n"
+                     "<origin xyz=\"0 0,5 0\"/><limit lower=\"-1\" upper=\"1\"/></joint></robot>") ==
+        "bad.urdf:6: xyz '0 0,5 0' is not three finite numbers");
+  CHECK(error(head + "<joint name=\"j1\" type=\"fixed\"><parent link=\"a\"/><child link=\"x\"/></joint></robot>") ==
+        "bad.urdf:5: joint 'j1' names link 'x', which is not defined");
+  CHECK(error(head + j1 + "</robot>", {"a", "c"}) == "bad.urdf:4: link 'c' is not below link 'a'");
+  CHECK(error("<robot><link name=\"a\">\n</robot>").starts_with("bad.urdf:1: XML: Error=XML_ERROR_MISMATCHED_ELEMENT"));
+  CHECK(error(head + j1 + "</robot>") ==
+        "bad.urdf:1: the links form no single tree (roots: a, c): choose the chain's first link with --base-link");
+  CHECK(error(head + j1 + "</robot>", {"a", "nope"}) == "bad.urdf:1: no link named 'nope' (--tip-link)");
+  CHECK_THROWS_WITH_AS(load_model("robot.yaml", {"", "tool0"}), doctest::Contains("for URDF models"), InputError);
+}
