@@ -52,19 +52,29 @@ Eigen::Vector3d so3_log(const Eigen::Matrix3d& r) {
 }
 
 Parameterization::Parameterization(const RobotModel& start, ParameterIds ids)
-    : start_(start), start_chain_(model::to_chain(start)), ids_(std::move(ids)) {
+    : start_(start), start_chain_(model::to_chain(start)), ids_(std::move(ids)), current_(start) {
+  if (ids_.size() > static_cast<std::size_t>(core::kMaxErrorParameters) + 2 * core::kMaxJoints)
+    throw std::invalid_argument("too many parameters");
   for (const core::ParameterId& id : ids_) {
+    if (model::is_joint_map_parameter(id.kind)) {
+      link_column_.push_back(-2 - static_cast<int>(joint_map_ids_.size()));  // resolved below
+      joint_map_ids_.push_back(id);
+      continue;
+    }
     if (!is_link(id.kind)) {
       link_column_.push_back(-1);
       continue;
     }
+    if (augmented_.count >= core::kMaxErrorParameters - 12) throw std::invalid_argument("too many parameters");
     link_column_.push_back(augmented_.count);
     augmented_.ids[static_cast<std::size_t>(augmented_.count++)] = id;
   }
   for (int k = 0; k < 12; ++k)
     augmented_.ids[static_cast<std::size_t>(augmented_.count++)] = {
         static_cast<core::ParameterKind>(static_cast<int>(core::ParameterKind::base_x) + k), 0};
-  if (augmented_.count > core::kMaxErrorParameters) throw std::invalid_argument("too many parameters");
+  for (int& c : link_column_)
+    if (c <= -2) c = augmented_.count + (-2 - c);
+  plain_ = joint_map_ids_.empty() && !model::has_joint_map(start_) && !model::has_compliance(start_);
   delta_.assign(ids_.size(), 0.0);
   set(delta_);
 }
@@ -76,7 +86,18 @@ void Parameterization::set(std::span<const double> delta) {
   core::ParameterSet chosen;
   core::ErrorVector<double> errors = core::ErrorVector<double>::Zero();
   Eigen::Vector3d base_r = Eigen::Vector3d::Zero(), tool_r = Eigen::Vector3d::Zero();
+  current_ = start_;
   for (std::size_t k = 0; k < ids_.size(); ++k) {
+    if (ids_[k].kind == model::kJointScale) {
+      model::Joint& j = current_.joints.at(ids_[k].link);
+      j.scale = j.scale.value_or(1.0) + delta_[k];
+      continue;
+    }
+    if (ids_[k].kind == model::kJointCompliance) {
+      model::Joint& j = current_.joints.at(ids_[k].link);
+      j.compliance = j.compliance.value_or(0.0) + delta_[k];
+      continue;
+    }
     chosen.ids[static_cast<std::size_t>(chosen.count)] = ids_[k];
     errors(chosen.count++) = delta_[k];
     if (!is_link(ids_[k].kind)) {
@@ -89,6 +110,7 @@ void Parameterization::set(std::span<const double> delta) {
   if (core::apply_parameter_errors(start_chain_, chosen, errors, current) != core::ErrorModelStatus::ok)
     throw std::invalid_argument("Parameterization: a parameter names a joint the model does not have");
   core::prepare_chain(current, prepared_);
+  current_chain_ = current;
   base_exp_t_ = Eigen::AngleAxisd(base_r.norm(), base_r.norm() > 0 ? base_r.normalized() : Eigen::Vector3d::UnitZ())
                     .toRotationMatrix()
                     .transpose();
@@ -105,7 +127,33 @@ RobotModel Parameterization::model() const {
   return model::apply_parameter_errors(start_, ids_, d);
 }
 
+template <class Columns>
+void Parameterization::motion_corrected(const Columns& e, Eigen::MatrixXd& jacobian) const {
+  const int motions = augmented_.count - 12;
+  // Motion columns corrected to d/d(delta) at the current delta.
+  Eigen::Matrix<double, 6, 12> m;
+  m.leftCols<3>() = e.template middleCols<3>(motions) * base_exp_t_;
+  m.middleCols<3>(3) = e.template middleCols<3>(motions + 3) * base_jr_;
+  m.middleCols<3>(6) = e.template middleCols<3>(motions + 6) * tool_exp_t_;
+  m.rightCols<3>() = e.template middleCols<3>(motions + 9) * tool_jr_;
+  jacobian.resize(6, static_cast<Eigen::Index>(ids_.size()));
+  for (std::size_t k = 0; k < ids_.size(); ++k) {
+    const auto c = static_cast<Eigen::Index>(k);
+    jacobian.col(c) = link_column_[k] >= 0 ? Eigen::Matrix<double, 6, 1>(e.col(link_column_[k]))
+                                           : Eigen::Matrix<double, 6, 1>(m.col(motion_index(ids_[k].kind)));
+  }
+}
+
 Transform Parameterization::pose(std::span<const double> q, Eigen::MatrixXd* jacobian) const {
+  if (!plain_) {
+    const model::ChainAtJoints at = model::evaluate_chain(current_, current_chain_, q);
+    if (jacobian) {
+      ParameterIds all(augmented_.ids.begin(), augmented_.ids.begin() + augmented_.count);
+      all.insert(all.end(), joint_map_ids_.begin(), joint_map_ids_.end());
+      motion_corrected(model::parameter_jacobian(current_, at, q, all), *jacobian);
+    }
+    return at.frames.base_T_tool;
+  }
   const core::JointVector<double> qv = model::joint_vector(q);
   std::array<core::SinCos<double>, core::kMaxJoints> trig{};
   core::joint_trig(prepared_, qv, trig);
@@ -115,19 +163,7 @@ Transform Parameterization::pose(std::span<const double> q, Eigen::MatrixXd* jac
     core::ErrorMatrix<double> e;
     if (core::parameter_jacobian(prepared_, qv, trig, frames, augmented_, e) != core::ErrorModelStatus::ok)
       throw std::invalid_argument("Parameterization: bad parameter set");
-    const int motions = augmented_.count - 12;
-    // Motion columns corrected to d/d(delta) at the current delta.
-    Eigen::Matrix<double, 6, 12> m;
-    m.leftCols<3>() = e.middleCols<3>(motions) * base_exp_t_;
-    m.middleCols<3>(3) = e.middleCols<3>(motions + 3) * base_jr_;
-    m.middleCols<3>(6) = e.middleCols<3>(motions + 6) * tool_exp_t_;
-    m.rightCols<3>() = e.middleCols<3>(motions + 9) * tool_jr_;
-    jacobian->resize(6, static_cast<Eigen::Index>(ids_.size()));
-    for (std::size_t k = 0; k < ids_.size(); ++k) {
-      const auto c = static_cast<Eigen::Index>(k);
-      jacobian->col(c) = link_column_[k] >= 0 ? Eigen::Matrix<double, 6, 1>(e.col(link_column_[k]))
-                                              : Eigen::Matrix<double, 6, 1>(m.col(motion_index(ids_[k].kind)));
-    }
+    motion_corrected(e, *jacobian);
   }
   return frames.base_T_tool;
 }

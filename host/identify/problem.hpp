@@ -10,6 +10,12 @@
 // Jacobian is exact at any delta, not only at zero (tests/host/identify check it against
 // central differences).
 //
+// Joint-map parameters (scale<i>, compliance<i>; model/robot_model.hpp) add to the model's
+// fields; a model with a joint map is evaluated through model::evaluate_chain and its columns
+// come from model::parameter_jacobian (exact but for the gravity deflection's dependence on
+// the geometry, taken by central differences, about 1e-12 of a column). A model without one takes
+// the plain chain's path, unchanged.
+//
 // Residuals of one measurement (whitened, so each is N(0, 1) for a correct model):
 //   position     L (p_measured - p_model),   L^T L = inverse position covariance
 //   orientation  w log(R_measured R_model^T),  w = 1 / sigma_rad (when used)
@@ -45,11 +51,19 @@ class Parameterization {
   Transform pose(std::span<const double> q, Eigen::MatrixXd* jacobian) const;
 
  private:
+  // The columns of ids_ from those of the augmented set, motion columns made d/d(delta).
+  template <class Columns>
+  void motion_corrected(const Columns& e, Eigen::MatrixXd& jacobian) const;
+
   RobotModel start_;
   core::ChainModel<double> start_chain_;
   ParameterIds ids_;
   core::ParameterSet augmented_;  // the links of ids_, then all 12 base/tool motions
-  std::vector<int> link_column_;  // ids_[k] -> column in augmented_ (links), -1 for motions
+  ParameterIds joint_map_ids_;    // the augmented set's tail: the joint-map parameters of ids_
+  std::vector<int> link_column_;  // ids_[k] -> column of the augmented set (links, joint map), -1 for motions
+  bool plain_ = true;             // no joint map: the core's chain alone
+  RobotModel current_;            // start_ with the joint-map deltas (its fields, not its geometry)
+  core::ChainModel<double> current_chain_;
   std::vector<double> delta_;
   core::PreparedChain<double> prepared_;
   Eigen::Matrix3d base_exp_t_, base_jr_, tool_exp_t_, tool_jr_;

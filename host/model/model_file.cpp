@@ -11,6 +11,8 @@
 #include <numbers>
 #include <sstream>
 
+#include <Eigen/SVD>
+
 namespace kincal::model {
 
 namespace {
@@ -67,6 +69,12 @@ class Reader {
     return Vector3(number(node[0], what) * scale, number(node[1], what) * scale, number(node[2], what) * scale);
   }
 
+  double mass(const YAML::Node& node, const std::string& what) const {
+    const double v = number(node, what);
+    if (v < 0.0) fail(node, what + " must not be negative (kg)");
+    return v;
+  }
+
   std::string text(const YAML::Node& node, const std::string& what) const {
     if (!node.IsScalar()) fail(node, what + " must be a string");
     return node.Scalar();
@@ -97,6 +105,23 @@ class Reader {
   std::string source_;
 };
 
+// Readings must map one to one onto the chain's variables (the correction inverts the map).
+void check_coupling(const Reader& r, const YAML::Node& joints, const RobotModel& model) {
+  const auto n = static_cast<Eigen::Index>(model.joints.size());
+  Eigen::MatrixXd c = Eigen::MatrixXd::Identity(n, n);
+  bool coupled = false;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const std::vector<double>& row = model.joints[static_cast<std::size_t>(i)].coupling;
+    if (row.empty()) continue;
+    coupled = true;
+    for (Eigen::Index k = 0; k < n; ++k) c(i, k) = row[static_cast<std::size_t>(k)];
+  }
+  if (!coupled) return;
+  const Eigen::VectorXd s = c.jacobiSvd().singularValues();
+  if (!(s(n - 1) > 1e-9 * s(0)))
+    r.fail(joints, "the joints' coupling rows are linearly dependent: two joints would follow the same readings");
+}
+
 CalibrationRecord read_calibration(const Reader& r, const YAML::Node& node) {
   r.only_keys(node, "calibration",
               {"method", "data", "measurements", "rms_residual_m", "validation_rms_m", "held_fixed", "parameters"});
@@ -126,7 +151,7 @@ CalibrationRecord read_calibration(const Reader& r, const YAML::Node& node) {
 
 RobotModel read_model(const YAML::Node& root, const Reader& r) {
   if (!root || root.IsNull()) r.fail(root, "empty model file");
-  r.only_keys(root, "the model", {"name", "angles", "base", "joints", "tool", "calibration"});
+  r.only_keys(root, "the model", {"name", "angles", "base", "joints", "tool", "gravity", "payload", "calibration"});
   RobotModel model;
   model.name = root["name"] ? r.text(root["name"], "name") : "robot";
   if (root["angles"]) {
@@ -152,7 +177,9 @@ RobotModel read_model(const YAML::Node& root, const Reader& r) {
   for (const auto& jn : joints) {
     ++index;
     const std::string what = "joint " + std::to_string(index);
-    r.only_keys(jn, what, {"name", "type", "convention", "d", "theta", "a", "alpha", "beta", "offset", "limits"});
+    r.only_keys(jn, what,
+                {"name", "type", "convention", "d", "theta", "a", "alpha", "beta", "offset", "limits", "coupling",
+                 "scale", "compliance", "mass", "centre_of_mass"});
     Joint j;
     j.name = jn["name"] ? r.text(jn["name"], what + " name") : "j" + std::to_string(index);
     if (!jn["type"]) r.fail(jn, what + ": missing 'type' (revolute or prismatic)");
@@ -194,8 +221,23 @@ RobotModel read_model(const YAML::Node& root, const Reader& r) {
       j.upper = revolute ? r.angle(l[1], what + " upper limit", unit) : r.number(l[1], what + " upper limit");
       if (!(j.lower < j.upper)) r.fail(l, what + ": lower limit must be below the upper limit");
     }
+    if (jn["coupling"]) {
+      const YAML::Node& c = jn["coupling"];
+      if (!c.IsSequence() || c.size() != joints.size())
+        r.fail(c, what + ": coupling must be a list of " + std::to_string(joints.size()) +
+                      " coefficients, one per joint reading");
+      for (const auto& k : c) j.coupling.push_back(r.number(k, what + " coupling"));
+    }
+    if (jn["scale"]) {
+      j.scale = r.number(jn["scale"], what + " scale");
+      if (!(*j.scale > 0.0)) r.fail(jn["scale"], what + ": scale must be positive");
+    }
+    if (jn["compliance"]) j.compliance = r.number(jn["compliance"], what + " compliance");
+    if (jn["mass"]) j.mass_kg = r.mass(jn["mass"], what + " mass");
+    if (jn["centre_of_mass"]) j.centre_of_mass_m = r.vector3(jn["centre_of_mass"], what + " centre_of_mass");
     model.joints.push_back(j);
   }
+  check_coupling(r, joints, model);
   if (root["tool"]) {
     const YAML::Node& t = root["tool"];
     r.only_keys(t, "tool", {"point", "translation", "rpy", "quaternion"});
@@ -208,6 +250,13 @@ RobotModel read_model(const YAML::Node& root, const Reader& r) {
       model.tool = ToolKind::frame;
       model.flange_T_tool = r.transform(t, "tool", unit);
     }
+  }
+  if (root["gravity"]) model.gravity_mps2 = r.vector3(root["gravity"], "gravity");
+  if (root["payload"]) {
+    const YAML::Node& p = root["payload"];
+    r.only_keys(p, "payload", {"mass", "centre_of_mass"});
+    if (p["mass"]) model.payload.mass_kg = r.mass(p["mass"], "payload mass");
+    if (p["centre_of_mass"]) model.payload.centre_of_mass_m = r.vector3(p["centre_of_mass"], "payload centre_of_mass");
   }
   if (root["calibration"]) model.calibration = read_calibration(r, root["calibration"]);
   return model;
@@ -306,6 +355,18 @@ std::string write_model(const RobotModel& model) {
       out << YAML::Key << "limits" << YAML::Value << YAML::Flow << YAML::BeginSeq << angle_text(j.lower, s)
           << angle_text(j.upper, s) << YAML::EndSeq;
     }
+    if (!j.coupling.empty()) {
+      out << YAML::Key << "coupling" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+      for (const double c : j.coupling) out << number_text(c);
+      out << YAML::EndSeq;
+    }
+    if (j.scale) out << YAML::Key << "scale" << YAML::Value << number_text(*j.scale);
+    if (j.compliance) out << YAML::Key << "compliance" << YAML::Value << number_text(*j.compliance);
+    if (j.mass_kg != 0.0) out << YAML::Key << "mass" << YAML::Value << number_text(j.mass_kg);
+    if (!j.centre_of_mass_m.isZero(0.0)) {
+      out << YAML::Key << "centre_of_mass" << YAML::Value;
+      emit_vector(out, j.centre_of_mass_m);
+    }
     out << YAML::EndMap;
   }
   out << YAML::EndSeq;
@@ -316,6 +377,17 @@ std::string write_model(const RobotModel& model) {
     out << YAML::EndMap;
   } else {
     emit_transform(out, model.flange_T_tool, a);
+  }
+  if (has_compliance(model) || model.gravity_mps2 != RobotModel{}.gravity_mps2) {
+    out << YAML::Key << "gravity" << YAML::Value;
+    emit_vector(out, model.gravity_mps2);
+  }
+  if (model.payload.mass_kg != 0.0 || !model.payload.centre_of_mass_m.isZero(0.0)) {
+    out << YAML::Key << "payload" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "mass" << YAML::Value << number_text(model.payload.mass_kg);
+    out << YAML::Key << "centre_of_mass" << YAML::Value;
+    emit_vector(out, model.payload.centre_of_mass_m);
+    out << YAML::EndMap;
   }
   if (model.calibration) {
     const CalibrationRecord& c = *model.calibration;

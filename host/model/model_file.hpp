@@ -18,13 +18,29 @@
 //       beta: 0                  # doty only
 //       offset: 0                # joint offset: added to the reading (optional, default 0)
 //       limits: [-170, 170]      # reading limits (optional)
+//       coupling: [0, 1, 1]      # optional: this joint's variable is this combination of the
+//                                # readings (here J2 + J3); one coefficient per joint
+//       scale: 1                 # optional: reading factor (gear ratio), identified when given
+//       compliance: 0            # optional: rad/(N m) (m/N prismatic), SI whatever 'angles' says;
+//                                # deflection = compliance * gravity torque, identified when given
+//       mass: 25                 # optional, kg: the link this joint moves, for the gravity torque
+//       centre_of_mass: [0.3, 0, 0]   # optional, m, in frame i (the frame at the end of link i)
 //   tool:
 //     point: [0, 0, 0.1]         # a tool point in the flange frame, or a frame:
 //                                # translation: [...] and rpy: [...] (or quaternion)
+//   gravity: [0, 0, -9.80665]    # optional, m/s^2 in frame 0 (this default)
+//   payload:                     # optional: what the flange carries, for the gravity torque
+//     mass: 10                   # kg
+//     centre_of_mass: [0, 0, 0.1]   # m, flange frame
+//
+// robot_model.hpp says how scale, coupling and compliance act. A model without them reads and
+// writes exactly as before (gravity is written only with a compliance or when not the default).
 //   calibration: ...             # written by `kincal identify`; read back as a record, not used
 //
 // Reading is strict: unknown keys, missing parameters, wrong types, an unknown convention or
-// joint type, more than core::kMaxJoints joints, non-finite numbers, lower > upper: InputError
+// joint type, more than core::kMaxJoints joints, non-finite numbers, lower > upper, a coupling
+// list of the wrong length or coupling rows that are linearly dependent, a scale that is not
+// positive, a negative mass: InputError
 // with "FILE:LINE:COLUMN: what". Writing keeps the file's angle unit and prints numbers in their
 // shortest exact form, so a model written in radians reads back bit for bit.
 #pragma once

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <numbers>
 
 namespace kincal::model {
 
@@ -28,15 +29,123 @@ struct KindName {
   core::ParameterKind kind;
   const char* name;
 };
-constexpr KindName kLinkNames[] = {{core::ParameterKind::link_theta, "theta"},
-                                   {core::ParameterKind::link_alpha, "alpha"},
-                                   {core::ParameterKind::link_beta, "beta"},
-                                   {core::ParameterKind::link_d, "d"},
-                                   {core::ParameterKind::link_a, "a"}};
+constexpr KindName kIndexedNames[] = {{core::ParameterKind::link_theta, "theta"},
+                                      {core::ParameterKind::link_alpha, "alpha"},
+                                      {core::ParameterKind::link_beta, "beta"},
+                                      {core::ParameterKind::link_d, "d"},
+                                      {core::ParameterKind::link_a, "a"},
+                                      {kJointScale, "scale"},
+                                      {kJointCompliance, "compliance"}};
 constexpr const char* kMotionNames[] = {"base_x", "base_y", "base_z", "base_rx", "base_ry", "base_rz",
                                         "tool_x", "tool_y", "tool_z", "tool_rx", "tool_ry", "tool_rz"};
 
+// The core's kinds of ids (joint-map kinds left out), and where each id's column comes from.
+core::ParameterSet geometric_set(std::span<const core::ParameterId> ids) {
+  std::vector<core::ParameterId> geometric;
+  for (const core::ParameterId& id : ids)
+    if (!is_joint_map_parameter(id.kind)) geometric.push_back(id);
+  return to_set(geometric);
+}
+
+bool is_plain(const RobotModel& model) { return !has_joint_map(model) && !has_compliance(model); }
+
+// Readings -> chain variables before the deflection (offsets are in the chain): scale, coupling.
+core::JointVector<double> coupled_values(const RobotModel& model, std::span<const double> q) {
+  if (!has_joint_map(model)) return joint_vector(q);
+  core::JointVector<double> u = joint_vector(q), v = core::JointVector<double>::Zero();
+  for (std::size_t k = 0; k < model.joints.size(); ++k)
+    u(static_cast<Eigen::Index>(k)) *= model.joints[k].scale.value_or(1.0);
+  for (std::size_t i = 0; i < model.joints.size(); ++i) {
+    const std::vector<double>& c = model.joints[i].coupling;
+    const auto row = static_cast<Eigen::Index>(i);
+    if (c.empty()) {
+      v(row) = u(row);
+      continue;
+    }
+    for (std::size_t k = 0; k < c.size() && k < model.joints.size(); ++k)
+      v(row) += c[k] * u(static_cast<Eigen::Index>(k));
+  }
+  return v;
+}
+
+// The coupling coefficients (n x n; identity rows where a joint has none), without the scales.
+Eigen::MatrixXd coupling_matrix(const RobotModel& model) {
+  const auto n = static_cast<Eigen::Index>(model.joints.size());
+  Eigen::MatrixXd c = Eigen::MatrixXd::Identity(n, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const std::vector<double>& row = model.joints[static_cast<std::size_t>(i)].coupling;
+    if (row.empty()) continue;
+    for (Eigen::Index k = 0; k < n; ++k)
+      c(i, k) = static_cast<std::size_t>(k) < row.size() ? row[static_cast<std::size_t>(k)] : 0.0;
+  }
+  return c;
+}
+
+Eigen::VectorXd scales(const RobotModel& model) {
+  Eigen::VectorXd s(static_cast<Eigen::Index>(model.joints.size()));
+  for (std::size_t i = 0; i < model.joints.size(); ++i)
+    s(static_cast<Eigen::Index>(i)) = model.joints[i].scale.value_or(1.0);
+  return s;
+}
+
+Eigen::VectorXd compliances(const RobotModel& model) {
+  Eigen::VectorXd k(static_cast<Eigen::Index>(model.joints.size()));
+  for (std::size_t i = 0; i < model.joints.size(); ++i)
+    k(static_cast<Eigen::Index>(i)) = model.joints[i].compliance.value_or(0.0);
+  return k;
+}
+
+core::PreparedChain<double> prepared(const core::ChainModel<double>& chain) {
+  core::PreparedChain<double> p;
+  core::prepare_chain(chain, p);
+  return p;
+}
+
+// Central-difference steps for the deflection's derivatives (rad or m): G is smooth and the
+// deflection small, so truncation (h^2) and rounding (1e-16 |G| / h) both stay far below 1e-9
+// of a column.
+constexpr double kDeflectionStep = 1e-6;
+
+// d(deflection)/d(v) at v: n x n, compliance_i dG_i/dv_k.
+Eigen::MatrixXd deflection_by_values(const RobotModel& model, const core::PreparedChain<double>& chain,
+                                     const core::JointVector<double>& v) {
+  const auto n = static_cast<Eigen::Index>(model.joints.size());
+  Eigen::MatrixXd d(n, n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    core::JointVector<double> plus = v, minus = v;
+    plus(k) += kDeflectionStep;
+    minus(k) -= kDeflectionStep;
+    d.col(k) = ((gravity_forces(model, chain, plus) - gravity_forces(model, chain, minus)) / (2.0 * kDeflectionStep))
+                   .head(n)
+                   .cwiseProduct(compliances(model));
+  }
+  return d;
+}
+
 }  // namespace
+
+bool has_joint_map(const RobotModel& model) {
+  return std::any_of(model.joints.begin(), model.joints.end(),
+                     [](const Joint& j) { return !j.coupling.empty() || j.scale.has_value(); });
+}
+
+bool has_compliance(const RobotModel& model) {
+  return std::any_of(model.joints.begin(), model.joints.end(), [](const Joint& j) { return j.compliance.has_value(); });
+}
+
+bool is_joint_map_parameter(core::ParameterKind kind) { return kind == kJointScale || kind == kJointCompliance; }
+
+DisplayUnit display_unit(const RobotModel& model, core::ParameterId id) {
+  using K = core::ParameterKind;
+  if (id.kind == kJointScale) return {1e6, "ppm"};
+  if (id.kind == kJointCompliance) {
+    const bool prismatic = id.link < model.joints.size() && model.joints[id.link].type == core::JointType::prismatic;
+    return {1e6, prismatic ? "um/N" : "urad/Nm"};
+  }
+  const bool angle = id.kind == K::link_theta || id.kind == K::link_alpha || id.kind == K::link_beta ||
+                     (id.kind >= K::base_rx && id.kind <= K::base_rz) || id.kind >= K::tool_rx;
+  return angle ? DisplayUnit{180.0 / std::numbers::pi, "deg"} : DisplayUnit{1e3, "mm"};
+}
 
 core::ChainModel<double> to_chain(const RobotModel& model) {
   core::ChainModel<double> chain;
@@ -78,30 +187,76 @@ core::JointVector<double> joint_vector(std::span<const double> q) {
 }
 
 Transform forward_kinematics(const RobotModel& model, std::span<const double> q) {
-  return core::forward_kinematics(to_chain(model), joint_vector(q));
+  if (is_plain(model)) return core::forward_kinematics(to_chain(model), joint_vector(q));
+  return chain_at_joints(model, q).frames.base_T_tool;
 }
 
-ChainAtJoints chain_at_joints(const RobotModel& model, std::span<const double> q) {
+ChainAtJoints evaluate_chain(const RobotModel& model, const core::ChainModel<double>& chain,
+                             std::span<const double> q) {
   ChainAtJoints at;
-  core::prepare_chain(to_chain(model), at.chain);
-  at.q = joint_vector(q);
+  at.geometry = chain;
+  core::prepare_chain(chain, at.chain);
+  at.coupled = coupled_values(model, q);
+  at.q = at.coupled;
+  if (has_compliance(model)) {
+    const core::JointVector<double> g = gravity_forces(model, at.chain, at.coupled);
+    for (std::size_t i = 0; i < model.joints.size(); ++i)
+      at.q(static_cast<Eigen::Index>(i)) += model.joints[i].compliance.value_or(0.0) * g(static_cast<Eigen::Index>(i));
+  }
   core::joint_trig(at.chain, at.q, at.trig);
   core::forward_kinematics(at.chain, at.q, at.trig, at.frames);
   return at;
+}
+
+ChainAtJoints chain_at_joints(const RobotModel& model, std::span<const double> q) {
+  return evaluate_chain(model, to_chain(model), q);
+}
+
+core::JointVector<double> gravity_forces(const RobotModel& model, const core::PreparedChain<double>& chain,
+                                         const core::JointVector<double>& v) {
+  std::array<core::SinCos<double>, core::kMaxJoints> trig{};
+  core::ChainFrames<double> frames;
+  core::joint_trig(chain, v, trig);
+  core::forward_kinematics(chain, v, trig, frames);
+  core::JointJacobian<double> j;
+  core::joint_jacobian(chain, frames, j);
+  const Vector3 g = chain.base_T_frame0.rotation * model.gravity_mps2;
+  const Vector3& tool = frames.base_T_tool.translation;
+  const std::size_t n = model.joints.size();
+  core::JointVector<double> forces = core::JointVector<double>::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto c = static_cast<Eigen::Index>(i);
+    // The velocity of a point x moved by joint i: v + w x (x - tool), from the twist at the tool.
+    const auto moved = [&](const Vector3& x) -> Vector3 {
+      return j.col(c).head<3>() + j.col(c).tail<3>().cross(x - tool);
+    };
+    double f = 0.0;
+    for (std::size_t b = i; b < n; ++b)
+      if (model.joints[b].mass_kg != 0.0)
+        f += model.joints[b].mass_kg * g.dot(moved(frames.base_T_frame[b + 1] * model.joints[b].centre_of_mass_m));
+    if (model.payload.mass_kg != 0.0)
+      f += model.payload.mass_kg * g.dot(moved(frames.base_T_frame[n] * model.payload.centre_of_mass_m));
+    forces(c) = f;
+  }
+  return forces;
 }
 
 Eigen::MatrixXd joint_jacobian(const RobotModel& model, std::span<const double> q) {
   const ChainAtJoints at = chain_at_joints(model, q);
   core::JointJacobian<double> j;
   core::joint_jacobian(at.chain, at.frames, j);
-  return j.leftCols(model.joint_count());
+  const auto n = static_cast<Eigen::Index>(model.joint_count());
+  if (is_plain(model)) return j.leftCols(n);
+  Eigen::MatrixXd by_values = Eigen::MatrixXd::Identity(n, n);
+  if (has_compliance(model)) by_values += deflection_by_values(model, at.chain, at.coupled);
+  return j.leftCols(n) * by_values * coupling_matrix(model) * scales(model).asDiagonal();
 }
 
 std::string parameter_name(core::ParameterId id) {
   const int kind = static_cast<int>(id.kind);
-  if (kind >= static_cast<int>(core::ParameterKind::base_x))
+  if (!is_joint_map_parameter(id.kind) && kind >= static_cast<int>(core::ParameterKind::base_x))
     return kMotionNames[kind - static_cast<int>(core::ParameterKind::base_x)];
-  for (const KindName& k : kLinkNames)
+  for (const KindName& k : kIndexedNames)
     if (k.kind == id.kind) return std::string(k.name) + std::to_string(id.link + 1);
   return "?";
 }
@@ -110,7 +265,7 @@ core::ParameterId parse_parameter_name(const std::string& name, int joint_count)
   for (int k = 0; k < 12; ++k)
     if (name == kMotionNames[k])
       return {static_cast<core::ParameterKind>(static_cast<int>(core::ParameterKind::base_x) + k), 0};
-  for (const KindName& k : kLinkNames) {
+  for (const KindName& k : kIndexedNames) {
     const std::string prefix = k.name;
     if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
     int joint = 0;
@@ -124,7 +279,8 @@ core::ParameterId parse_parameter_name(const std::string& name, int joint_count)
     return {k.kind, static_cast<std::uint8_t>(joint - 1)};
   }
   throw InputError("unknown parameter name '" + name +
-                   "' (expected d<i>, theta<i>, a<i>, alpha<i>, beta<i>, base_x..base_rz or tool_x..tool_rz)");
+                   "' (expected d<i>, theta<i>, a<i>, alpha<i>, beta<i>, scale<i>, compliance<i>, base_x..base_rz or "
+                   "tool_x..tool_rz)");
 }
 
 std::vector<core::ParameterId> all_parameters(const RobotModel& model) {
@@ -143,28 +299,104 @@ std::vector<core::ParameterId> all_parameters(const RobotModel& model) {
     ids.push_back({static_cast<core::ParameterKind>(static_cast<int>(core::ParameterKind::base_x) + k), 0});
   for (int k = 0; k < tool_count; ++k)
     ids.push_back({static_cast<core::ParameterKind>(static_cast<int>(core::ParameterKind::tool_x) + k), 0});
+  for (std::size_t i = 0; i < model.joints.size(); ++i)
+    if (model.joints[i].scale) ids.push_back({kJointScale, static_cast<std::uint8_t>(i)});
+  for (std::size_t i = 0; i < model.joints.size(); ++i)
+    if (model.joints[i].compliance) ids.push_back({kJointCompliance, static_cast<std::uint8_t>(i)});
   return ids;
 }
 
 Eigen::MatrixXd parameter_jacobian(const RobotModel& model, std::span<const double> q,
                                    std::span<const core::ParameterId> ids) {
-  const core::ParameterSet set = to_set(ids);
-  const ChainAtJoints at = chain_at_joints(model, q);
+  return parameter_jacobian(model, chain_at_joints(model, q), q, ids);
+}
+
+Eigen::MatrixXd parameter_jacobian(const RobotModel& model, const ChainAtJoints& at, std::span<const double> q,
+                                   std::span<const core::ParameterId> ids) {
+  const core::ParameterSet set = geometric_set(ids);
   core::ErrorMatrix<double> e = core::ErrorMatrix<double>::Zero();
   if (core::parameter_jacobian(at.chain, at.q, at.trig, at.frames, set, e) != core::ErrorModelStatus::ok)
     throw std::invalid_argument("parameter_jacobian: a parameter names a joint the model does not have");
-  return e.leftCols(set.count);
+  if (is_plain(model) && static_cast<std::size_t>(set.count) == ids.size()) return e.leftCols(set.count);
+  // The joint map: columns through the chain's joint Jacobian at the deflected values.
+  core::JointJacobian<double> joints;
+  core::joint_jacobian(at.chain, at.frames, joints);
+  const auto n = static_cast<Eigen::Index>(model.joints.size());
+  const bool compliance = has_compliance(model);
+  const core::JointVector<double> forces =
+      compliance ? gravity_forces(model, at.chain, at.coupled) : core::JointVector<double>::Zero();
+  const Eigen::VectorXd k = compliances(model);
+  Eigen::MatrixXd by_values = Eigen::MatrixXd::Identity(n, n);
+  bool by_values_ready = !compliance;
+  Eigen::MatrixXd out(6, static_cast<Eigen::Index>(ids.size()));
+  int geometric = 0;
+  for (std::size_t c = 0; c < ids.size(); ++c) {
+    const core::ParameterId id = ids[c];
+    const auto col = static_cast<Eigen::Index>(c);
+    if (id.link >= model.joints.size() &&
+        (is_joint_map_parameter(id.kind) || id.kind <= core::ParameterKind::link_beta))
+      throw std::invalid_argument("parameter_jacobian: a parameter names a joint the model does not have");
+    const auto link = static_cast<Eigen::Index>(id.link);
+    if (id.kind == kJointCompliance) {
+      out.col(col) = joints.col(link) * forces(link);
+      continue;
+    }
+    if (id.kind == kJointScale) {
+      if (!by_values_ready) by_values += deflection_by_values(model, at.chain, at.coupled);
+      by_values_ready = true;
+      const Eigen::VectorXd dv = coupling_matrix(model).col(link) * q[static_cast<std::size_t>(id.link)];
+      out.col(col) = joints.leftCols(n) * (by_values * dv);
+      continue;
+    }
+    out.col(col) = e.col(geometric++);
+    if (!compliance || id.kind > core::ParameterKind::link_beta) continue;
+    // A link parameter moves the deflection too (base and tool motions do not: gravity is given
+    // in frame 0 and the payload in the flange frame).
+    core::ParameterSet one;
+    one.count = 1;
+    one.ids[0] = id;
+    core::JointVector<double> dforces = core::JointVector<double>::Zero();
+    for (const double sign : {1.0, -1.0}) {
+      core::ErrorVector<double> step = core::ErrorVector<double>::Zero();
+      step(0) = sign * kDeflectionStep;
+      core::ChainModel<double> moved;
+      if (core::apply_parameter_errors(at.geometry, one, step, moved) != core::ErrorModelStatus::ok)
+        throw std::invalid_argument("parameter_jacobian: a parameter names a joint the model does not have");
+      dforces += sign * gravity_forces(model, prepared(moved), at.coupled);
+    }
+    out.col(col) += joints.leftCols(n) * (dforces.head(n) / (2.0 * kDeflectionStep)).cwiseProduct(k);
+  }
+  return out;
 }
 
 RobotModel apply_parameter_errors(const RobotModel& model, std::span<const core::ParameterId> ids,
                                   const Eigen::VectorXd& errors) {
-  const core::ParameterSet set = to_set(ids);
+  std::vector<core::ParameterId> geometric;
+  std::vector<double> geometric_errors;
+  RobotModel out = model;
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    const double e = errors(static_cast<Eigen::Index>(k));
+    if (!is_joint_map_parameter(ids[k].kind)) {
+      geometric.push_back(ids[k]);
+      geometric_errors.push_back(e);
+      continue;
+    }
+    if (ids[k].link >= out.joints.size())
+      throw std::invalid_argument("apply_parameter_errors: a parameter names a joint the model does not have");
+    Joint& j = out.joints[ids[k].link];
+    if (ids[k].kind == kJointScale) {
+      j.scale = j.scale.value_or(1.0) + e;
+    } else {
+      j.compliance = j.compliance.value_or(0.0) + e;
+    }
+  }
+  const core::ParameterSet set = to_set(geometric);
   core::ErrorVector<double> e = core::ErrorVector<double>::Zero();
-  e.head(set.count) = errors.head(set.count);
+  for (int k = 0; k < set.count; ++k) e(k) = geometric_errors[static_cast<std::size_t>(k)];
   core::ChainModel<double> actual;
   if (core::apply_parameter_errors(to_chain(model), set, e, actual) != core::ErrorModelStatus::ok)
     throw std::invalid_argument("apply_parameter_errors: a parameter names a joint the model does not have");
-  return from_chain(model, actual);
+  return from_chain(out, actual);
 }
 
 Matrix3 rotation_from_rpy(const Vector3& rpy) {

@@ -13,6 +13,20 @@
 // q_i + offset_i, added to theta (revolute) or d (prismatic). The offset is where calibrated
 // zero-reference errors go; theta/d keep the nominal geometry, so both are visible in the file.
 //
+// Non-geometric joint map (all optional; a model without them evaluates exactly as the plain
+// chain, bit for bit). From readings r to the chain's variables v:
+//   u_k = scale_k r_k                        gear-ratio error of reading k (scale absent: 1)
+//   v_i = sum_k coupling_ik u_k + offset_i   coupling absent: v_i = u_i + offset_i (Fanuc's elbow
+//                                            is J2 + J3: coupling [0, 1, 1, 0, 0, 0] on joint 3)
+//   v_i += compliance_i * G_i(v)             gravity deflection: G_i the generalized force that
+//                                            gravity puts on joint i (N m, or N for a prismatic
+//                                            joint) at v, from the link masses and the payload
+// G_i = sum over bodies b that joint i moves (links i..n, the payload) of m_b g . dc_b/dv_i, with
+// c_b each body's centre of mass, g the gravity vector given in frame 0: the first-order model
+// of a joint that gives way in proportion to the static torque it holds (heavy arms' shoulder
+// and elbow sag). A joint with a scale or a compliance in its model has that parameter
+// identified (names scale<i>, compliance<i>); the masses, centres of mass and gravity are inputs.
+//
 // Everything is double, SI (m, rad). Functions here do not throw unless they say so.
 #pragma once
 
@@ -50,7 +64,23 @@ struct Joint {
   double offset = 0.0;                        // rad (revolute) or m (prismatic)
   double lower = -std::numeric_limits<double>::infinity();
   double upper = std::numeric_limits<double>::infinity();
+  // The joint map (see the top): empty coupling = the joint's own reading; otherwise one
+  // coefficient per reading.
+  std::vector<double> coupling;
+  std::optional<double> scale;                 // dimensionless; present: identified
+  std::optional<double> compliance;            // rad/(N m) or m/N; present: identified
+  double mass_kg = 0.0;                        // of the link this joint moves
+  Vector3 centre_of_mass_m = Vector3::Zero();  // in frame i, the frame at the end of link i
 };
+
+// What the last link carries, for the gravity deflection: its mass and centre of mass in the
+// flange frame.
+struct Payload {
+  double mass_kg = 0.0;
+  Vector3 centre_of_mass_m = Vector3::Zero();
+};
+
+inline constexpr double kStandardGravity_mps2 = 9.80665;
 
 enum class ToolKind { point, frame };
 enum class AngleUnit { rad, deg };
@@ -81,9 +111,15 @@ struct RobotModel {
   ToolKind tool = ToolKind::point;
   AngleUnit file_angles = AngleUnit::rad;  // how the file wrote angles; writing keeps it
   std::optional<CalibrationRecord> calibration;
+  Vector3 gravity_mps2{0.0, 0.0, -kStandardGravity_mps2};  // in frame 0
+  Payload payload;
 
   int joint_count() const { return static_cast<int>(joints.size()); }
 };
+
+// Whether readings go through scale or coupling, and whether any joint has a compliance.
+bool has_joint_map(const RobotModel& model);
+bool has_compliance(const RobotModel& model);
 
 // The core chain with offsets folded into theta/d. Requires joint_count() <= core::kMaxJoints
 // (load_model checks it).
@@ -96,10 +132,14 @@ RobotModel from_chain(const RobotModel& like, const core::ChainModel<double>& ch
 core::JointVector<double> joint_vector(std::span<const double> q);
 
 // The core's chain of a model evaluated at joint readings q, with the inputs its frames were
-// computed from: what the Jacobians below and the joint axes (axes.hpp) start from.
+// computed from: what the Jacobians below and the joint axes (axes.hpp) start from. q holds the
+// chain's variables (through the joint map, deflection included), coupled the same before the
+// deflection.
 struct ChainAtJoints {
+  core::ChainModel<double> geometry;
   core::PreparedChain<double> chain;
   core::JointVector<double> q;
+  core::JointVector<double> coupled;
   std::array<core::SinCos<double>, core::kMaxJoints> trig{};
   core::ChainFrames<double> frames;
 };
@@ -108,26 +148,60 @@ ChainAtJoints chain_at_joints(const RobotModel& model, std::span<const double> q
 // device_T_tool at joint readings q (q.size() == joint_count()).
 Transform forward_kinematics(const RobotModel& model, std::span<const double> q);
 
-// d(tool pose)/dq as a twist [dp; dphi] per joint, in the device frame: 6 x n.
+// d(tool pose)/d(readings) as a twist [dp; dphi] per reading, in the device frame: 6 x n.
 Eigen::MatrixXd joint_jacobian(const RobotModel& model, std::span<const double> q);
 
 // ---- Named parameters ---------------------------------------------------------------------
 // Names: d1 theta1 a1 alpha1 beta1 (1-based joint), base_x base_y base_z base_rx base_ry base_rz
 // (small motions of frame 0 along/about its own axes), tool_x ... tool_rz (along/about the
 // tool's own axes). Their errors act as core::apply_parameter_errors says.
+// scale1, compliance1 ...: the joint map's parameters (errors add to them). Their kinds are the
+// host's own, beyond the core's enumerators: the core never sees them (apply_parameter_errors
+// and parameter_jacobian below handle them), and code that orders kinds asks
+// is_joint_map_parameter first.
+inline constexpr core::ParameterKind kJointScale{200};
+inline constexpr core::ParameterKind kJointCompliance{201};
+bool is_joint_map_parameter(core::ParameterKind kind);
+
+// How reports print a parameter: value_in_unit = SI value * per_si. Angles in deg, lengths in
+// mm, scales in ppm, compliances in urad/(N m) (um/N for a prismatic joint).
+struct DisplayUnit {
+  double per_si = 1.0;
+  const char* name = "";
+};
+DisplayUnit display_unit(const RobotModel& model, core::ParameterId id);
 std::string parameter_name(core::ParameterId id);
 // Throws InputError naming the bad entry.
 core::ParameterId parse_parameter_name(const std::string& name, int joint_count);
 
 // Every parameter the model's conventions have: links (theta, d, a, alpha, and beta for Doty
-// links), then the base's six motions, then the tool's six (three if the tool is a point).
+// links), then the base's six motions, then the tool's six (three if the tool is a point), then
+// the scales and compliances the model's joints declare.
 std::vector<core::ParameterId> all_parameters(const RobotModel& model);
 
 // The twist columns of the tool pose w.r.t. parameter errors at zero error: 6 x ids.size().
 Eigen::MatrixXd parameter_jacobian(const RobotModel& model, std::span<const double> q,
                                    std::span<const core::ParameterId> ids);
 
-// The model with the given parameter errors applied exactly (link sums, base/tool composed).
+// The same for a model whose geometry is `chain` (identify's Parameterization keeps its own
+// chain), with the chain evaluated at readings q. Core kinds take the core's columns at the
+// deflected joint values, plus -- when the model has compliance -- the change of the deflection
+// with the parameter (central differences of G: the deflection is small, so its derivative is
+// accurate to about 1e-12 of the column). Throws std::invalid_argument for a link index the
+// chain does not have.
+Eigen::MatrixXd parameter_jacobian(const RobotModel& model, const ChainAtJoints& at, std::span<const double> q,
+                                   std::span<const core::ParameterId> ids);
+
+// chain_at_joints for the joint map of `model` and the geometry `chain` (to_chain(model), or
+// identify's Parameterization's own chain).
+ChainAtJoints evaluate_chain(const RobotModel& model, const core::ChainModel<double>& chain, std::span<const double> q);
+
+// G(v) of the top comment for the prepared chain at chain variables v: N m (revolute) or N.
+core::JointVector<double> gravity_forces(const RobotModel& model, const core::PreparedChain<double>& chain,
+                                         const core::JointVector<double>& v);
+
+// The model with the given parameter errors applied exactly (link sums, base/tool composed,
+// scale and compliance added; an absent scale counts as 1, an absent compliance as 0).
 RobotModel apply_parameter_errors(const RobotModel& model, std::span<const core::ParameterId> ids,
                                   const Eigen::VectorXd& errors);
 

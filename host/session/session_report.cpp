@@ -19,7 +19,7 @@ bool is_angle(core::ParameterKind k) {
 std::string group_of(core::ParameterId id) {
   using K = core::ParameterKind;
   if (id.kind >= K::base_x && id.kind <= K::base_rz) return "base";
-  if (id.kind >= K::tool_x) return "tool";
+  if (id.kind >= K::tool_x && !model::is_joint_map_parameter(id.kind)) return "tool";
   return "joint " + std::to_string(id.link + 1);
 }
 
@@ -31,6 +31,8 @@ double error_of(const model::RobotModel& model, std::span<const double> q, const
 
 double parameter_value(const model::RobotModel& model, const model::RobotModel& start, core::ParameterId id) {
   using K = core::ParameterKind;
+  if (id.kind == model::kJointScale) return model.joints.at(id.link).scale.value_or(1.0);
+  if (id.kind == model::kJointCompliance) return model.joints.at(id.link).compliance.value_or(0.0);
   if (id.kind >= K::base_x && id.kind <= K::base_rz)
     return identify::small_motion(start.base_T_frame0,
                                   model.base_T_frame0)(static_cast<int>(id.kind) - static_cast<int>(K::base_x));
