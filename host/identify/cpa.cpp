@@ -311,7 +311,8 @@ std::vector<Point> screen(std::vector<Point> pts, const model::Dataset& data, co
   return pts;
 }
 
-TypeTest type_test(const std::vector<Point>& pts, double circle_rss, bool known_noise, double significance) {
+TypeTest type_test(const std::vector<Point>& pts, double unit_line_rss, double circle_rss, bool known_noise,
+                   double significance) {
   TypeTest t;
   const LinearFit general = linear_fit(pts, 4, false);
   const LinearFit line = linear_fit(pts, 2, false);
@@ -336,12 +337,18 @@ TypeTest type_test(const std::vector<Point>& pts, double circle_rss, bool known_
   const bool line_rejected = t.tested && t.p_line < significance;
   const bool circle_rejected = t.tested && t.p_circle < significance;
   t.conclusive = line_rejected != circle_rejected;
+  t.p_unit_speed = t.tested ? p_of(unit_line_rss, general.rank - 5.0) : 1.0;
   if (t.conclusive) {
     t.verdict = line_rejected ? core::JointType::revolute : core::JointType::prismatic;
+  } else if (t.tested && !line_rejected) {
+    // Both fit (a short sweep): a prismatic joint moves 1 m per metre of reading, a revolute one
+    // r per radian, so the unit-speed line tells them apart unless r is near 1 m.
+    t.verdict = t.p_unit_speed < significance ? core::JointType::revolute : core::JointType::prismatic;
   } else {
-    // Akaike: residual plus twice the parameter count, in units of the noise variance.
+    // Neither fits, or untested: Akaike on the joint models (circle 7 parameters, unit line 5).
     const double s2 = dof >= 1.0 && general.rss > 0.0 ? general.rss / dof : 1.0;
-    t.verdict = circle_rss / s2 + 14.0 < line.rss / s2 + 12.0 ? core::JointType::revolute : core::JointType::prismatic;
+    t.verdict =
+        circle_rss / s2 + 14.0 < unit_line_rss / s2 + 10.0 ? core::JointType::revolute : core::JointType::prismatic;
   }
   return t;
 }
@@ -402,7 +409,7 @@ SweepFit fit_sweep(const model::Dataset& data, const Sweep& s, std::optional<cor
   const std::vector<Point> kept = screen(pts, data, options, fit.rejected_lines);
   const Fit circle = fit_circle(kept);
   const Fit line = fit_line(kept);
-  fit.test = type_test(kept, circle.rss, known_noise, options.significance);
+  fit.test = type_test(kept, line.rss, circle.rss, known_noise, options.significance);
   fit.p_value = fit.test.p_line;
   fit.type = declared.value_or(fit.test.verdict);
   const bool revolute = fit.type == core::JointType::revolute;
@@ -578,8 +585,9 @@ std::string describe(const SweepFit& f) {
   const bool revolute = f.type == core::JointType::revolute;
   const double deg = 180.0 / std::numbers::pi;
   out << "joint " << f.joint + 1 << ": " << (revolute ? "circle" : "line") << " (p(line) = " << f.test.p_line
-      << ", p(circle) = " << f.test.p_circle << (f.test.tested ? "" : ", untested: too few points") << "), " << f.used
-      << " points, lines " << f.first_line << "-" << f.last_line;
+      << ", p(circle) = " << f.test.p_circle << ", p(unit-speed line) = " << f.test.p_unit_speed
+      << (f.test.conclusive ? "" : ", inconclusive") << (f.test.tested ? "" : ", untested: too few points") << "), "
+      << f.used << " points, lines " << f.first_line << "-" << f.last_line;
   if (revolute) {
     out << ", swept " << f.q_min * deg << ".." << f.q_max * deg << " deg, radius " << f.radius_m * 1e3 << " +- "
         << f.radius_stddev_m * 1e3 << " mm";

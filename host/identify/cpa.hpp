@@ -22,8 +22,11 @@
 //             With too few points for an F test (dof 0) and a known noise level (covariance on
 //             every row, or sigma_m) the drop in whitened residual is taken as chi-square. The
 //             verdict is revolute when only the line is rejected at `significance`, prismatic
-//             when only the circle is; otherwise (both fit: a short sweep; or neither) the smaller
-//             Akaike criterion decides and the verdict is marked inconclusive.
+//             when only the circle is. When both fit (a short sweep) a third test decides:
+//             p_unit_speed, H0 "a line at unit speed" (a prismatic joint moves 1 m per metre of
+//             reading, a revolute one r per radian): prismatic unless it is rejected. When neither
+//             fits, the smaller Akaike criterion (circle 7 parameters, unit line 5). Such verdicts
+//             are marked inconclusive.
 //   fit       revolute: p_k = c + r R [cos q_k, sin q_k, 0]^T (linear start, then Ceres on centre,
 //             rotation, radius); the axis is R's z through c, signed so positive q turns
 //             counter-clockwise about it. prismatic: p_k = c + u q_k, |u| = 1 (metres of travel
@@ -67,10 +70,11 @@ struct CpaOptions {
 };
 
 struct TypeTest {
-  bool tested = false;    // false: too few points and unknown noise; the verdict is by fit only
-  double p_line = 1.0;    // of "affine in q" (prismatic)
-  double p_circle = 1.0;  // of "on a circle at angle q" (revolute)
-  int residual_dof = 0;   // of the general model
+  bool tested = false;        // false: too few points and unknown noise; the verdict is by fit only
+  double p_line = 1.0;        // of "affine in q" (prismatic)
+  double p_circle = 1.0;      // of "on a circle at angle q" (revolute)
+  double p_unit_speed = 1.0;  // of "on a line at 1 m per unit of reading" (prismatic, scale known)
+  int residual_dof = 0;       // of the general model
   core::JointType verdict = core::JointType::revolute;
   bool conclusive = false;  // exactly one of the two hypotheses rejected
 };

@@ -9,6 +9,7 @@
 
 #include <Eigen/Geometry>
 
+#include "host/identify/problem.hpp"
 #include "host/model/dataset.hpp"
 #include "host/model/robot_model.hpp"
 #include "host/sim/robot.hpp"
@@ -43,6 +44,43 @@ inline model::Dataset measure(const model::RobotModel& truth, const std::vector<
     d.rows.push_back(m);
   }
   return d;
+}
+
+// Single-joint sweeps: joint j takes the readings readings[j] in turn, the others stay at home.
+inline std::vector<std::vector<double>> single_joint_sweeps(const std::vector<double>& home,
+                                                            const std::vector<std::vector<double>>& readings) {
+  std::vector<std::vector<double>> qs;
+  for (std::size_t j = 0; j < readings.size(); ++j)
+    for (double r : readings[j]) {
+      std::vector<double> q = home;
+      q[j] = r;
+      qs.push_back(q);
+    }
+  return qs;
+}
+
+// The Cramer-Rao bound on the squared tool-point error of a model identified from noise-free
+// rows `exact` with weights `w` (whitening the true noise), summed over held-out
+// configurations: sum of trace(J_q F^-1 J_q^T), F = J^T J the Fisher information of the
+// parameters `ids` at the truth (held-fixed parameters change nothing the data can see).
+inline double prediction_bound(const model::RobotModel& truth, const identify::ParameterIds& ids,
+                               const model::Dataset& exact, const identify::Weights& w,
+                               const std::vector<std::vector<double>>& held_out) {
+  identify::Parameterization at_truth(truth, ids);
+  std::vector<int> rows(exact.rows.size());
+  for (std::size_t i = 0; i < rows.size(); ++i) rows[i] = static_cast<int>(i);
+  Eigen::VectorXd residual;
+  Eigen::MatrixXd j;
+  identify::stacked(at_truth, exact, w, rows, residual, &j);
+  const Eigen::LDLT<Eigen::MatrixXd> information(j.transpose() * j);
+  double bound = 0.0;
+  for (const auto& q : held_out) {
+    Eigen::MatrixXd jq;
+    (void)at_truth.pose(q, &jq);
+    const Eigen::MatrixXd p = jq.topRows(3);
+    bound += (p * information.solve(p.transpose())).trace();
+  }
+  return bound;
 }
 
 // RMS distance between two models' tool points over configurations.
