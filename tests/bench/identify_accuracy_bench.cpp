@@ -67,27 +67,14 @@ int main() {
         continue;
       }
       // Fisher information at the truth, same parameters, same weights.
-      const identify::ParameterIds& ids = result.identifiability.identified;
-      identify::Parameterization at_truth(truth, ids);
       const model::Dataset exact = simulation::measure(truth, qs, rng, 0.0, r.pose, 0.0, false);
       const identify::Weights w = identify::make_weights(exact, sigma_m, r.pose ? sigma_rad : 0.0);
-      Eigen::VectorXd residual;
-      Eigen::MatrixXd j;
-      identify::stacked(at_truth, exact, w, std::vector<int>([&] {
-                          std::vector<int> rows(exact.rows.size());
-                          for (std::size_t i = 0; i < rows.size(); ++i) rows[i] = static_cast<int>(i);
-                          return rows;
-                        }()),
-                        residual, &j);
-      const Eigen::MatrixXd info = j.transpose() * j;
-      const Eigen::LDLT<Eigen::MatrixXd> ldlt(info);
-      for (const auto& q : sim::random_configurations(nominal, held_out, rng)) {
-        Eigen::MatrixXd jq;
-        const model::Transform t = at_truth.pose(q, &jq);
-        const Eigen::MatrixXd p = jq.topRows(3);
-        bound += (p * ldlt.solve(p.transpose())).trace();
-        error2 += (model::forward_kinematics(result.model, q).translation - t.translation).squaredNorm();
-        nominal2 += (model::forward_kinematics(nominal, q).translation - t.translation).squaredNorm();
+      const auto held = sim::random_configurations(nominal, held_out, rng);
+      bound += simulation::prediction_bound(truth, result.identifiability.identified, exact, w, held);
+      for (const auto& q : held) {
+        const model::Vector3 t = model::forward_kinematics(truth, q).translation;
+        error2 += (model::forward_kinematics(result.model, q).translation - t).squaredNorm();
+        nominal2 += (model::forward_kinematics(nominal, q).translation - t).squaredNorm();
       }
     }
     const double ratio = std::sqrt(error2 / bound);
