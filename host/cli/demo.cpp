@@ -3,7 +3,7 @@
 #include <iostream>
 #include <memory>
 
-#include "host/session/demo.hpp"
+#include "host/demo/demo.hpp"
 #include "host/session/session_error.hpp"
 
 namespace kincal::cli {

@@ -1,5 +1,5 @@
 // `kincal demo`: the main job -- the whole calibration loop on the simulated ARID platform rig
-// and the simulated Kapucu & Baysec stereo rig, with the report (host/session/demo.hpp).
+// and the simulated Kapucu & Baysec stereo rig, with the report (host/demo/demo.hpp).
 #pragma once
 
 #include <CLI/App.hpp>

@@ -24,6 +24,7 @@
 
 #include "host/can/socketcan.hpp"
 #include "host/cli/model_option.hpp"
+#include "host/demo/simulated_rig.hpp"
 #include "host/files/output_file.hpp"
 #include "host/identify/plausibility.hpp"
 #include "host/model/model_file.hpp"
@@ -31,7 +32,6 @@
 #include "host/session/online_correction.hpp"
 #include "host/session/session.hpp"
 #include "host/session/session_report.hpp"
-#include "host/session/simulated_rig.hpp"
 #include "host/sim/robot.hpp"
 
 namespace kincal::cli {

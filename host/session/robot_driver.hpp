@@ -1,6 +1,6 @@
 // How a calibration session moves the robot (issue #6): one interface, three drivers.
 //
-//   simulated  (host/sim) the simulated robot goes where it is told; what the platform sees
+//   simulated  (host/demo, over host/sim) the simulated robot goes where it is told; what the platform sees
 //              follows from its true (hidden) model.
 //   manual     the operator jogs the robot to the pose shown and confirms with Enter, or types
 //              the readings the robot's pendant shows if they differ from the target.

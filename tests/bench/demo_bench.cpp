@@ -13,7 +13,7 @@
 #include <filesystem>
 #include <sstream>
 
-#include "host/session/demo.hpp"
+#include "host/demo/demo.hpp"
 
 int main() {
   kincal::session::DemoOptions options;

@@ -1,4 +1,4 @@
-#include "host/session/simulated_rig.hpp"
+#include "host/demo/simulated_rig.hpp"
 
 #include <cmath>
 #include <functional>
@@ -65,7 +65,7 @@ constexpr int kSquares = 16;
 class PlatformRig : public SimulatedRig {
  public:
   PlatformRig(const model::RobotModel& file, const RigOptions& options)
-      : options_(options), nominal_(place(file)), robot_(nominal_, options.seed) {
+      : options_(options), nominal_(place(file)), robot_(nominal_, options.seed, {}, sim::typical_imperfections(sim::reach_m(nominal_))) {
     camera_.distortion = {-0.05, 0.01, 0, 0, 0};
     if (!options.candump_log.empty()) bus_.log_to(options.candump_log);
     platform_ = std::make_unique<sim::SimulatedPlatform>(bus_, options.fd, camera_.width_px, camera_.height_px, view_);
@@ -149,7 +149,8 @@ class PlatformRig : public SimulatedRig {
   void show(int index, const std::vector<double>& q) {
     // Forward kinematics without the limit check of tool_pose(): a corrected target may lie a
     // hair beyond a limit.
-    const Eigen::Isometry3d camera_T_strip = isometry(model::forward_kinematics(robot_.truth(), q).inverse());
+    const Eigen::Isometry3d camera_T_strip =
+        isometry(robot_.visit_pose(q, static_cast<std::uint64_t>(index)).inverse());
     sim::ImagingConditions conditions;
     conditions.seed = pose_seed(options_.seed, index);
     conditions.read_noise_dn *= options_.measurement_scale;
@@ -184,7 +185,7 @@ constexpr double kBeaconCentroidSigmaPx = 0.05;
 
 class StereoRig : public SimulatedRig {
  public:
-  StereoRig(const model::RobotModel& file, const RigOptions& options) : options_(options), robot_(file, options.seed) {
+  StereoRig(const model::RobotModel& file, const RigOptions& options) : options_(options), robot_(file, options.seed, {}, sim::typical_imperfections(sim::reach_m(file))) {
     beacon_.radius_m = 0.015;
     core::ParallelStereoRig rig;
     rig.focal_x_px = static_cast<float>(spec_.camera.fx_px);
@@ -230,7 +231,7 @@ class StereoRig : public SimulatedRig {
     sim::ImagingConditions conditions;
     conditions.seed = pose_seed(options_.seed, index);
     conditions.read_noise_dn *= options_.measurement_scale;
-    const model::Vector3 beacon = model::forward_kinematics(robot_.truth(), q).translation;
+    const model::Vector3 beacon = robot_.visit_pose(q, static_cast<std::uint64_t>(index)).translation;
     const sim::StereoFrame f = sim::render_beacon(spec_, beacon_, beacon, conditions);
     frames_ = {f.left, f.right, 0.0};
   }

@@ -1,4 +1,4 @@
-#include "host/session/demo.hpp"
+#include "host/demo/demo.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -10,12 +10,12 @@
 #include <ostream>
 #include <random>
 
+#include "host/demo/simulated_rig.hpp"
 #include "host/identify/cpa.hpp"
 #include "host/model/model_file.hpp"
 #include "host/report/report.hpp"
 #include "host/session/pose_plan.hpp"
 #include "host/session/session_report.hpp"
-#include "host/session/simulated_rig.hpp"
 #include "host/sim/robot.hpp"
 
 namespace kincal::session {
