@@ -419,18 +419,7 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
     cpa_options.sigma_m = options.sigma_m;
     cpa_options.parallel_tolerance_rad = options.parallel_tolerance_rad;
     const CpaResult cpa = circle_point_analysis(nominal, data, cpa_options);
-    for (const SweepFit& f : cpa.fits) {
-      std::ostringstream line;
-      line << "joint " << f.joint + 1 << ": " << (f.curved ? "circle" : "line") << " (p(straight) = " << f.p_value
-           << "), " << f.used << " points";
-      if (f.curved) line << ", radius " << f.radius_m * 1e3 << " mm";
-      line << ", fit rms " << f.rms_m * 1e3 << " mm";
-      if (!f.rejected_lines.empty()) {
-        line << ", rejected lines";
-        for (int l : f.rejected_lines) line << ' ' << l;
-      }
-      result.cpa_sweeps.push_back(line.str());
-    }
+    for (const SweepFit& f : cpa.fits) result.cpa_sweeps.push_back(describe(f));
     result.notes.insert(result.notes.end(), cpa.notes.begin(), cpa.notes.end());
     if (options.method == Method::cpa) {
       result.model = cpa.model;
@@ -679,7 +668,7 @@ std::string format_report(const IdentifyResult& r) {
     } else {
       out << "unknown";
     }
-    if (r.model_error_estimated)
+    if (r.model_error_position_m > 0.0)
       out << " + model error " << std::setprecision(4) << r.model_error_position_m * 1e3 << " mm per axis (REML)";
     if (r.orientation_used) {
       out << "; orientation: instrument ";
@@ -688,7 +677,7 @@ std::string format_report(const IdentifyResult& r) {
       } else {
         out << "unknown";
       }
-      if (r.model_error_estimated)
+      if (r.model_error_orientation_rad > 0.0)
         out << " + model error " << r.model_error_orientation_rad * kDegPerRad << " deg per axis (REML)";
     }
     out << "; chi-square per degree of freedom " << r.chi_square_per_dof << "; the standard deviations below include "
