@@ -24,8 +24,8 @@ struct IdentifyArgs {
   ModelOption model;
   std::string data, out, method = "full", start = "nominal", validate, urdf;
   std::vector<std::string> fix, params;
-  double sigma_m = 0.0, orientation_sigma_deg = 0.0, outlier_probability = 1e-4;
-  bool no_robust = false, accept_implausible = false;
+  double sigma_m = 0.0, orientation_sigma_deg = 0.0, outlier_probability = 1e-3, max_rejected_fraction = 0.05;
+  bool no_robust = false, no_model_error = false, accept_implausible = false;
 };
 
 int run_identify(const IdentifyArgs& a) {
@@ -40,6 +40,8 @@ int run_identify(const IdentifyArgs& a) {
   options.orientation_sigma_rad = a.orientation_sigma_deg * std::numbers::pi / 180.0;
   options.robust = !a.no_robust;
   options.outlier_probability = a.outlier_probability;
+  options.max_rejected_fraction = a.max_rejected_fraction;
+  options.model_error = !a.no_model_error;
   try {
     files::refuse_overwriting({{"--out", a.out}, {"--urdf", a.urdf}},
                               {{"--model", a.model.path}, {"--data", a.data}, {"--validate", a.validate}});
@@ -114,15 +116,25 @@ void add_identify_command(CLI::App& app, int& status) {
   cmd->add_option("--fix", a->fix, "parameters held at their start value (e.g. base,theta1,tool_z)")->delimiter(',');
   cmd->add_option("--params", a->params, "identify exactly these parameters (error if the data cannot)")
       ->delimiter(',');
-  cmd->add_option("--sigma", a->sigma_m, "position noise (m) of rows without covariance (default: estimated)")
+  cmd->add_option("--sigma", a->sigma_m,
+                  "instrument position noise (m) of rows without covariance (default: none; the model error is "
+                  "estimated on top)")
       ->check(finite_positive());
   cmd->add_option("--orientation-sigma-deg", a->orientation_sigma_deg,
-                  "orientation noise (deg) of pose measurements (default: estimated)")
+                  "instrument orientation noise (deg) of pose measurements (default: none; the model error is "
+                  "estimated on top)")
       ->check(finite_in(1e-9, 180.0));
   cmd->add_option("--outlier-probability", a->outlier_probability,
-                  "reject measurements beyond this chi-square tail probability (default 1e-4)")
+                  "reject rows whose studentized residual is beyond this tail probability over all rows "
+                  "(default 0.001)")
       ->check(finite_in(1e-12, 0.5));
-  cmd->add_flag("--no-robust", a->no_robust, "plain least squares (no Huber loss)");
+  cmd->add_option("--max-rejected-fraction", a->max_rejected_fraction,
+                  "reject at most this fraction of the rows (default 0.05)")
+      ->check(finite_in(0.0, 0.5));
+  cmd->add_flag("--no-robust", a->no_robust, "reject no outliers");
+  cmd->add_flag("--no-model-error", a->no_model_error,
+                "no model-error variance: the noise is the data's covariance (or --sigma) alone, estimated only "
+                "where nothing gives it");
   cmd->add_flag("--accept-implausible", a->accept_implausible,
                 "solve even when the data look wrong for the model (units, quaternion order, limits)");
   cmd->add_option(

@@ -84,7 +84,7 @@ struct IdentifyOptions {
   double orientation_sigma_rad = 0.0;  // instrument orientation sigma; 0: none
   bool model_error = true;             // estimate the model-error components s_p, s_o (see above)
   bool robust = true;                  // reject outliers (see above)
-  double outlier_probability = 0.01;   // family-wise, over the rows
+  double outlier_probability = 1e-3;   // family-wise, over the rows (chosen on the real UR10 set)
   double max_rejected_fraction = 0.05;
   int max_iterations = 100;
   double parallel_tolerance_rad = 0.1;
