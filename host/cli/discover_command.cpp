@@ -1,10 +1,10 @@
 #include "host/cli/discover_command.hpp"
 
-#include <fstream>
 #include <iostream>
 #include <memory>
 
 #include "host/cli/number_options.hpp"
+#include "host/files/output_file.hpp"
 #include "host/identify/discover.hpp"
 #include "host/model/dataset.hpp"
 #include "host/model/model_file.hpp"
@@ -26,6 +26,7 @@ int run_discover(const DiscoverArgs& a) {
   options.cpa.outlier_probability = a.outlier_probability;
   options.cpa.still_tolerance = a.still_tolerance;
   try {
+    files::refuse_overwriting({{"--out", a.out}, {"--urdf", a.urdf}}, {{"--data", a.data}});
     const model::Dataset data = model::read_dataset(a.data);
     const identify::DiscoverResult result = identify::discover(data, options);
     std::cout << "kincal discover: " << a.data << " (" << data.rows.size() << " rows; joint types tested at "
@@ -34,13 +35,11 @@ int run_discover(const DiscoverArgs& a) {
     model::save_model(result.model, a.out);
     std::cout << "wrote " << a.out << '\n';
     if (!a.urdf.empty()) {
-      std::ofstream u(a.urdf);
-      u << model::write_urdf(result.model);
-      if (!u) throw model::InputError(a.urdf + ": cannot write the URDF file");
+      files::write_file_atomically(a.urdf, model::write_urdf(result.model));
       std::cout << "wrote " << a.urdf << '\n';
     }
     return 0;
-  } catch (const model::InputError& e) {
+  } catch (const std::exception& e) {
     std::cerr << "kincal discover: " << e.what() << '\n';
     return 1;
   }
