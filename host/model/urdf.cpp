@@ -1,9 +1,10 @@
 #include "host/model/urdf.hpp"
 
-#include <tinyxml2.h>
-
+#include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
+#include <utility>
 
 #include "host/model/axes.hpp"
 #include "host/model/number_text.hpp"
@@ -100,20 +101,38 @@ Transform onto_axis(const Transform& estimate, const Vector3& axis_in_link, cons
   return t;
 }
 
-tinyxml2::XMLElement* find_joint(tinyxml2::XMLElement& robot, const std::string& name) {
-  for (tinyxml2::XMLElement* e = robot.FirstChildElement("joint"); e; e = e->NextSiblingElement("joint"))
-    if (const char* n = e->Attribute("name"); n != nullptr && name == n) return e;
-  return nullptr;
+// The next `tag` ("<origin") in text[from, until) outside comments; npos when none.
+std::size_t find_tag(const std::string& text, std::size_t from, std::size_t until, const std::string& tag) {
+  while (from < until) {
+    const std::size_t t = text.find(tag, from), c = text.find("<!--", from);
+    if (t == std::string::npos || t >= until) return std::string::npos;
+    if (c == std::string::npos || t < c) {
+      const char next = t + tag.size() < text.size() ? text[t + tag.size()] : '>';
+      if (next == ' ' || next == '\t' || next == '\n' || next == '\r' || next == '/' || next == '>') return t;
+      from = t + tag.size();
+    } else {
+      const std::size_t end = text.find("-->", c + 4);
+      if (end == std::string::npos) return std::string::npos;
+      from = end + 3;
+    }
+  }
+  return std::string::npos;
 }
 
-void set_origin(tinyxml2::XMLDocument& doc, tinyxml2::XMLElement& joint, const Transform& t) {
-  tinyxml2::XMLElement* o = joint.FirstChildElement("origin");
-  if (o == nullptr) {
-    o = doc.NewElement("origin");
-    joint.InsertEndChild(o);
+// Where the text of joint `name` starts (its "<joint" at or after line `line`) and where its
+// start tag ends (after the '>').
+std::pair<std::size_t, std::size_t> joint_start_tag(const std::string& text, int line, const std::string& name) {
+  std::size_t from = 0;
+  for (int l = 1; l < line && from != std::string::npos; ++l) from = text.find('\n', from) + 1;
+  for (std::size_t t = find_tag(text, from, text.size(), "<joint"); t != std::string::npos;
+       t = find_tag(text, t + 6, text.size(), "<joint")) {
+    const std::size_t end = text.find('>', t);
+    const std::string tag = text.substr(t, end - t);
+    if (tag.find("name=\"" + escape_xml_text(name) + "\"") != std::string::npos ||
+        tag.find("name='" + escape_xml_text(name) + "'") != std::string::npos)
+      return {t, end + 1};
   }
-  o->SetAttribute("xyz", triple(t.translation).c_str());
-  o->SetAttribute("rpy", triple(rpy_from_rotation(t.rotation)).c_str());
+  throw std::logic_error("joint '" + name + "' not found in the text tinyxml2 parsed");
 }
 
 std::string millimetres(double m) {
@@ -187,30 +206,47 @@ CalibratedUrdf write_calibrated_urdf(const std::string& original_text, const std
     }
   }
 
-  tinyxml2::XMLDocument doc;
-  doc.Parse(original_text.c_str(), original_text.size());  // parse_urdf_chain checked it
-  tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
+  // Edit the text itself, so that everything but the chain's <origin> elements stays byte for
+  // byte (formatting, comments, attribute order); the reader gave each joint's line.
+  struct Edit {
+    std::size_t begin, end;
+    std::string text;
+  };
+  std::vector<Edit> edits;
   for (std::size_t k = 0; k < chain.joints.size(); ++k) {
     if (!rewrite[k]) continue;
+    const UrdfJoint& j = chain.joints[k];
     const Transform parent = k == 0 ? Transform{} : poses[k - 1];
-    set_origin(doc, *find_joint(*robot, chain.joints[k].name), parent.inverse() * poses[k]);
+    const Transform o = parent.inverse() * poses[k];
+    const std::string element =
+        "<origin xyz=\"" + triple(o.translation) + "\" rpy=\"" + triple(rpy_from_rotation(o.rotation)) + "\"/>";
+    const auto [tag_begin, tag_end] = joint_start_tag(original_text, j.line, j.name);
+    const std::size_t close = original_text.find("</joint>", tag_end);
+    const std::size_t at = find_tag(original_text, tag_end, close, "<origin");
+    if (at == std::string::npos) {
+      edits.push_back({tag_end, tag_end, element});
+    } else {
+      const std::size_t gt = original_text.find('>', at);
+      const std::size_t end =
+          original_text[gt - 1] == '/' ? gt + 1 : original_text.find("</origin>", gt) + std::string("</origin>").size();
+      edits.push_back({at, end, element});
+    }
   }
   const Transform& r = result.device_T_base_link;
   std::string comment = " kincal: calibrated joint origins of the chain " + chain.base_link + " -> " + chain.tip_link +
-                        " (model '" + calibrated.name + "'); the measuring device's frame to " + chain.base_link +
-                        ": xyz=\"" + triple(r.translation) + "\" rpy=\"" + triple(rpy_from_rotation(r.rotation)) +
-                        "\" ";
-  for (const std::string& note : result.notes) comment += "; note: " + note + " ";
+                        " (model '" + calibrated.name + "'). " + chain.base_link +
+                        " in the measuring device's frame (device_T_base_link): xyz=\"" + triple(r.translation) +
+                        "\" rpy=\"" + triple(rpy_from_rotation(r.rotation)) + "\" ";
+  for (const std::string& note : result.notes) comment += "Note: " + note + " ";
   for (std::size_t p = comment.find("--"); p != std::string::npos; p = comment.find("--")) comment.replace(p, 2, "- ");
-  tinyxml2::XMLNode* first = doc.FirstChild();
-  tinyxml2::XMLComment* c = doc.NewComment(comment.c_str());
-  if (first != nullptr && first->ToDeclaration() != nullptr)
-    doc.InsertAfterChild(first, c);
-  else
-    doc.InsertFirstChild(c);
-  tinyxml2::XMLPrinter printer;
-  doc.Print(&printer);
-  result.text = printer.CStr();
+  const std::size_t declaration = original_text.find("?>");
+  const bool has_declaration = original_text.find_first_not_of(" \t\r\n") == original_text.find("<?xml");
+  const std::size_t top = has_declaration ? declaration + 2 : 0;
+  edits.push_back(
+      {top, top, std::string(has_declaration ? "\n" : "") + "<!--" + comment + "-->" + (has_declaration ? "" : "\n")});
+  std::sort(edits.begin(), edits.end(), [](const Edit& a, const Edit& b) { return a.begin > b.begin; });
+  result.text = original_text;
+  for (const Edit& e : edits) result.text.replace(e.begin, e.end - e.begin, e.text);
   return result;
 }
 

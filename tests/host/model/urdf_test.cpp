@@ -299,6 +299,29 @@ TEST_CASE("urdf: UR10 from its description, calibrated and written back with mes
   for (std::size_t k = 0; k < a.size(); ++k) worst = std::max(worst, gap(a[k], b[k]).position_m);
   CHECK(worst < 1.5e-3);  // 1 mrad over the 1.2 m arm
   CHECK(worst > 1e-4);
+
+  // The file is the original but for one comment line after the declaration and the <origin>
+  // lines of the six joints and the tool joint: formatting, comments and everything else kept.
+  const auto lines = [](const std::string& t) {
+    std::vector<std::string> result;
+    std::istringstream stream(t);
+    for (std::string l; std::getline(stream, l);) result.push_back(l);
+    return result;
+  };
+  const CalibratedUrdf probe =
+      write_calibrated_urdf(text, path, {"", "tracker_probe"}, perturbed(load_model(path, {"", "tracker_probe"}), 9));
+  std::vector<std::string> in = lines(text), written = lines(probe.text);
+  REQUIRE(written.size() == in.size() + 1);
+  CHECK(written[1].starts_with("<!-- kincal: calibrated joint origins of the chain base_link -> tracker_probe"));
+  written.erase(written.begin() + 1);
+  int changed = 0;
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    if (in[i] == written[i]) continue;
+    ++changed;
+    CHECK(in[i].find("<origin") != std::string::npos);
+    CHECK(written[i].find("<origin xyz=") != std::string::npos);
+  }
+  CHECK(changed == 7);
 }
 
 TEST_CASE("urdf: the tip link on the last joint: the tool's calibration is reported, not lost silently") {
