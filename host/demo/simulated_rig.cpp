@@ -65,7 +65,9 @@ constexpr int kSquares = 16;
 class PlatformRig : public SimulatedRig {
  public:
   PlatformRig(const model::RobotModel& file, const RigOptions& options)
-      : options_(options), nominal_(place(file)), robot_(nominal_, options.seed, {}, sim::typical_imperfections(sim::reach_m(nominal_))) {
+      : options_(options),
+        nominal_(place(file)),
+        robot_(nominal_, options.seed, {}, sim::typical_imperfections(sim::reach_m(nominal_))) {
     camera_.distortion = {-0.05, 0.01, 0, 0, 0};
     if (!options.candump_log.empty()) bus_.log_to(options.candump_log);
     platform_ = std::make_unique<sim::SimulatedPlatform>(bus_, options.fd, camera_.width_px, camera_.height_px, view_);
@@ -147,8 +149,8 @@ class PlatformRig : public SimulatedRig {
   }
 
   void show(int index, const std::vector<double>& q) {
-    // Forward kinematics without the limit check of tool_pose(): a corrected target may lie a
-    // hair beyond a limit.
+    // The true pose on this visit (sag and repeatability included), without the limit check of
+    // tool_pose(): a corrected target may lie a hair beyond a limit.
     const Eigen::Isometry3d camera_T_strip =
         isometry(robot_.visit_pose(q, static_cast<std::uint64_t>(index)).inverse());
     sim::ImagingConditions conditions;
@@ -185,7 +187,8 @@ constexpr double kBeaconCentroidSigmaPx = 0.05;
 
 class StereoRig : public SimulatedRig {
  public:
-  StereoRig(const model::RobotModel& file, const RigOptions& options) : options_(options), robot_(file, options.seed, {}, sim::typical_imperfections(sim::reach_m(file))) {
+  StereoRig(const model::RobotModel& file, const RigOptions& options)
+      : options_(options), robot_(file, options.seed, {}, sim::typical_imperfections(sim::reach_m(file))) {
     beacon_.radius_m = 0.015;
     core::ParallelStereoRig rig;
     rig.focal_x_px = static_cast<float>(spec_.camera.fx_px);

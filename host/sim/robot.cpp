@@ -31,6 +31,12 @@ Imperfections typical_imperfections(double reach_m) {
   return i;
 }
 
+double reach_m(const model::RobotModel& m) {
+  double reach = m.flange_T_tool.translation.norm();
+  for (const model::Joint& j : m.joints) reach += std::abs(j.parameters.a_m) + std::abs(j.parameters.d_m);
+  return reach;
+}
+
 model::RobotModel with_imperfections(const model::RobotModel& truth, const Imperfections& imp) {
   model::RobotModel m = truth;
   const std::vector<double> zero(m.joints.size(), 0.0);

@@ -55,6 +55,9 @@ struct Imperfections {
 // data show them (tenths of a millimetre on a 2 m arm, a few hundredths on a desk robot).
 Imperfections typical_imperfections(double reach_m);
 
+// An arm's reach for that: the sum of its links' |a| and |d| and of the tool's offset (m).
+double reach_m(const model::RobotModel& model);
+
 // Whether a parameter is an angle (rad) rather than a length (m).
 bool is_angle(core::ParameterKind kind);
 
