@@ -346,6 +346,18 @@ HandEyeCalibration calibrate_hand_eye(const std::vector<HandEyeView>& views, con
   const Residual refined = ax_xb(base_T_gripper, camera_T_target, result.gripper_T_camera);
   result.rotation_rms_rad = refined.rotation_rms_rad;
   result.translation_rms_m = refined.translation_rms_m;
+  if (result.rotation_rms_rad > options.max_rotation_rms_rad ||
+      result.translation_rms_m > options.max_translation_rms_m ||
+      result.rms_after_px > options.max_reprojection_rms_px) {
+    throw CalibrationError(
+        "hand-eye calibration: the robot poses and the images do not belong together: AX = XB "
+        "residual " +
+        fixed(result.rotation_rms_rad * kDeg, 2) + " degrees / " + fixed(result.translation_rms_m * 1e3, 1) +
+        " mm RMS (at most " + fixed(options.max_rotation_rms_rad * kDeg, 2) + " degrees / " +
+        fixed(options.max_translation_rms_m * 1e3, 1) + " mm), reprojection " + fixed(result.rms_after_px, 2) +
+        " px RMS (at most " + fixed(options.max_reprojection_rms_px, 2) +
+        " px): a poses file of another run, rows out of order, or another camera");
+  }
   return result;
 }
 

@@ -22,6 +22,10 @@
 //  6. Refinement (Ceres, Levenberg-Marquardt): gripper_T_camera and base_T_target minimizing
 //     the reprojection error of every board corner in every used view, starting from the
 //     AX = XB method with the smallest rotation residual; RMS before and after are reported.
+//  7. Consistency: poses and images that do not belong together (another run's poses, shifted
+//     by one, the wrong camera) still give a solution; it is refused with CalibrationError and
+//     the numbers when the refined AX = XB residual exceeds max_rotation_rms_rad or
+//     max_translation_rms_m, or the reprojection RMS exceeds max_reprojection_rms_px.
 // Robot poses are taken as exact (their errors are what the kinematic calibration finds).
 // Cost: O(n^2) motions for the checks and residuals (n poses), O(m^2) in the m large motions for
 // the axis check; the refinement is milliseconds for tens of views.
@@ -55,6 +59,9 @@ struct HandEyeOptions {
   double min_rotation_rad = 20 * 3.14159265358979323846 / 180;
   double min_axis_angle_rad = 20 * 3.14159265358979323846 / 180;
   double convention_ratio = 5;
+  double max_rotation_rms_rad = 2 * 3.14159265358979323846 / 180;
+  double max_translation_rms_m = 0.02;
+  double max_reprojection_rms_px = 5;
 };
 
 struct HandEyeEstimate {

@@ -16,6 +16,18 @@ std::string size_text(cv::Size s) { return std::to_string(s.width) + "x" + std::
 
 constexpr int kGridCols = 8, kGridRows = 6;
 
+// The RMS distance (px) between two detections' image corners when they saw the same board
+// corners in the same order, or a negative number when they did not.
+double same_corners_rms_px(const BoardDetection& a, const BoardDetection& b) {
+  if (a.board_m != b.board_m || a.image_px.empty()) return -1.0;
+  double sum = 0.0;
+  for (std::size_t i = 0; i < a.image_px.size(); ++i) {
+    const cv::Point2f d = a.image_px[i] - b.image_px[i];
+    sum += static_cast<double>(d.dot(d));
+  }
+  return std::sqrt(sum / static_cast<double>(a.image_px.size()));
+}
+
 }  // namespace
 
 cv::Mat CameraModel::distortion_mat() const {
@@ -30,6 +42,7 @@ IntrinsicCalibration calibrate_intrinsics(const std::vector<BoardDetection>& det
   std::vector<std::vector<cv::Point3f>> object_points;
   std::vector<std::vector<cv::Point2f>> image_points;
   std::vector<std::size_t> used;  // indices into result.views
+  std::vector<const BoardDetection*> used_detections;
   cv::Size image_size;
   for (const BoardDetection& d : detections) {
     ViewReport v;
@@ -41,8 +54,18 @@ IntrinsicCalibration calibrate_intrinsics(const std::vector<BoardDetection>& det
       v.rejection = "detection without board coordinates";
     } else if (image_size.area() > 0 && d.image_size != image_size) {
       v.rejection = "image size " + size_text(d.image_size) + " differs from the first view's " + size_text(image_size);
+    } else if (const auto twin = std::find_if(used_detections.begin(), used_detections.end(),
+                                              [&d](const BoardDetection* u) {
+                                                const double rms = same_corners_rms_px(d, *u);
+                                                return rms >= 0.0 && rms < kDuplicateViewRms_px;
+                                              });
+               twin != used_detections.end()) {
+      v.rejection = "a near-duplicate of " + (*twin)->view + " (the same corners within " +
+                    fixed(same_corners_rms_px(d, **twin), 3) + " px RMS, less than " + fixed(kDuplicateViewRms_px, 1) +
+                    " px)";
     } else {
       image_size = d.image_size;
+      used_detections.push_back(&d);
       v.used = true;
       object_points.push_back(d.board_m);
       image_points.push_back(d.image_px);

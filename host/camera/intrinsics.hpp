@@ -7,7 +7,10 @@
 // camera_model.hpp), zero skew, pixel (0, 0) at the centre of the top-left pixel.
 //
 // Views left out (ViewReport::rejection): the detection's own reason ("pattern not found",
-// "too few corners (N, at least M)"), or "image size WxH differs from the first view's WxH".
+// "too few corners (N, at least M)"), "image size WxH differs from the first view's WxH", or
+// "a near-duplicate of VIEW (the same corners within X px RMS)": a view whose corners lie within
+// kDuplicateViewRms_px of an earlier used view's adds no information and, counted twice, makes
+// the fit overconfident and biased (one image three times gave fx 750 for 600).
 // Warnings (IntrinsicCalibration::warnings; the calibration is still returned):
 //   - fewer than options.recommended_views views used;
 //   - the corners cover less than options.min_coverage of the image (cells of an 8 x 6 grid
@@ -52,6 +55,8 @@ struct ViewReport {
   double rms_px = 0;                           // used views only
   cv::Vec3d camera_r_board, camera_t_board_m;  // rotation vector and translation, used views only
 };
+
+inline constexpr double kDuplicateViewRms_px = 1.0;
 
 struct IntrinsicOptions {
   int min_views = 3;

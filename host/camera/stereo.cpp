@@ -89,6 +89,21 @@ StereoCalibration calibrate_stereo(const std::vector<BoardDetection>& left, cons
   result.right_R_left = cv::Matx33d(r);
   result.right_t_left_m = cv::Vec3d(t);
   result.baseline_m = cv::norm(result.right_t_left_m);
+  std::vector<double> distances_m;
+  for (std::size_t k = 0; k < object_points.size(); ++k) {
+    cv::Mat rvec, tvec;
+    if (cv::solvePnP(object_points[k], left_points[k], k1, d1, rvec, tvec)) distances_m.push_back(cv::norm(tvec));
+  }
+  if (!distances_m.empty()) {
+    std::nth_element(distances_m.begin(), distances_m.begin() + static_cast<std::ptrdiff_t>(distances_m.size() / 2),
+                     distances_m.end());
+    const double distance_m = distances_m[distances_m.size() / 2];
+    if (result.baseline_m < kMinBaselineOverBoardDistance * distance_m)
+      throw CalibrationError("stereo calibration: baseline " + fixed(result.baseline_m, 6) + " m is " +
+                             fixed(100 * result.baseline_m / distance_m, 3) + " % of the board's median distance " +
+                             fixed(distance_m, 3) + " m (at least " + fixed(100 * kMinBaselineOverBoardDistance, 1) +
+                             " %): the same images left and right, or one camera twice");
+  }
   result.essential = cv::Matx33d(e);
   result.fundamental = cv::Matx33d(f);
   for (std::size_t k = 0; k < used.size(); ++k) {

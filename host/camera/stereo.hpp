@@ -15,7 +15,9 @@
 // or they share fewer than min_common_corners corners.
 // Errors: CalibrationError when the lists differ in length, the two cameras' image sizes
 // differ, an image size differs from its camera's, or fewer than min_pairs pairs are usable
-// (the message lists each pair left out and why).
+// (the message lists each pair left out and why), or a baseline below
+// kMinBaselineOverBoardDistance of the median board distance (the same images left and right,
+// or one camera twice: the message gives both numbers).
 // Cost: one Levenberg-Marquardt solve in OpenCV (milliseconds for tens of pairs).
 #pragma once
 
@@ -28,6 +30,8 @@
 #include "host/camera/intrinsics.hpp"
 
 namespace kincal::camera {
+
+inline constexpr double kMinBaselineOverBoardDistance = 0.01;
 
 struct StereoOptions {
   bool refine_intrinsics = false;

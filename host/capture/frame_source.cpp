@@ -12,6 +12,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio/registry.hpp>
 
+#include "host/files/input_limits.hpp"
+
 namespace kincal::capture {
 
 namespace {
@@ -150,11 +152,13 @@ std::optional<Frame> ImageSequenceSource::next() {
   const std::string& path = files_[next_];
   Frame f;
   try {
+    files::check_image_header(path);
     f.image = cv::imread(path, cv::IMREAD_ANYCOLOR);
   } catch (const cv::Exception& e) {
     throw CaptureError(path + ": unreadable image (" + e.what() + ")");
   }
   if (f.image.empty()) throw CaptureError(path + ": unreadable image (not a format OpenCV decodes)");
+  files::check_image_size(path, f.image.cols, f.image.rows);
   f.index = static_cast<std::int64_t>(next_);
   f.timestamp_s = static_cast<double>(next_) * period_s_;
   f.origin = path;

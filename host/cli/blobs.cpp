@@ -23,6 +23,7 @@ struct BlobsOptions {
   std::string colour_table;
   int connectivity = 8;
   std::uint32_t min_area_px = 1;
+  std::uint32_t max_blobs = 100000;
   bool no_refine = false;
 };
 
@@ -66,6 +67,13 @@ int run_blobs(const BlobsOptions& o) {
   for (std::size_t i = 0; i < images.size(); ++i) {
     const vision::LabelResult r =
         options.colour ? vision::label_colour(images[i], options) : vision::label_grey(images[i], options);
+    const std::uint64_t found = std::uint64_t{r.summary.blobs} + r.summary.blobs_dropped_output_full;
+    if (found > o.max_blobs || r.summary.blobs_dropped_output_full > 0)
+      throw std::runtime_error(o.images[i] + ": " + std::to_string(found) + " blobs, more than " +
+                               (r.summary.blobs_dropped_output_full > 0
+                                    ? std::string("the labeler's output holds")
+                                    : "--max-blobs " + std::to_string(o.max_blobs)) +
+                               " (about 300 bytes of JSON each): raise the threshold or --min-area, or --max-blobs");
     nlohmann::ordered_json blobs = nlohmann::ordered_json::array();
     for (const core::Blob& b : r.blobs) blobs.push_back(vision::blob_to_json(b));
     nlohmann::ordered_json image = {{"image", o.images[i]}, {"summary", vision::summary_to_json(r.summary)}};
@@ -100,6 +108,9 @@ void add_blobs_command(CLI::App& app, int& status) {
       ->check(CLI::IsMember({4, 8}))
       ->capture_default_str();
   cmd->add_option("--min-area", options->min_area_px, "Drop blobs with fewer pixels")->capture_default_str();
+  cmd->add_option("--max-blobs", options->max_blobs, "Fail (exit 1) rather than print more blobs than this per image")
+      ->check(CLI::Range(1, 1 << 20))
+      ->capture_default_str();
   cmd->add_flag("--no-refine", options->no_refine, "Skip the Gaussian-window refinement of spot-like blobs");
   cmd->callback([options, &status] {
     try {

@@ -14,6 +14,7 @@ namespace kincal::identify {
 namespace {
 
 constexpr double kDegreesPerRadian = 180.0 / std::numbers::pi;
+constexpr double kMaxRange_m = 1000.0;  // beyond any laser tracker's or camera's range
 
 std::string number(double v) {
   char text[32];
@@ -93,13 +94,19 @@ void check_far_points(const model::Dataset& data, const Predicted& p, std::vecto
   for (const model::Measurement& r : data.rows) measured.push_back(r.position);
   const model::Vector3 centre = median_point(measured);
   const double limit = 2 * spread + 0.5;
-  int far = 0;
-  std::string first;
+  int far = 0, remote = 0;
+  std::string first, first_remote;
   for (const model::Measurement& r : data.rows) {
+    const double coordinate = r.position.cwiseAbs().maxCoeff();  // the norm of 1e308s overflows
+    if (coordinate > kMaxRange_m && remote++ == 0)
+      first_remote = "line " + std::to_string(r.line) + ": a coordinate of " + number(coordinate) + " m";
     const double distance = (r.position - centre).norm();
     if (distance <= limit) continue;  // NaN cannot occur: the reader takes finite numbers only
     if (far++ == 0) first = "line " + std::to_string(r.line) + ": " + number(distance) + " m";
   }
+  if (remote > 0)
+    found.push_back(std::to_string(remote) + " measured points lie farther than " + number(kMaxRange_m) +
+                    " m from the measuring device (" + first_remote + "): no instrument measures a robot there");
   if (far > 0)
     found.push_back(std::to_string(far) + " measured points lie farther than " + number(limit) +
                     " m (twice the model's spread of " + number(spread) + " m, plus 0.5 m) from the median point (" +

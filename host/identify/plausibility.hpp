@@ -15,7 +15,8 @@
 //                 degrees is implausible; the quaternions read as x,y,z,w are tried and named
 //                 when they fit. (Unit norm is checked by the dataset reader.)
 //   far points    a measured point farther from the median point than twice the model's own
-//                 spread plus 0.5 m (a typing error, 1e308): named by its line.
+//                 spread plus 0.5 m (a typing error), or more than 1 km from the device (1e308):
+//                 the first is named by its line.
 //   exact fit     the nominal model reproduces every point within 1e-9 m and the data carry no
 //                 noise (no sigma/covariance columns, no --sigma): no noise level or uncertainty
 //                 can be estimated from it (data made by `kincal predict`?).

@@ -9,6 +9,8 @@
 #include <ostream>
 #include <sstream>
 
+#include "host/files/input_limits.hpp"
+
 namespace kincal::model {
 
 namespace {
@@ -199,9 +201,22 @@ Dataset parse_dataset(std::istream& in, const std::string& source) {
   return data;
 }
 
+namespace {
+
+void within_size_limit(const std::string& path) {
+  try {
+    files::check_text_file_size(path);
+  } catch (const files::InputLimitError& e) {
+    throw InputError(e.what());
+  }
+}
+
+}  // namespace
+
 Dataset read_dataset(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot open the data file");
+  within_size_limit(path);
   return parse_dataset(in, path);
 }
 
@@ -215,6 +230,7 @@ std::vector<std::vector<double>> parse_joints(std::istream& in, const std::strin
 std::vector<std::vector<double>> read_joints(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot open the joints file");
+  within_size_limit(path);
   return parse_joints(in, path);
 }
 

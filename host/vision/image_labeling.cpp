@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "firmware/core/auto_threshold.hpp"
+#include "host/files/input_limits.hpp"
 
 namespace kincal::vision {
 
@@ -92,6 +93,7 @@ cv::Mat read_image(const std::string& path, bool grey) {
   if (!std::filesystem::is_regular_file(path, ec)) throw std::runtime_error(path + ": no such file");
   cv::Mat img;
   try {
+    files::check_image_header(path);
     img = cv::imread(path, grey ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR);
   } catch (const cv::Exception& e) {
     throw std::runtime_error(path + ": cannot decode the image (" + e.what() + ")");

@@ -212,6 +212,14 @@ std::vector<std::uint8_t> read_pgm(const std::string& path, std::uint16_t& width
   if (width < 1 || width > 65535 || height < 1 || height > 65535)
     throw bad("frame size " + std::to_string(width) + " x " + std::to_string(height) + " is outside 1..65535");
   if (maxval < 1 || maxval > 255) throw bad("maxval " + std::to_string(maxval) + " is not 8-bit (1..255)");
+  // The header's size is checked against the file's before the pixels are allocated.
+  std::error_code size_error;
+  const auto file_bytes = static_cast<long long>(std::filesystem::file_size(path, size_error));
+  const long long pixel_bytes = static_cast<long long>(width) * height;
+  if (!size_error && file_bytes - static_cast<long long>(in.tellg()) < pixel_bytes)
+    throw bad("truncated: the header says " + std::to_string(width) + " x " + std::to_string(height) + " = " +
+              std::to_string(pixel_bytes) + " pixel bytes, the file holds " +
+              std::to_string(file_bytes - static_cast<long long>(in.tellg())) + " after the header");
   std::vector<std::uint8_t> pixels(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
   in.read(reinterpret_cast<char*>(pixels.data()), static_cast<std::streamsize>(pixels.size()));
   if (in.gcount() != static_cast<std::streamsize>(pixels.size()))

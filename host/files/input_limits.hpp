@@ -1,0 +1,39 @@
+// Limits on what kincal reads (issue #16), checked before memory is committed: a 20000 x 20000
+// PNG is a few kilobytes on disk and 1.2 GB decoded, and OpenCV's own limit (2^30 pixels) lets
+// it through.
+//
+//   images      at most kMaxImageSide pixels a side and kMaxImagePixels pixels, read from the
+//               file's header (PNG IHDR, JPEG SOFn, PNM) before decoding; other formats are
+//               checked after decoding.
+//   text files  datasets, models, plans: at most kMaxTextFileBytes.
+//
+// Why read image headers here: OpenCV 4.6 (Debian 12) has no call that reports an image's size
+// without decoding it, and its decoders allocate the whole image first.
+#pragma once
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+namespace kincal::files {
+
+inline constexpr std::int64_t kMaxImageSide = 16384;
+inline constexpr std::int64_t kMaxImagePixels = std::int64_t{64} << 20;  // 64 Mpx: 8192 x 8192
+inline constexpr std::uintmax_t kMaxTextFileBytes = std::uintmax_t{256} << 20;
+
+// An input over a limit; the message names the file, its size and the limit.
+class InputLimitError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Throws InputLimitError when the image's header states a size over the limits. Headers it
+// cannot read (other formats, damaged files) pass: the decoder reports those, and
+// check_image_size() then checks the decoded size.
+void check_image_header(const std::string& path);
+void check_image_size(const std::string& path, std::int64_t width_px, std::int64_t height_px);
+
+// Throws InputLimitError when a text input is larger than kMaxTextFileBytes.
+void check_text_file_size(const std::string& path);
+
+}  // namespace kincal::files

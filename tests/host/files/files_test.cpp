@@ -1,0 +1,112 @@
+// host/files: the refusal to overwrite inputs, the whole-or-nothing write, the image header limits.
+#include <doctest/doctest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "host/files/input_limits.hpp"
+#include "host/files/output_file.hpp"
+
+namespace fs = std::filesystem;
+using kincal::files::NamedPath;
+
+namespace {
+
+// A fresh directory under the system's temporary directory, removed at the end of the test.
+struct Scratch {
+  fs::path dir = fs::temp_directory_path() / ("kincal_files_test_" + std::to_string(::getpid()));
+  Scratch() {
+    fs::remove_all(dir);
+    fs::create_directories(dir / "sub");
+  }
+  ~Scratch() { fs::remove_all(dir); }
+  std::string path(const std::string& name) const { return (dir / name).string(); }
+};
+
+std::string contents(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+bool temporaries_left(const fs::path& dir) {
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().filename().string().find(".kincal-") != std::string::npos) return true;
+  return false;
+}
+
+}  // namespace
+
+TEST_CASE("an output that resolves to an input is refused, naming both options") {
+  Scratch s;
+  kincal::files::write_file_atomically(s.path("d.csv"), "data\n");
+  fs::create_hard_link(s.path("d.csv"), s.path("link.csv"));
+  fs::create_symlink(s.path("d.csv"), s.path("sym.csv"));
+  for (const std::string& spelling : {s.path("d.csv"), s.path("sub/../d.csv"), s.path("link.csv"), s.path("sym.csv")}) {
+    CAPTURE(spelling);
+    try {
+      kincal::files::refuse_overwriting({{"--out", spelling}}, {{"--data", s.path("d.csv")}});
+      FAIL("not refused");
+    } catch (const kincal::files::OutputError& e) {
+      const std::string what = e.what();
+      CHECK(what.find("--out") != std::string::npos);
+      CHECK(what.find("--data") != std::string::npos);
+    }
+  }
+  CHECK_THROWS_AS(kincal::files::refuse_overwriting({{"--out", s.path("x")}, {"--urdf", s.path("sub/../x")}}, {}),
+                  kincal::files::OutputError);
+  CHECK_NOTHROW(kincal::files::refuse_overwriting({{"--out", s.path("o.yaml")}, {"--urdf", ""}, {"-o", "-"}},
+                                                  {{"--data", s.path("d.csv")}, {"--validate", ""}}));
+  CHECK(contents(s.path("d.csv")) == "data\n");
+}
+
+TEST_CASE("a write replaces the file whole, keeps its permissions and leaves no temporary file") {
+  Scratch s;
+  const std::string p = s.path("out.txt");
+  kincal::files::write_file_atomically(p, "first");
+  ::chmod(p.c_str(), 0640);
+  kincal::files::write_file_atomically(p, std::string(1 << 20, 'x'));
+  CHECK(contents(p).size() == (1u << 20));
+  struct stat st {};
+  REQUIRE(::stat(p.c_str(), &st) == 0);
+  CHECK((st.st_mode & 0777) == 0640);
+  CHECK_FALSE(temporaries_left(s.dir));
+}
+
+TEST_CASE("a failed write leaves the target as it was") {
+  Scratch s;
+  CHECK_THROWS_AS(kincal::files::write_file_atomically(s.path("no/such/dir/out.txt"), "x"), kincal::files::OutputError);
+  CHECK_THROWS_AS(kincal::files::write_file_atomically(s.path("sub"), "x"), kincal::files::OutputError);
+  CHECK(fs::is_directory(s.path("sub")));
+  CHECK_FALSE(temporaries_left(s.dir));
+}
+
+TEST_CASE("image headers over the limits are refused before decoding") {
+  Scratch s;
+  const auto write = [&](const std::string& name, const std::string& bytes) {
+    std::ofstream(s.path(name), std::ios::binary) << bytes;
+    return s.path(name);
+  };
+  // PNG signature, IHDR length and type, then width and height big-endian.
+  const std::string png_head = std::string("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR", 16);
+  CHECK_THROWS_AS(
+      kincal::files::check_image_header(write("big.png", png_head + std::string("\0\0\x4e\x20\0\0\x4e\x20", 8))),
+      kincal::files::InputLimitError);
+  CHECK_NOTHROW(
+      kincal::files::check_image_header(write("vga.png", png_head + std::string("\0\0\x02\x80\0\0\x01\xe0", 8))));
+  CHECK_THROWS_AS(kincal::files::check_image_header(write("big.pgm", "P5\n# comment\n65535 65535\n255\n")),
+                  kincal::files::InputLimitError);
+  CHECK_NOTHROW(kincal::files::check_image_header(write("small.pgm", "P5 640 480 255\n")));
+  // JPEG: SOI, an APP0 segment, then SOF0 with height 20000 and width 20000.
+  const std::string jpeg = std::string("\xff\xd8\xff\xe0\x00\x04\x00\x00\xff\xc0\x00\x11\x08\x4e\x20\x4e\x20", 17);
+  CHECK_THROWS_AS(kincal::files::check_image_header(write("big.jpg", jpeg)), kincal::files::InputLimitError);
+  CHECK_NOTHROW(kincal::files::check_image_header(write("text.png", "not an image")));
+  CHECK_THROWS_WITH_AS(kincal::files::check_image_size("x.bmp", 20000, 20000),
+                       "x.bmp: image of 20000 x 20000 pixels is over the limit of 16384 pixels a side and 64 Mpx",
+                       kincal::files::InputLimitError);
+}
