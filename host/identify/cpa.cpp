@@ -65,10 +65,10 @@ struct LinearFit {
   double rss = 0.0;  // whitened
   int rank = 0;      // parameters
   Eigen::VectorXd residual;
-  Eigen::MatrixXd hat;  // only when asked
+  Eigen::MatrixXd q1;  // orthonormal basis of the fitted space (3m x rank), only when asked
 };
 
-LinearFit linear_fit(const std::vector<Point>& pts, int terms, bool with_hat) {
+LinearFit linear_fit(const std::vector<Point>& pts, int terms, bool with_basis) {
   const auto m = static_cast<Eigen::Index>(pts.size());
   Eigen::MatrixXd x(3 * m, 3 * terms);
   Eigen::VectorXd y(3 * m);
@@ -86,10 +86,8 @@ LinearFit linear_fit(const std::vector<Point>& pts, int terms, bool with_hat) {
   f.rank = static_cast<int>(qr.rank());
   f.residual = y - x * qr.solve(y);
   f.rss = f.residual.squaredNorm();
-  if (with_hat) {
-    const Eigen::MatrixXd q_full = qr.householderQ();
-    const Eigen::MatrixXd q1 = q_full.leftCols(f.rank);
-    f.hat = q1 * q1.transpose();
+  if (with_basis) {
+    f.q1 = qr.householderQ() * Eigen::MatrixXd::Identity(x.rows(), f.rank);
   }
   return f;
 }
@@ -290,7 +288,7 @@ std::vector<Point> screen(std::vector<Point> pts, const model::Dataset& data, co
     std::size_t worst = 0;
     for (std::size_t k = 0; k < pts.size(); ++k) {
       const auto i = static_cast<Eigen::Index>(3 * k);
-      const Eigen::Matrix3d m = Eigen::Matrix3d::Identity() - f.hat.block<3, 3>(i, i);
+      const Eigen::Matrix3d m = Eigen::Matrix3d::Identity() - f.q1.middleRows<3>(i) * f.q1.middleRows<3>(i).transpose();
       const Eigen::LDLT<Eigen::Matrix3d> ldlt(m);
       if (ldlt.info() != Eigen::Success || m.determinant() < 1e-9) continue;  // leverage ~1: cannot be judged
       const Eigen::Vector3d e = f.residual.segment<3>(i);
