@@ -1,11 +1,14 @@
 #include "host/camera/calibration_file.hpp"
 
 #include <cmath>
+#include <fstream>
 #include <limits>
 
+#include <yaml-cpp/yaml.h>
 #include <opencv2/core/eigen.hpp>
 
 #include "host/files/output_file.hpp"
+#include "host/model/number_text.hpp"
 
 namespace kincal::camera {
 
@@ -97,13 +100,15 @@ std::uint16_t to_u16(int v, const char* name) {
 }
 
 // Every calibration file is composed in memory and written whole (host/files/output_file.hpp).
-void write_storage(cv::FileStorage& fs, const std::string& path) {
+void write_text(const std::string& path, const std::string& text) {
   try {
-    files::write_file_atomically(path, fs.releaseAndGetString());
+    files::write_file_atomically(path, text);
   } catch (const files::OutputError& e) {
     throw CalibrationError(e.what());
   }
 }
+
+void write_storage(cv::FileStorage& fs, const std::string& path) { write_text(path, fs.releaseAndGetString()); }
 
 }  // namespace
 
@@ -124,7 +129,64 @@ void save_camera(const std::string& path, const IntrinsicCalibration& c, const s
   write_storage(fs, path);
 }
 
+void save_camera_ros(const std::string& path, const CameraModel& camera, const std::string& camera_name) {
+  const auto matrix = [](const char* key, int rows, int cols, const std::vector<double>& data) {
+    std::string text =
+        std::string(key) + ":\n  rows: " + std::to_string(rows) + "\n  cols: " + std::to_string(cols) + "\n  data: [";
+    for (std::size_t i = 0; i < data.size(); ++i) text += (i ? ", " : "") + model::shortest_number_text(data[i]);
+    return text + "]\n";
+  };
+  const cv::Matx33d& k = camera.camera_matrix;
+  std::string text = "image_width: " + std::to_string(camera.image_size.width) +
+                     "\nimage_height: " + std::to_string(camera.image_size.height) + "\ncamera_name: " + camera_name +
+                     "\n";
+  text +=
+      matrix("camera_matrix", 3, 3, {k(0, 0), k(0, 1), k(0, 2), k(1, 0), k(1, 1), k(1, 2), k(2, 0), k(2, 1), k(2, 2)});
+  text += "distortion_model: plumb_bob\n";
+  text += matrix("distortion_coefficients", 1, 5, {camera.distortion.begin(), camera.distortion.end()});
+  text += matrix("rectification_matrix", 3, 3, {1, 0, 0, 0, 1, 0, 0, 0, 1});
+  text += matrix("projection_matrix", 3, 4,
+                 {k(0, 0), k(0, 1), k(0, 2), 0, k(1, 0), k(1, 1), k(1, 2), 0, k(2, 0), k(2, 1), k(2, 2), 0});
+  write_text(path, text);
+}
+
+// A ROS camera_info file (no "%YAML:1.0" line, which OpenCV needs and yaml-cpp refuses).
+CameraModel load_ros_camera(const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::Exception& e) {
+    throw CalibrationError(path + ": not a YAML file (" + e.what() + ")");
+  }
+  try {
+    const auto matrix = [&](const char* key, int rows, int cols) {
+      const YAML::Node m = root[key];
+      std::vector<double> data;
+      if (m && m["rows"] && m["cols"] && m["data"] && m["rows"].as<int>() == rows && m["cols"].as<int>() == cols)
+        data = m["data"].as<std::vector<double>>();
+      if (data.size() != static_cast<std::size_t>(rows * cols))
+        throw CalibrationError(path + ": key '" + key + "' missing or not a " + std::to_string(rows) + "x" +
+                               std::to_string(cols) + " matrix");
+      return cv::Mat(data, true).reshape(1, rows);
+    };
+    const std::string model = root["distortion_model"] ? root["distortion_model"].as<std::string>() : "";
+    if (model != "plumb_bob")
+      throw CalibrationError(path + ": distortion_model '" + model + "': only plumb_bob (k1 k2 p1 p2 k3) is supported");
+    if (!root["image_width"] || !root["image_height"] || root["image_width"].as<int>() < 1 ||
+        root["image_height"].as<int>() < 1)
+      throw CalibrationError(path + ": image_width and image_height must be positive integers");
+    return camera_from(matrix("camera_matrix", 3, 3), matrix("distortion_coefficients", 1, 5),
+                       {root["image_width"].as<int>(), root["image_height"].as<int>()});
+  } catch (const YAML::Exception& e) {
+    throw CalibrationError(path + ": " + e.what());
+  }
+}
+
 CameraModel load_camera(const std::string& path) {
+  std::ifstream in(path);
+  std::string first_line;
+  std::getline(in, first_line);
+  if (in && first_line.rfind("%YAML:", 0) != 0) return load_ros_camera(path);
   cv::FileStorage fs = open_for_reading(path);
   const cv::Mat k = read_matrix(fs, path, "camera_matrix", 3, 3);
   const cv::Mat d = read_matrix(fs, path, "distortion_coefficients", 1, 5);

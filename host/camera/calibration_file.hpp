@@ -12,6 +12,14 @@
 //              reprojection_rms_before_px, reprojection_rms_after_px
 // Only the keys a loader needs are required; the rest are for people and other tools.
 //
+// A camera can also be written as ROS's camera_info YAML (camera_calibration_parsers, what
+// camera_info_manager and image_proc load): image_width, image_height, camera_name,
+// camera_matrix, distortion_model (plumb_bob: k1 k2 p1 p2 k3), distortion_coefficients,
+// rectification_matrix (the identity: one camera) and projection_matrix ([K | 0], as
+// CameraInfo's documentation gives for a monocular camera), each matrix as {rows, cols, data}.
+// load_camera reads both (a file not starting with OpenCV's "%YAML:1.0" is read as ROS's, with
+// yaml-cpp); a ROS file's distortion_model must be plumb_bob.
+//
 // to_platform converts a camera to the firmware's camera block (shared::CameraIntrinsics, float
 // and u16, as the platform stores it), so a host calibration loads into the platform as it is.
 //
@@ -31,6 +39,7 @@
 namespace kincal::camera {
 
 void save_camera(const std::string& path, const IntrinsicCalibration& calibration, const std::string& board_text);
+void save_camera_ros(const std::string& path, const CameraModel& camera, const std::string& camera_name);
 CameraModel load_camera(const std::string& path);
 
 void save_stereo(const std::string& path, const StereoCalibration& calibration);

@@ -23,6 +23,7 @@ namespace {
 
 struct CameraArgs {
   std::string board, out, left_camera, right_camera, camera, poses, convention = "gripper2base";
+  std::string format = "opencv", camera_name = "camera";
   std::vector<std::string> images, left, right;
   bool refine_intrinsics = false;
   double tolerance_s = 0.5;
@@ -55,7 +56,10 @@ int run_calibrate(const CameraArgs& a) {
   const camera::Board board = camera::parse_board(a.board);
   const camera::IntrinsicCalibration c = camera::calibrate_intrinsics(detect_all(board, a.images, a.min_corners));
   std::cout << camera::describe(c);
-  camera::save_camera(a.out, c, board.text());
+  if (a.format == "ros")
+    camera::save_camera_ros(a.out, c.camera, a.camera_name);
+  else
+    camera::save_camera(a.out, c, board.text());
   std::cout << "written: " << a.out << "\n";
   return 0;
 }
@@ -150,6 +154,9 @@ void add_camera_command(CLI::App& app, int& status) {
   CLI::App* calibrate = camera->add_subcommand("calibrate", "Intrinsic calibration from images of a board");
   add_common(calibrate, *args);
   calibrate->add_option("images", args->images, "image files, a directory or a video")->required();
+  calibrate->add_option("--format", args->format, "opencv (OpenCV YAML, the default) or ros (ROS camera_info YAML)")
+      ->check(CLI::IsMember({"opencv", "ros"}));
+  calibrate->add_option("--camera-name", args->camera_name, "camera_name of a ROS file")->capture_default_str();
   calibrate->callback([args, &status] { guarded("calibrate", status, *args, [&] { return run_calibrate(*args); }); });
 
   CLI::App* stereo = camera->add_subcommand("stereo", "Stereo calibration from image pairs of a board");

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <numbers>
 #include <sstream>
 
 #include "host/model/number_text.hpp"
@@ -10,35 +11,20 @@ namespace kincal::model {
 
 namespace {
 
-Transform rotation_z(double angle) {
-  Transform t;
-  t.rotation = Eigen::AngleAxisd(angle, Vector3::UnitZ()).toRotationMatrix();
-  return t;
-}
-Transform translation_z(double d) {
-  Transform t;
-  t.translation = Vector3(0, 0, d);
-  return t;
-}
-
 // The part of a link before its joint's motion, with the axis along its z: link = head * rest.
+// Standard DH: Rz(theta) Tz(d); Doty: Tz(d) Rz(theta) -- the link with a, alpha, beta zeroed.
+// Modified DH: the whole link (its axis is z of the frame after it).
 Transform link_head(const core::Link<double>& link) {
-  const core::LinkParameters<double>& p = link.parameters;
-  switch (link.convention) {
-    case core::LinkConvention::standard_dh:
-      return rotation_z(p.theta_rad) * translation_z(p.d_m);
-    case core::LinkConvention::doty:
-      return translation_z(p.d_m) * rotation_z(p.theta_rad);
-    case core::LinkConvention::modified_dh:
-      break;
-  }
-  return core::link_transform(link, 0.0);
+  if (link.convention == core::LinkConvention::modified_dh) return core::link_transform(link, 0.0);
+  core::Link<double> head = link;
+  head.parameters.a_m = head.parameters.alpha_rad = head.parameters.beta_rad = 0.0;
+  return core::link_transform(head, 0.0);
 }
 
 std::string size_text(const Transform& t) {
   char buffer[96];
   std::snprintf(buffer, sizeof buffer, "%.3f mm, %.4f deg", t.translation.norm() * 1e3,
-                Eigen::AngleAxisd(t.rotation).angle() * 180.0 / 3.14159265358979323846);
+                Eigen::AngleAxisd(t.rotation).angle() * 180.0 / std::numbers::pi);
   return buffer;
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,7 @@
 #include "host/camera/hand_eye.hpp"
 #include "host/camera/intrinsics.hpp"
 #include "host/camera/stereo.hpp"
+#include "host/model/number_text.hpp"
 #include "shared/parameters.hpp"
 #include "tests/host/camera/camera_scenes.hpp"
 
@@ -399,6 +401,38 @@ TEST_CASE("calibration files round-trip in OpenCV YAML and name bad keys") {
         dir.file("partial.yaml") + ": key 'camera_matrix' missing or not a 3x3 matrix");
   CHECK(error_of([&] { (void)load_camera(dir.file("none.yaml")); }) == dir.file("none.yaml") + ": cannot read");
   CHECK(contains(error_of([&] { (void)load_hand_eye(dir.file("camera.yaml")); }), "key 'gripper_T_camera' missing"));
+}
+
+TEST_CASE("a camera in ROS camera_info YAML: the keys ROS reads, read back exactly") {
+  TempDir dir;
+  const CameraModel truth = model_of(scenes::test_camera());
+  save_camera_ros(dir.file("camera_info.yaml"), truth, "wrist_camera");
+  std::ifstream in(dir.file("camera_info.yaml"));
+  std::ostringstream text;
+  text << in.rdbuf();
+  const cv::Matx33d& k = truth.camera_matrix;
+  const auto n = [](double v) { return kincal::model::shortest_number_text(v); };
+  CHECK(contains(text.str(),
+                 "image_width: 640\nimage_height: 480\ncamera_name: wrist_camera\ncamera_matrix:\n"
+                 "  rows: 3\n  cols: 3\n  data: [" +
+                     n(k(0, 0)) + ", 0, " + n(k(0, 2)) + ", 0, " + n(k(1, 1)) + ", " + n(k(1, 2)) +
+                     ", 0, 0, 1]\ndistortion_model: plumb_bob\ndistortion_coefficients:\n  rows: 1\n"));
+  CHECK(contains(text.str(),
+                 "rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n"
+                 "projection_matrix:\n  rows: 3\n  cols: 4\n  data: [" +
+                     n(k(0, 0)) + ", 0, " + n(k(0, 2)) + ", 0, 0, " + n(k(1, 1)) + ", " + n(k(1, 2)) +
+                     ", 0, 0, 0, 1, 0]\n"));
+  const CameraModel loaded = load_camera(dir.file("camera_info.yaml"));
+  CHECK(loaded.image_size == truth.image_size);
+  CHECK(cv::norm(cv::Mat(loaded.camera_matrix), cv::Mat(truth.camera_matrix)) == 0.0);
+  for (std::size_t i = 0; i < 5; ++i) CHECK(loaded.distortion[i] == truth.distortion[i]);
+
+  std::ofstream(dir.file("equidistant.yaml"))
+      << "image_width: 640\nimage_height: 480\ncamera_matrix: {rows: 3, cols: 3, data: [1, 0, 0, 0, 1, 0, 0, 0, 1]}\n"
+         "distortion_model: equidistant\ndistortion_coefficients: {rows: 1, cols: 4, data: [0, 0, 0, 0]}\n";
+  CHECK(error_of([&] { (void)load_camera(dir.file("equidistant.yaml")); }) ==
+        dir.file("equidistant.yaml") +
+            ": distortion_model 'equidistant': only plumb_bob (k1 k2 p1 p2 k3) is supported");
 }
 
 TEST_CASE("a host calibration converts to the platform's camera block and back") {
