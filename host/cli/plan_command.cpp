@@ -31,6 +31,9 @@ int run_plan(const PlanArgs& a) {
     options.pool = a.pool;
     options.seed = a.seed;
     options.orientation = a.orientation;
+    options.progress = [](int sweep, std::size_t done, std::size_t total) {
+      std::cerr << "kincal plan: exchange sweep " << sweep << ": " << done << " of " << total << " configurations\n";
+    };
     const identify::PlanResult r = identify::plan_configurations(m, options);
     std::ostringstream out;
     // The summary as comment lines, which the dataset reader skips.

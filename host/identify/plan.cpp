@@ -1,5 +1,6 @@
 #include "host/identify/plan.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -122,9 +123,16 @@ PlanResult plan_configurations(const model::RobotModel& m, const PlanOptions& op
   for (int k = 0; k < options.count; ++k) set.push_back(static_cast<std::size_t>(k));
   Eigen::MatrixXd info = information(set);
   const Eigen::MatrixXd ridge = Eigen::MatrixXd::Identity(p, p) * 1e-9;
+  const std::size_t tried = std::min(pool.size(), std::max<std::size_t>(64, kExchangeBudget / set.size()));
+  std::vector<std::size_t> candidates_tried(tried);
   for (int sweep = 0; sweep < 20; ++sweep) {
     bool improved = false;
     for (std::size_t i = 0; i < set.size(); ++i) {
+      if (options.progress && set.size() >= 1000 && i % (set.size() / 10) == 0)
+        options.progress(sweep + 1, i, set.size());
+      for (std::size_t t = 0; t < tried; ++t)
+        candidates_tried[t] =
+            tried == pool.size() ? t : std::uniform_int_distribution<std::size_t>(0, pool.size() - 1)(rng);
       const Eigen::MatrixXd reduced = info - pool[set[i]].j.transpose() * pool[set[i]].j + ridge;
       const Eigen::LDLT<Eigen::MatrixXd> ldlt(reduced);
       // det(reduced + J^T J) = det(reduced) det(I + J reduced^-1 J^T): compare the small factor.
@@ -136,7 +144,7 @@ PlanResult plan_configurations(const model::RobotModel& m, const PlanOptions& op
       const double current = gain(set[i]);
       double best = current;
       std::size_t best_c = set[i];
-      for (std::size_t c = 0; c < pool.size(); ++c) {
+      for (const std::size_t c : candidates_tried) {
         const double g = gain(c);
         if (g > best) {
           best = g;
@@ -149,6 +157,7 @@ PlanResult plan_configurations(const model::RobotModel& m, const PlanOptions& op
         improved = true;
       }
     }
+    if (options.progress) options.progress(sweep + 1, set.size(), set.size());
     if (!improved) break;
   }
   result.index = o1(info, m_rows);
