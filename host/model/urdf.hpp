@@ -16,7 +16,9 @@
 //
 // write_calibrated_urdf: the robot's own URDF with the calibrated geometry in its joint origins
 // and everything else kept (link and joint names, meshes, inertias, limits, axes, other
-// branches, comments). Which frames move and why:
+// branches, comments): the text is edited in place, only the chain's <origin> elements are
+// replaced (one is added to a joint that had none) and a comment goes after the XML
+// declaration. Which frames move and why:
 //   - The calibrated model (any conventions) is registered to the URDF: device_T_base_link =
 //     calibrated base_T_frame0 * (nominal base_T_frame0)^-1, nominal = model_from_urdf of the
 //     same chain. So the base link keeps its nominal place relative to the first joint axis;
