@@ -1,10 +1,13 @@
 #include "host/cli/import_command.hpp"
 
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <numbers>
+#include <sstream>
 
+#include "host/cli/model_option.hpp"
+#include "host/files/output_file.hpp"
+#include "host/identify/plausibility.hpp"
 #include "host/model/dataset.hpp"
 #include "host/model/measurement_import.hpp"
 
@@ -15,6 +18,7 @@ namespace {
 struct ImportArgs {
   std::string in, out, separator, joint_unit, position_unit, angle_unit = "deg", euler;
   std::vector<std::string> joints, position, position_std, orientation, orientation_std;
+  ModelOption model;
 };
 
 std::array<std::string, 3> three(const std::vector<std::string>& names, const char* option) {
@@ -48,12 +52,11 @@ int run_import(const ImportArgs& a) {
       o.angle_unit = model::parse_angle_unit(a.angle_unit);
     }
     if (!a.orientation_std.empty()) o.angle_std = three(a.orientation_std, "--orientation-std");
+    files::refuse_overwriting({{"--out", a.out}}, {{"export", a.in}, {"--model", a.model.path}});
     const model::ImportResult r = model::import_measurements_file(a.in, o);
-    std::ofstream file(a.out);
-    if (!file) throw model::InputError(a.out + ": cannot write");
-    model::write_dataset(file, r.data);
-    file.close();
-    if (!file) throw model::InputError(a.out + ": writing failed");
+    std::ostringstream text;
+    model::write_dataset(text, r.data);
+    files::write_file_atomically(a.out, text.str());
     std::cout << "kincal import: " << r.data.rows.size() << " rows from " << a.in << " (separator '"
               << (r.separator == '\t' ? std::string("tab") : std::string(1, r.separator)) << "', decimal "
               << (r.decimal_comma ? "comma" : "point") << "), " << r.data.joint_count << " joints"
@@ -64,7 +67,17 @@ int run_import(const ImportArgs& a) {
                 << " deg (not written: the dataset format has no orientation covariance; identify estimates the "
                    "orientation noise)";
     std::cout << "\nwrote " << a.out << '\n';
+    if (!a.model.path.empty()) {
+      const model::RobotModel nominal = a.model.load();
+      model::check_joint_count(nominal, r.data.joint_count, a.out);
+      const std::vector<std::string> findings = identify::implausibilities(nominal, r.data);
+      for (const std::string& f : findings) std::cerr << "kincal import: warning: " << f << '\n';
+      if (findings.empty()) std::cout << "plausible for " << nominal.name << " (units, limits, distances)\n";
+    }
     return 0;
+  } catch (const files::OutputError& e) {
+    std::cerr << "kincal import: " << e.what() << '\n';
+    return 1;
   } catch (const model::InputError& e) {
     std::cerr << "kincal import: " << e.what() << '\n';
     return 1;
@@ -100,6 +113,7 @@ void add_import_command(CLI::App& app, int& status) {
   cmd->add_option("--orientation-std", a->orientation_std,
                   "header names of the Euler angles' std (checked, summarized)")
       ->delimiter(',');
+  add_model_option(*cmd, a->model, "check the data against this model and warn (units, limits, distances)", false);
   cmd->callback([a, &status] { status = run_import(*a); });
 }
 
