@@ -82,6 +82,32 @@ std::vector<std::vector<double>> random_observable(const model::RobotModel& nomi
   return poses;
 }
 
+// A plan file read against the rig's model. A simulated rig may narrow joint limits (the ARID rig
+// keeps its rail within 0.1 m so that the camera stays over the strip): a plan made from the
+// model file then fails, and the error says which limits the rig narrowed and why.
+std::vector<std::vector<double>> read_plan_for(const model::RobotModel& file, const model::RobotModel& nominal,
+                                               const std::string& path) {
+  try {
+    return session::read_plan(nominal, path);
+  } catch (const model::InputError& e) {
+    std::string narrowed;
+    for (std::size_t j = 0; j < nominal.joints.size() && j < file.joints.size(); ++j) {
+      const model::Joint &rig = nominal.joints[j], &given = file.joints[j];
+      if (rig.lower != given.lower || rig.upper != given.upper) {
+        std::ostringstream text;
+        text << (narrowed.empty() ? "" : ", ") << rig.name << " [" << rig.lower << ", " << rig.upper << "] instead of ["
+             << given.lower << ", " << given.upper << "]";
+        narrowed += text.str();
+      }
+    }
+    if (narrowed.empty()) throw;
+    throw model::InputError(std::string(e.what()) + "\n  the simulated rig narrows its model's limits (SI units) to " +
+                            narrowed +
+                            " so that the sensor sees the target; make the plan within these limits, or "
+                            "leave --plan out to let the rig draw poses it can see");
+  }
+}
+
 int run(const SessionArgs& a) {
   files::refuse_overwriting({{"--out", a.out}, {"--report", a.report}, {"--dataset", a.dataset}},
                             {{"--journal", a.journal},
@@ -128,7 +154,7 @@ int run(const SessionArgs& a) {
   session::SessionPlan plan;
   std::mt19937_64 rng(a.seed);
   if (!a.plan.empty()) {
-    plan.calibration = session::read_plan(nominal, a.plan);
+    plan.calibration = read_plan_for(file, nominal, a.plan);
   } else if (a.sweeps > 0 || !platform) {
     const std::vector<double> home = a.home.empty() ? mid_range(nominal) : parse_home(a.home, nominal);
     plan.calibration = session::single_joint_sweeps(nominal, home, a.sweeps > 0 ? a.sweeps : 10, 0.4);
@@ -136,7 +162,7 @@ int run(const SessionArgs& a) {
     plan.calibration = random_observable(nominal, *rig, a.poses, rng, "--poses");
   }
   if (!a.validation_plan.empty()) {
-    plan.validation = session::read_plan(nominal, a.validation_plan);
+    plan.validation = read_plan_for(file, nominal, a.validation_plan);
   } else if (rig) {
     plan.validation = random_observable(nominal, *rig, a.validation, rng, "--validation");
   }

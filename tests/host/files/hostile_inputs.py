@@ -105,6 +105,7 @@ case("identify:not a dataset", ident + ["--data", puma, "--out", "o.yaml"], r"pu
 case("predict:out=joints", ["predict", "--model", puma, "--joints", "q.csv", "-o", "q.csv"], r"-o q\.csv is the same file as --joints", protect=["q.csv"])
 case("predict:out=model", ["predict", "--model", puma, "--joints", "q.csv", "-o", puma], r"same file as --model", protect=[puma])
 case("plan:out=model", ["plan", "--model", puma, "-n", "5", "-o", puma], r"same file as --model", protect=[puma])
+case("plan:progress on stderr", ["plan", "--model", puma, "-n", "40", "--pool", "300"], r"exchange sweep 1: 40 of 40", rc_ok=True)
 case("plan:count 0", ["plan", "--model", puma, "-n", "0"], r"-n|count")
 case("urdf:out=model", ["urdf", "--model", puma, "-o", puma], r"same file as --model", protect=[puma])
 case("urdf:out is a directory", ["urdf", "--model", puma, "-o", "sub"], r"sub")
@@ -120,6 +121,10 @@ case("session:dataset=model", sess + ["--dataset", os.path.join(robots, "arid_pr
 case("session:report=out", sess + ["--report", "r.html", "--out", "r.html"], r"another output", protect=["s.journal"])
 case("session:puma on the platform rig", ["session", "--model", puma, "--poses", "3", "--journal", "p.journal"],
      r"0 of [0-9]+ random configurations of puma560.*in view", timeout=120)
+run(["plan", "--model", os.path.join(robots, "arid_prrr.yaml"), "-n", "20", "-o", "arid_plan.csv"])
+case("session:plan outside the rig's rail", ["session", "--model", os.path.join(robots, "arid_prrr.yaml"), "--plan", "arid_plan.csv",
+     "--journal", "a.journal"], r"narrows its model's limits \(SI units\) to rail \[0, 0\.1\] instead of \[0, 18\.24\]",
+     protect=["arid_plan.csv"])
 case("session:poses 0", ["session", "--model", puma, "--poses", "0", "--journal", "p.journal"], r"--poses")
 
 # --- colour-table
