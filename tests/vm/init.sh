@@ -20,23 +20,41 @@ step "init: loading the CAN modules"
 for m in can can-raw can-isotp can-dev vcan; do insmod /modules/$m.ko || bad "insmod_$m"; done
 ip link add dev vcan0 type vcan && ip link set vcan0 mtu 72 && ip link set up vcan0 && ok vcan0_up || bad vcan0_up
 
-platform() {  # starts the native firmware; $@ = extra options
+# Readiness is waited for, never slept for: on a busy machine the emulated, sanitized programs
+# need seconds to start, and a frame sent before a socket is bound is lost.
+# listening PID: waits (at most 20 s) until process PID has a CAN socket open.
+listening() {
+  i=0
+  while [ $i -lt 200 ]; do
+    ls -l "/proc/$1/fd" 2>/dev/null | grep -q "socket:" && { sleep 0.1; return 0; }
+    sleep 0.1
+    i=$((i + 1))
+  done
+  echo "VMTEST note: process $1 opened no socket within 20 s"
+}
+platform() {  # starts the native firmware and waits until it runs; $@ = extra options
+  : >/tmp/platform.err  # emptied here: the background start truncates it only some time later
   kincal_platform --can vcan0 --storage /tmp/store "$@" 2>/tmp/platform.err &
   PLATFORM=$!
-  sleep 0.5
+  i=0
+  while [ $i -lt 300 ] && ! grep -q "running on" /tmp/platform.err; do
+    sleep 0.1
+    i=$((i + 1))
+  done
+  grep -q "running on" /tmp/platform.err || { show /tmp/platform.err; bad platform_starts; }
 }
 stop_platform() {
   kill "$PLATFORM"
   wait "$PLATFORM" && grep -q "stopped" /tmp/platform.err && ok "$1" || { show /tmp/platform.err; bad "$1"; }
 }
 # expect_frame NAME CANDUMP_FILTER PATTERN COMMAND...: runs COMMAND and checks that candump sees
-# a frame matching PATTERN (candump -L format) within 3 s.
+# a frame matching PATTERN (candump -L format) within 10 s.
 expect_frame() {
   name=$1 filter=$2 pattern=$3
   shift 3
-  candump -L -n 1 -T 3000 "vcan0,$filter" >/tmp/expect.txt &
+  candump -L -n 1 -T 10000 "vcan0,$filter" >/tmp/expect.txt &
   C=$!
-  sleep 0.3
+  listening $C
   "$@"
   wait $C
   grep -q "$pattern" /tmp/expect.txt && ok "$name" || { show /tmp/expect.txt; bad "$name"; }
@@ -46,6 +64,7 @@ expect_frame() {
 step "1: platform and client, classic CAN then CAN FD"
 candump -L vcan0 >/tmp/session.log &
 CANDUMP=$!
+listening $CANDUMP
 platform
 step "1a: kincal exercise, classic CAN"
 kincal exercise --can vcan0 --measurements 10 --corrections 200 --correction-timeout-ms 3000 >/tmp/ex1.txt 2>&1 && ok scenario_classic ||
@@ -77,9 +96,9 @@ echo "candump log: $(wc -l </tmp/session.log) frames; $(tail -1 /tmp/monitor.txt
 step "3: can-utils ISO-TP peers"
 platform
 expect_frame isotpsend_to_platform 130:7FF "130#01" sh -c "isotpsend -s 150 -d 158 -p CC vcan0 </vm/intrinsics_write.hex"
-timeout 5 isotprecv -s 150 -d 158 -p CC vcan0 >/tmp/recv.txt &
+timeout 15 isotprecv -s 150 -d 158 -p CC vcan0 >/tmp/recv.txt &
 R=$!
-sleep 0.3
+listening $R
 echo "02 01" | isotpsend -s 150 -d 158 -p CC vcan0
 wait $R
 grep -q "^82 01 02 00 28 00" /tmp/recv.txt && ok platform_to_isotprecv || { show /tmp/recv.txt; bad platform_to_isotprecv; }
@@ -95,7 +114,7 @@ expect_frame unknown_message 140:7FF "140#0C" cansend vcan0 150#017E
 expect_frame joint_not_in_mode 140:7FF "140#06" cansend vcan0 110#0000000000000000
 candump -L -T 1000 vcan0,140:7FF >/tmp/other.txt &
 C=$!
-sleep 0.3
+listening $C
 cansend vcan0 7FF#00  # another node's traffic: no response at all
 cansend vcan0 050#0102
 wait $C
@@ -105,6 +124,7 @@ grep -q "140#" /tmp/other.txt && bad foreign_ids_ignored || ok foreign_ids_ignor
 step "5: a flood of malformed frames"
 candump -L vcan0,140:7FF >/tmp/flood.txt &
 C=$!
+listening $C
 start=$(date +%s)
 cangen vcan0 -I 110 -L 3 -g 0 -i -n 20000
 end=$(date +%s)
