@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "host/model/number_text.hpp"
+#include "host/model/urdf.hpp"
 
 namespace kincal::model {
 
@@ -52,6 +53,7 @@ UrKinematics ur_kinematics(const RobotModel& model) {
   note(chain.base_T_frame0, "the base transform base_T_frame0 (the registration to the measuring device)");
   note(k.wrist_3_T_flange, "link 6 beyond the wrist_3 frame (a6, alpha6, beta6)");
   note(chain.flange_T_tool, "the tool flange_T_tool (set the TCP on the controller)");
+  if (const std::string n = non_geometric_note(model); !n.empty()) k.notes.push_back(n);
   return k;
 }
 

@@ -145,6 +145,15 @@ std::string millimetres(double m) {
 
 }  // namespace
 
+std::string non_geometric_note(const RobotModel& model) {
+  std::string joints;
+  for (const Joint& j : model.joints)
+    if (!j.coupling.empty() || j.scale || j.compliance) joints += (joints.empty() ? "" : ", ") + j.name;
+  return joints.empty() ? ""
+                        : "the joint map (coupling, scale, compliance) of " + joints +
+                              " is not in this file: readings go in as they are";
+}
+
 CalibratedUrdf write_calibrated_urdf(const std::string& original_text, const std::string& source,
                                      const UrdfChainEnds& ends, const RobotModel& calibrated) {
   const UrdfChain chain = parse_urdf_chain(original_text, source, ends);
@@ -159,6 +168,7 @@ CalibratedUrdf write_calibrated_urdf(const std::string& original_text, const std
                        std::to_string(i + 1) + " are not of the same type");
 
   CalibratedUrdf result;
+  if (const std::string note = non_geometric_note(calibrated); !note.empty()) result.notes.push_back(note);
   // Register: the calibrated frame 0 is put where the URDF's is.
   result.device_T_base_link = calibrated.base_T_frame0 * nominal.base_T_frame0.inverse();
   RobotModel registered = calibrated;

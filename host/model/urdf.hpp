@@ -49,6 +49,10 @@ namespace kincal::model {
 
 std::string write_urdf(const RobotModel& model);
 
+// "" for a purely geometric model; otherwise a note naming the joints whose coupling, scale or
+// compliance a file of joint origins (URDF, ur-kinematics) leaves out.
+std::string non_geometric_note(const RobotModel& model);
+
 struct CalibratedUrdf {
   std::string text;
   Transform device_T_base_link{};  // the registration the model's base transform held
@@ -56,7 +60,8 @@ struct CalibratedUrdf {
 };
 
 // Throws InputError when the URDF is bad (urdf_chain.hpp) or its chain does not match the model
-// (joint count or types).
+// (joint count or types). The joint map (coupling, scale, compliance: robot_model.hpp) has no
+// place in a URDF; a model with one gets a note (non_geometric_note).
 CalibratedUrdf write_calibrated_urdf(const std::string& original_text, const std::string& source,
                                      const UrdfChainEnds& ends, const RobotModel& calibrated);
 

@@ -332,6 +332,13 @@ TEST_CASE("urdf: the tip link on the last joint: the tool's calibration is repor
   const CalibratedUrdf out = write_calibrated_urdf(text, "ur10.urdf", ends, m);
   REQUIRE(out.notes.size() == 1);
   CHECK(out.notes[0].find("10.000 mm") != std::string::npos);
+  m.joints[1].compliance = 1e-6;
+  const CalibratedUrdf sag = write_calibrated_urdf(text, "ur10.urdf", ends, m);
+  REQUIRE(sag.notes.size() == 2);
+  CHECK(sag.notes[0] ==
+        "the joint map (coupling, scale, compliance) of shoulder_lift_joint is not in this file: "
+        "readings go in as they are");
+  CHECK(ur_kinematics(m).notes.back() == sag.notes[0]);
 }
 
 TEST_CASE("ur-kinematics: the UR10 description's defaults come back, and the file's FK is the model's") {
