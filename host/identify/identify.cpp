@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iomanip>
 #include <memory>
@@ -126,41 +127,67 @@ WhitenedFit whitened_fit(const Eigen::VectorXd& e, const Eigen::MatrixXd& j, con
   return f;
 }
 
-// REML for the model-error components at a fixed linearization (see identify.hpp): the fixed
-// point s_k^2 <- s_k^2 (r^T V^-1 V_k V^-1 r) / tr(V_k P), evaluated per row block with whitened
-// residuals and the hat matrix's diagonal blocks. A component far below the instrument's
-// variance (1e-8 of it) has converged to zero for every practical purpose and stops there.
+// REML for the model-error components at a fixed linearization (see identify.hpp), by Fisher
+// scoring: g_k = (r^T V^-1 V_k V^-1 r - tr(V_k P)) / 2, F_kl = tr(V_k P V_l P) / 2, evaluated per
+// row block with whitened residuals and the thin Q of the whitened Jacobian (H = Q Q^T; with
+// M_k = L V_k L^T block-diagonal, tr(V_k P V_k P) = tr(M_k^2) - 2 tr(Q^T M_k^2 Q) + |Q^T M_k Q|^2).
+// A step is cut at a tenth of the current value, so the boundary at zero is approached
+// geometrically; a component below negligible2 (1e-6 of the instrument's variance) has reached
+// zero for every practical purpose and stays there.
 Components reml(const Eigen::VectorXd& e, const Eigen::MatrixXd& j, const std::vector<int>& rows,
                 const std::vector<Eigen::Matrix3d>& instrument, double orientation_given2, Components c,
                 bool estimate_position, bool estimate_orientation, int size, double negligible_position2) {
   const bool orientation_used = size == 6;
-  for (int iteration = 0; iteration < 200; ++iteration) {
+  const Eigen::Index p = j.cols();
+  const double negligible_orientation2 = 1e-6 * orientation_given2;
+  for (int iteration = 0; iteration < 100; ++iteration) {
     const Weights w = noise_weights(instrument, orientation_given2, c, orientation_used);
     const WhitenedFit f = whitened_fit(e, j, w, rows, size);
-    double num_p = 0, den_p = 0, num_o = 0, den_o = 0;
+    Eigen::Vector2d num = Eigen::Vector2d::Zero(), trace = Eigen::Vector2d::Zero();
+    Eigen::Vector2d trace_m2 = Eigen::Vector2d::Zero(), trace_qm2q = Eigen::Vector2d::Zero();
+    std::array<Eigen::MatrixXd, 2> qmq{Eigen::MatrixXd::Zero(p, p), Eigen::MatrixXd::Zero(p, p)};
+    const double w2 = w.orientation * w.orientation;
     for (std::size_t k = 0; k < rows.size(); ++k) {
       const auto at = static_cast<Eigen::Index>(k) * size;
       const Eigen::Matrix3d& l = w.position[static_cast<std::size_t>(rows[k])];
-      const Eigen::Matrix3d a = l * l.transpose();  // L V_k L^T for V_k = I on the position block
-      const Eigen::MatrixXd q = f.q.middleRows(at, size);
-      const Eigen::Matrix3d h = q.topRows<3>() * q.topRows<3>().transpose();
+      const Eigen::Matrix3d a = l * l.transpose();  // M_k's block for V_k = I on the position block
+      const Eigen::MatrixXd qp = f.q.middleRows(at, 3);
       const Eigen::Vector3d rp = f.residual.segment<3>(at);
-      num_p += rp.dot(a * rp);
-      den_p += a.trace() - a.cwiseProduct(h).sum();
+      num(0) += rp.dot(a * rp);
+      trace(0) += a.trace() - a.cwiseProduct(qp * qp.transpose()).sum();
+      trace_m2(0) += a.squaredNorm();
+      trace_qm2q(0) += (a * qp).squaredNorm();
+      qmq[0] += qp.transpose() * a * qp;
       if (orientation_used) {
-        const double w2 = w.orientation * w.orientation;
-        num_o += w2 * f.residual.segment<3>(at + 3).squaredNorm();
-        den_o += w2 * (3.0 - q.bottomRows<3>().squaredNorm());
+        const Eigen::MatrixXd qo = f.q.middleRows(at + 3, 3);
+        num(1) += w2 * f.residual.segment<3>(at + 3).squaredNorm();
+        trace(1) += w2 * (3.0 - qo.squaredNorm());
+        trace_m2(1) += 3.0 * w2 * w2;
+        trace_qm2q(1) += w2 * w2 * qo.squaredNorm();
+        qmq[1] += w2 * qo.transpose() * qo;
       }
     }
-    Components next = c;
-    if (estimate_position && den_p > 0 && c.position2 > negligible_position2)
-      next.position2 = std::max(kVarianceFloor, c.position2 * num_p / den_p);
-    if (estimate_orientation && den_o > 0) next.orientation2 = std::max(kVarianceFloor, c.orientation2 * num_o / den_o);
-    const bool settled = std::abs(next.position2 - c.position2) <= 1e-6 * c.position2 &&
-                         std::abs(next.orientation2 - c.orientation2) <= 1e-6 * c.orientation2;
-    c = next;
-    if (settled) break;
+    const std::array<bool, 2> active{estimate_position && c.position2 > negligible_position2,
+                                     estimate_orientation && c.orientation2 > negligible_orientation2};
+    Eigen::Vector2d g = 0.5 * (num - trace);
+    Eigen::Matrix2d fisher;
+    for (int m = 0; m < 2; ++m)
+      fisher(m, m) = 0.5 * (trace_m2(m) - 2.0 * trace_qm2q(m) + qmq[static_cast<std::size_t>(m)].squaredNorm());
+    fisher(0, 1) = fisher(1, 0) = 0.5 * qmq[0].cwiseProduct(qmq[1]).sum();
+    for (int m = 0; m < 2; ++m) {
+      if (active[static_cast<std::size_t>(m)]) continue;
+      g(m) = 0.0;
+      fisher.row(m).setZero();
+      fisher.col(m).setZero();
+      fisher(m, m) = 1.0;
+    }
+    const Eigen::Vector2d step = fisher.ldlt().solve(g);
+    const Eigen::Vector2d now(c.position2, c.orientation2);
+    Eigen::Vector2d next = now;
+    for (int m = 0; m < 2; ++m)
+      if (active[static_cast<std::size_t>(m)]) next(m) = std::max({now(m) + step(m), 0.1 * now(m), kVarianceFloor});
+    c = {next(0), next(1)};
+    if (((next - now).array().abs() <= 1e-6 * now.array()).all()) break;
   }
   return c;
 }
@@ -502,7 +529,7 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
 
   Parameterization param(result.start, ids);
   std::vector<double> delta(static_cast<std::size_t>(p), 0.0);
-  const double negligible_position2 = 1e-8 * result.median_instrument_sigma_m * result.median_instrument_sigma_m;
+  const double negligible_position2 = 1e-6 * result.median_instrument_sigma_m * result.median_instrument_sigma_m;
 
   // Solve, estimate the model error from the residuals (REML), re-weight, until it settles.
   const auto fit = [&] {

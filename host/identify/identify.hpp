@@ -16,9 +16,9 @@
 // s_p and s_o are the model error: what the robot does that the model cannot (repeatability,
 // elasticity, gears). A laser tracker measures to 0.01 mm while a real arm leaves about 0.4 mm
 // unexplained, so the instrument's covariance alone would call every row an outlier. s_p, s_o
-// are estimated by REML: solve with the current V, linearize, and iterate the fixed point
-// s_k^2 <- s_k^2 * (r^T V^-1 V_k V^-1 r) / tr(V_k P), P = V^-1 - V^-1 J (J^T V^-1 J)^-1 J^T V^-1
-// (the hat-matrix correction for the degrees of freedom the fit uses), then solve again until
+// are estimated by REML: solve with the current V, linearize, and solve the REML equations
+// r^T V^-1 V_k V^-1 r = tr(V_k P), P = V^-1 - V^-1 J (J^T V^-1 J)^-1 J^T V^-1 (the hat-matrix
+// correction for the degrees of freedom the fit uses) by Fisher scoring, then solve again until
 // s_p and s_o change by less than 0.1 %. Every standard deviation, the parameter covariance and
 // the prediction covariance carry them. With model_error = false they are estimated only where
 // nothing else gives the noise (rows without covariance and no --sigma; orientation without
