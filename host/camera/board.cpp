@@ -127,7 +127,7 @@ Board parse_board(const std::string& text) {
   Board b;
   if (f.size() == 3 && f[0] == "chessboard") {
     b.kind = BoardKind::kChessboard;
-    std::tie(b.cols, b.rows) = grid(text, f[1], 2);
+    std::tie(b.cols, b.rows) = grid(text, f[1], 3);  // OpenCV's detector needs 3 or more each way
     b.square_m = positive_length(text, "square size", f[2]);
     return b;
   }
@@ -177,6 +177,14 @@ BoardDetection detect_board(const Board& board, const cv::Mat& image, const std:
   d.view = view;
   d.image_size = grey.size();
   std::vector<cv::Point2f> corners;
+  // Squares of fewer than 4 pixels are not detected, and OpenCV's chessboard detectors assert on
+  // images smaller than their windows.
+  const int min_side_px = 4 * (std::max(board.cols, board.rows) + 1);
+  if (grey.cols < min_side_px || grey.rows < min_side_px) {
+    d.reason = "image " + std::to_string(grey.cols) + "x" + std::to_string(grey.rows) + " too small for the " +
+               board.text() + " board (at least " + std::to_string(min_side_px) + " px a side)";
+    return d;
+  }
   if (board.kind == BoardKind::kChessboard) {
     const cv::Size pattern(board.cols, board.rows);
     bool found = cv::findChessboardCornersSB(grey, pattern, corners, cv::CALIB_CB_NORMALIZE_IMAGE);

@@ -190,6 +190,10 @@ case("camera:hand-eye poses of other images", ["camera", "hand-eye"] + board + [
 case("camera:hand-eye consistent", ["camera", "hand-eye"] + board + ["--camera", "cam.yaml", "--poses", os.path.join(camera_dir, "poses.csv"),
      "--images", bg, "-o", "he.yaml"], r"written: he\.yaml", rc_ok=True)
 
+big_png("tiny.png", 1, 1)
+case("camera:1x1 image", ["camera", "calibrate"] + board + ["tiny.png"] * 3 + ["-o", "t.yaml"], r"image 1x1 too small for the chessboard:9x6:0\.03 board")
+case("camera:2x2 board", ["camera", "calibrate", "--board", "chessboard:2x2:0.03", "v0.png", "-o", "t.yaml"], r"must be 3\.\.100")
+
 # --- others
 case("dbc:out is a directory", ["dbc", "-o", "sub"], r"sub: is a directory")
 case("monitor:duration nan", ["monitor", "--replay", "q.csv", "--duration-s", "nan"], r"not a finite")
