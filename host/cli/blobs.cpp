@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "host/cli/threshold_option.hpp"
+#include "host/files/input_limits.hpp"
 #include "host/vision/blob_json.hpp"
 #include "host/vision/image_labeling.hpp"
 
@@ -97,7 +98,9 @@ int run_blobs(const BlobsOptions& o) {
 void add_blobs_command(CLI::App& app, int& status) {
   auto options = std::make_shared<BlobsOptions>();
   auto* cmd = app.add_subcommand("blobs", "Label blobs in images with the firmware core's streaming labeler (JSON)");
-  cmd->add_option("images", options->images, "Image files (any format OpenCV reads)")->required();
+  cmd->add_option("images", options->images,
+                  std::string("Image files (any format OpenCV reads; ") + files::kImageLimitText + ")")
+      ->required();
   cmd->add_option("--polarity", options->polarity, "Blobs brighter or darker than the threshold")
       ->check(CLI::IsMember({"bright", "dark"}))
       ->capture_default_str();

@@ -14,6 +14,7 @@
 #include "host/capture/frame_source.hpp"
 #include "host/capture/stereo_source.hpp"
 #include "host/cli/number_options.hpp"
+#include "host/files/input_limits.hpp"
 #include "host/files/output_file.hpp"
 #include "host/model/dataset.hpp"
 
@@ -153,7 +154,10 @@ void add_camera_command(CLI::App& app, int& status) {
 
   CLI::App* calibrate = camera->add_subcommand("calibrate", "Intrinsic calibration from images of a board");
   add_common(calibrate, *args);
-  calibrate->add_option("images", args->images, "image files, a directory or a video")->required();
+  calibrate
+      ->add_option("images", args->images,
+                   std::string("image files, a directory or a video (") + files::kImageLimitText + ")")
+      ->required();
   calibrate->add_option("--format", args->format, "opencv (OpenCV YAML, the default) or ros (ROS camera_info YAML)")
       ->check(CLI::IsMember({"opencv", "ros"}));
   calibrate->add_option("--camera-name", args->camera_name, "camera_name of a ROS file")->capture_default_str();
@@ -161,8 +165,14 @@ void add_camera_command(CLI::App& app, int& status) {
 
   CLI::App* stereo = camera->add_subcommand("stereo", "Stereo calibration from image pairs of a board");
   add_common(stereo, *args);
-  stereo->add_option("--left", args->left, "left images, directory or video")->required();
-  stereo->add_option("--right", args->right, "right images, directory or video")->required();
+  stereo
+      ->add_option("--left", args->left,
+                   std::string("left images, directory or video (") + files::kImageLimitText + ")")
+      ->required();
+  stereo
+      ->add_option("--right", args->right,
+                   std::string("right images, directory or video (") + files::kImageLimitText + ")")
+      ->required();
   stereo->add_option("--left-camera", args->left_camera, "left camera (YAML; default: calibrate from the images)");
   stereo->add_option("--right-camera", args->right_camera, "right camera (YAML; default: calibrate from the images)");
   stereo->add_flag("--refine-intrinsics", args->refine_intrinsics, "refine both cameras jointly with the pose");
@@ -175,7 +185,10 @@ void add_camera_command(CLI::App& app, int& status) {
   add_common(hand_eye, *args);
   hand_eye->add_option("--camera", args->camera, "the camera's calibration (YAML)")->required();
   hand_eye->add_option("--poses", args->poses, "robot poses: q1..qN,x,y,z,qw,qx,qy,qz, one row per image")->required();
-  hand_eye->add_option("--images", args->images, "images, in the order of the poses (files or a directory)")
+  hand_eye
+      ->add_option(
+          "--images", args->images,
+          std::string("images, in the order of the poses (files or a directory; ") + files::kImageLimitText + ")")
       ->required();
   hand_eye->add_option("--convention", args->convention, "what the poses are: base_T_gripper or gripper_T_base")
       ->check(CLI::IsMember({"gripper2base", "base2gripper"}))

@@ -9,6 +9,7 @@
 #include "host/cli/model_option.hpp"
 #include "host/cli/number_options.hpp"
 #include "host/cli/urdf_command.hpp"
+#include "host/files/input_limits.hpp"
 #include "host/files/output_file.hpp"
 #include "host/identify/identify.hpp"
 #include "host/identify/plausibility.hpp"
@@ -104,7 +105,10 @@ void add_identify_command(CLI::App& app, int& status) {
   auto a = std::make_shared<IdentifyArgs>();
   auto* cmd = app.add_subcommand("identify", "Identify a robot's kinematic parameters from measurements");
   add_model_option(*cmd, a->model, "nominal model");
-  cmd->add_option("--data", a->data, "measurements (CSV: q1..qN,x,y,z[,qw,qx,qy,qz][,cxx..czz|,sigma])")->required();
+  cmd->add_option(
+         "--data", a->data,
+         std::string("measurements (CSV: q1..qN,x,y,z[,qw,qx,qy,qz][,cxx..czz|,sigma]; ") + files::kTextLimitText + ")")
+      ->required();
   cmd->add_option("--out", a->out, "calibrated model to write (YAML, same schema)")->required();
   cmd->add_option("--method", a->method,
                   "full (default): nonlinear least squares; first-order: Doty's linear model; "

@@ -27,6 +27,10 @@ class InputLimitError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// The limits as the commands' --help states them (in step with the numbers above).
+inline constexpr const char* kImageLimitText = "at most 16384 px a side and 64 Mpx";
+inline constexpr const char* kTextLimitText = "at most 256 MiB";
+
 // Throws InputLimitError when the image's header states a size over the limits. Headers it
 // cannot read (other formats, damaged files) pass: the decoder reports those, and
 // check_image_size() then checks the decoded size.
