@@ -663,6 +663,44 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
   return result;
 }
 
+std::string format_noise(const IdentifyResult& r) {
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  out.precision(3);
+  out << "noise: position: instrument ";
+  if (r.all_covariance) {
+    out << "covariance of each row (median sigma " << std::setprecision(4) << r.median_instrument_sigma_m * 1e3
+        << " mm)";
+  } else if (r.sigma_m > 0.0) {
+    out << "sigma " << std::setprecision(4) << r.sigma_m * 1e3 << " mm (given)";
+  } else {
+    out << "unknown";
+  }
+  if (r.model_error_position_m > 0.0)
+    out << " + model error " << std::setprecision(4) << r.model_error_position_m * 1e3 << " mm per axis (REML)";
+  if (r.orientation_used) {
+    out << "; orientation: instrument ";
+    if (r.orientation_sigma_rad > 0.0) {
+      out << "sigma " << r.orientation_sigma_rad * kDegPerRad << " deg (given)";
+    } else {
+      out << "unknown";
+    }
+    if (r.model_error_orientation_rad > 0.0)
+      out << " + model error " << r.model_error_orientation_rad * kDegPerRad << " deg per axis (REML)";
+  }
+  out << "; chi-square per degree of freedom " << r.chi_square_per_dof
+      << "; the parameters' standard deviations include "
+      << (r.model_error_estimated ? "the model error" : "the instrument noise only") << '\n';
+  for (const Rejection& x : r.rejections)
+    out << "  rejected line " << x.line << ": residual " << x.residual_m * 1e3 << " mm, studentized statistic "
+        << x.statistic_ratio << " x the threshold; removing it moves the predicted tool by up to "
+        << x.tool_shift_max_m * 1e3 << " mm over the data\n";
+  if (!r.rejections.empty())
+    out << "  model error before rejection " << r.model_error_before_rejection_m * 1e3 << " mm, after "
+        << r.model_error_position_m * 1e3 << " mm\n";
+  return out.str();
+}
+
 std::string format_report(const IdentifyResult& r) {
   std::ostringstream out;
   out.setf(std::ios::fixed);
@@ -686,36 +724,7 @@ std::string format_report(const IdentifyResult& r) {
         << std::fixed << '\n';
     for (const HeldFixed& h : r.identifiability.held_fixed)
       out << "  held fixed: " << model::parameter_name(h.id) << " (" << h.reason << ")\n";
-    out << "noise: position: instrument ";
-    if (r.all_covariance) {
-      out << "covariance of each row (median sigma " << std::setprecision(4) << r.median_instrument_sigma_m * 1e3
-          << " mm)";
-    } else if (r.sigma_m > 0.0) {
-      out << "sigma " << std::setprecision(4) << r.sigma_m * 1e3 << " mm (given)";
-    } else {
-      out << "unknown";
-    }
-    if (r.model_error_position_m > 0.0)
-      out << " + model error " << std::setprecision(4) << r.model_error_position_m * 1e3 << " mm per axis (REML)";
-    if (r.orientation_used) {
-      out << "; orientation: instrument ";
-      if (r.orientation_sigma_rad > 0.0) {
-        out << "sigma " << r.orientation_sigma_rad * kDegPerRad << " deg (given)";
-      } else {
-        out << "unknown";
-      }
-      if (r.model_error_orientation_rad > 0.0)
-        out << " + model error " << r.model_error_orientation_rad * kDegPerRad << " deg per axis (REML)";
-    }
-    out << "; chi-square per degree of freedom " << r.chi_square_per_dof << "; the standard deviations below include "
-        << (r.model_error_estimated ? "the model error" : "the instrument noise only") << '\n';
-    for (const Rejection& x : r.rejections)
-      out << "  rejected line " << x.line << ": residual " << x.residual_m * 1e3 << " mm, studentized statistic "
-          << x.statistic_ratio << " x the threshold; removing it moves the predicted tool by up to "
-          << x.tool_shift_max_m * 1e3 << " mm over the data\n";
-    if (!r.rejections.empty())
-      out << "  model error before rejection " << r.model_error_before_rejection_m * 1e3 << " mm, after "
-          << r.model_error_position_m * 1e3 << " mm\n";
+    out << format_noise(r);
     out << "parameter        change          stddev\n";
     for (std::size_t k = 0; k < r.identifiability.identified.size(); ++k) {
       const core::ParameterId id = r.identifiability.identified[k];

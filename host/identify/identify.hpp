@@ -156,6 +156,10 @@ RobotModel reparameterize_for_identification(const RobotModel& model, double par
 // link's parameters to the tool.
 ParameterIds candidate_parameters(const RobotModel& model);
 
+// The noise model's lines of the report: the instrument's noise, the model error (mm, deg), the
+// chi-square per degree of freedom, and each rejected row with what rejecting it changes.
+std::string format_noise(const IdentifyResult& result);
+
 // A human-readable report of a result (what `kincal identify` prints).
 std::string format_report(const IdentifyResult& result);
 

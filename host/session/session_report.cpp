@@ -85,6 +85,7 @@ report::Run report_run(const RunDescription& description, const model::RobotMode
   for (const identify::HeldFixed& h : r.identifiability.held_fixed)
     run.held_fixed.push_back({model::parameter_name(h.id), h.reason});
   run.notes = r.notes;
+  run.notes.push_back(identify::format_noise(r));
 
   auto accuracy = [](const std::string& label, const identify::AccuracyStats& s) {
     report::Accuracy a;
