@@ -81,7 +81,8 @@ Header parse_header(const std::string& line, const std::string& source, int numb
     bool known = false;
     for (const char* k : kKnown) known = known || name == k;
     if (name.size() > 1 && name[0] == 'q' && name.find_first_not_of("0123456789", 1) == std::string::npos) {
-      const int j = std::stoi(name.substr(1));
+      // More digits than any joint count: out of range without overflowing stoi (a fuzzer find).
+      const int j = name.size() <= 4 ? std::stoi(name.substr(1)) : 0;
       if (j < 1 || j > h.joints)
         fail(source, number, "header: column '" + name + "' but no q" + std::to_string(h.joints + 1));
       known = true;
