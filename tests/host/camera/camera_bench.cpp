@@ -22,7 +22,7 @@ std::vector<BoardDetection> detect_rendered(const Board& board, const sim::Camer
   const sim::PlanarTarget target = scenes::target_of(board);
   std::vector<BoardDetection> out;
   for (std::size_t i = 0; i < views.size(); ++i) {
-    out.push_back(detect_board(board, scenes::render(spec, views[i], target, seed + i), scenes::view_name(i)));
+    out.push_back(detect_board(board, scenes::render(spec, views[i], target, seed + i), "v" + std::to_string(i)));
   }
   return out;
 }

@@ -75,12 +75,6 @@ cv::Mat render(const sim::CameraSpec& camera, const Eigen::Isometry3d& camera_T_
   return sim::render_plane(camera, camera_T_board, target, conditions);
 }
 
-std::string view_name(std::size_t i) {
-  std::string name = "v";
-  name += std::to_string(i);
-  return name;
-}
-
 Eigen::Isometry3d left_T_right() {
   Eigen::Isometry3d m = Eigen::Isometry3d::Identity();
   m.linear() = Eigen::AngleAxisd(-3.0 * kPi / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();

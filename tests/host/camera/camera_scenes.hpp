@@ -33,10 +33,6 @@ sim::PlanarTarget target_of(const camera::Board& board);
 cv::Mat render(const sim::CameraSpec& camera, const Eigen::Isometry3d& camera_T_board, const sim::PlanarTarget& target,
                std::uint64_t seed);
 
-// A view's name, "v<i>", built by appending: GCC 12 at -O3 reports a false -Wrestrict inside
-// libstdc++ for "literal" + std::to_string(i) (GCC bug 105651).
-std::string view_name(std::size_t i);
-
 // The stereo rig: the right camera 0.12 m along the left's x, turned 3 degrees about y.
 Eigen::Isometry3d left_T_right();
 

@@ -360,7 +360,7 @@ TEST_CASE("calibration files round-trip in OpenCV YAML and name bad keys") {
   cv::RNG rng(11);
   std::vector<BoardDetection> detections;
   for (const Eigen::Isometry3d& v : scenes::board_views(board, 6)) {
-    detections.push_back(projected(board, truth, v, scenes::view_name(detections.size()), rng));
+    detections.push_back(projected(board, truth, v, "v" + std::to_string(detections.size()), rng));
   }
   const IntrinsicCalibration c = calibrate_intrinsics(detections);
   save_camera(dir.file("camera.yaml"), c, board.text());
