@@ -235,6 +235,11 @@ class StereoRig : public SimulatedRig {
     conditions.seed = pose_seed(options_.seed, index);
     conditions.read_noise_dn *= options_.measurement_scale;
     const model::Vector3 beacon = robot_.visit_pose(q, static_cast<std::uint64_t>(index)).translation;
+    if (!(beacon.z() > beacon_.radius_m)) {
+      throw SessionError("pose " + std::to_string(index) + ": the beacon is " + std::to_string(beacon.z()) +
+                         " m along the stereo pair's axis, behind or at the cameras: this rig cannot see " +
+                         robot_.nominal().name + " there (give --home or a --plan with poses in front of it)");
+    }
     const sim::StereoFrame f = sim::render_beacon(spec_, beacon_, beacon, conditions);
     frames_ = {f.left, f.right, 0.0};
   }

@@ -126,6 +126,8 @@ case("session:plan outside the rig's rail", ["session", "--model", os.path.join(
      "--journal", "a.journal"], r"narrows its model's limits \(SI units\) to rail \[0, 0\.1\] instead of \[0, 18\.24\]",
      protect=["arid_plan.csv"])
 case("session:poses 0", ["session", "--model", puma, "--poses", "0", "--journal", "p.journal"], r"--poses")
+case("session:puma's sweeps behind the stereo pair", ["session", "--model", puma, "--rig", "stereo", "--sweeps", "5",
+     "--validation", "0", "--journal", "q.journal"], r"pose [0-9]+: the beacon is .* behind or at the cameras", timeout=120)
 
 # --- colour-table
 bg, crop = os.path.join(camera_dir, "views"), None
