@@ -145,7 +145,7 @@ struct Report {
 
 // The whole HTML document. Throws ReportError (see above).
 std::string render_html(const Report& report);
-// render_html() written to `path` (replaced if it exists).
+// render_html() written whole to `path`, replacing it (host/files/output_file.hpp).
 void write_html(const Report& report, const std::string& path);
 
 }  // namespace kincal::report
