@@ -10,33 +10,14 @@
 #include <sstream>
 
 #include "host/files/input_limits.hpp"
+#include "host/model/csv_fields.hpp"
 
 namespace kincal::model {
 
 namespace {
 
-std::string trim(std::string_view s) {
-  std::size_t b = 0, e = s.size();
-  while (b < e && (s[b] == ' ' || s[b] == '\t' || s[b] == '\r')) ++b;
-  while (e > b && (s[e - 1] == ' ' || s[e - 1] == '\t' || s[e - 1] == '\r')) --e;
-  return std::string(s.substr(b, e - b));
-}
-
-std::vector<std::string> split(const std::string& line) {
-  std::vector<std::string> fields;
-  std::size_t start = 0;
-  while (true) {
-    const std::size_t comma = line.find(',', start);
-    fields.push_back(
-        trim(std::string_view(line).substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
-    if (comma == std::string::npos) break;
-    start = comma + 1;
-  }
-  return fields;
-}
-
 bool skipped(const std::string& line) {
-  const std::string t = trim(line);
+  const std::string t = trim_field(line);
   return t.empty() || t[0] == '#';
 }
 
@@ -65,7 +46,7 @@ struct Header {
 
 Header parse_header(const std::string& line, const std::string& source, int number, bool joints_only) {
   Header h;
-  const std::vector<std::string> names = split(line);
+  const std::vector<std::string> names = split_fields(line, ',');
   h.fields = names.size();
   for (std::size_t i = 0; i < names.size(); ++i) {
     const std::string& n = names[i];
@@ -133,7 +114,7 @@ void read_table(std::istream& in, const std::string& source, bool joints_only, O
       on_header(*h, number);
       continue;
     }
-    const std::vector<std::string> fields = split(line);
+    const std::vector<std::string> fields = split_fields(line, ',');
     if (fields.size() != h->fields)
       fail(
           source, number,

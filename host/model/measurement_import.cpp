@@ -8,31 +8,13 @@
 #include <map>
 #include <numbers>
 
+#include "host/model/csv_fields.hpp"
+
 namespace kincal::model {
 
 namespace {
 
 constexpr double kRadPerDeg = std::numbers::pi / 180.0;
-
-std::string trim(std::string_view s) {
-  std::size_t b = 0, e = s.size();
-  while (b < e && (s[b] == ' ' || s[b] == '\t' || s[b] == '\r' || s[b] == '"')) ++b;
-  while (e > b && (s[e - 1] == ' ' || s[e - 1] == '\t' || s[e - 1] == '\r' || s[e - 1] == '"')) --e;
-  return std::string(s.substr(b, e - b));
-}
-
-std::vector<std::string> split(const std::string& line, char separator) {
-  std::vector<std::string> fields;
-  std::size_t start = 0;
-  while (true) {
-    const std::size_t at = line.find(separator, start);
-    fields.push_back(
-        trim(std::string_view(line).substr(start, at == std::string::npos ? std::string::npos : at - start)));
-    if (at == std::string::npos) break;
-    start = at + 1;
-  }
-  return fields;
-}
 
 char detect_separator(const std::string& header) {
   char best = ',';
@@ -156,12 +138,12 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   int number = 0;
   while (std::getline(in, line)) {
     ++number;
-    if (!trim(line).empty()) break;
+    if (!trim_field(line, true).empty()) break;
   }
-  if (trim(line).empty()) throw InputError(source + ": empty file (expected a header row)");
+  if (trim_field(line, true).empty()) throw InputError(source + ": empty file (expected a header row)");
   t.header_line = number;
   result.separator = o.separator != 0 ? o.separator : detect_separator(line);
-  t.names = split(line, result.separator);
+  t.names = split_fields(line, result.separator, true);
   for (std::size_t i = 0; i < t.names.size(); ++i)
     if (!t.names[i].empty() && !t.index.emplace(t.names[i], i).second)
       fail(source, number, i, "header: column '" + t.names[i] + "' appears twice");
@@ -176,8 +158,8 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   std::vector<double> position_stds, angle_stds;
   while (std::getline(in, line)) {
     ++number;
-    if (trim(line).empty()) continue;
-    const std::vector<std::string> fields = split(line, result.separator);
+    if (trim_field(line, true).empty()) continue;
+    const std::vector<std::string> fields = split_fields(line, result.separator, true);
     if (fields.size() != t.names.size())
       fail(source, number, std::min(fields.size(), t.names.size()),
            "expected " + std::to_string(t.names.size()) + " fields as in the header, found " +
