@@ -110,4 +110,16 @@ PlaneStatus prepare_range_plane(const RangeSensorLayout& layout, RangePlaneModel
 PlaneStatus fit_range_plane(const RangePlaneModel& model, const std::array<float, kRangeSensorCount>& range_m,
                             CalibrationPlane& plane) noexcept;
 
+// The covariance of the fitted plane in the slope form z = c0 + slope_x x + slope_y y (camera
+// frame; order (c0_m, slope_x, slope_y); c0 = distance_m / n_z, slope = -(n_x, n_y) / n_z), from
+// independent range noise of standard deviation range_sigma_m on each reading that entered the fit
+// (plane.sensors_used: all four, or three). Along-beam: the fit is a constant matrix F times the
+// readings, so the covariance is sigma^2 F F^T exactly. Perpendicular: F gives (c0', -n_x, -n_y)
+// and the slope form follows to first order at `plane`. This is the prior planar_pose.hpp takes.
+// Statuses: ok; bad_layout when range_sigma_m is not positive and finite; range_missing when
+// sensors_used names fewer than three sensors; plane_not_facing when n_z <= 0. `covariance` is
+// written only on ok. Cost: about 60 multiply-adds.
+PlaneStatus range_plane_covariance(const RangePlaneModel& model, const CalibrationPlane& plane, float range_sigma_m,
+                                   Matrix3<float>& covariance) noexcept;
+
 }  // namespace kincal::core
