@@ -17,6 +17,17 @@
 //   pose       square_T_camera: translation 3 x i20 LSB 2^-18 m (3.8 um, +-2 m), rotation vector
 //              (axis * angle) 3 x i18 LSB 2^-15 rad (30.5 urad, +-4 rad >= pi). A pose from four
 //              fiducials is good to ~10 um / ~0.1 mrad, so neither LSB limits it.
+//              Then its covariance (protocol 2.0): the 6 x 6 covariance of exactly these six
+//              reported numbers (t_x t_y t_z in m, r_x r_y r_z in rad), as
+//              6 standard deviations, u10 each, sigma = 2^((raw - 896) / 32) m or rad: 1/32
+//                octave steps (rounding within +-1.1 % of sigma, +-2.2 % of the variance), range
+//                2^-28 (3.7 nm / 3.7 nrad; raw 0 stands for this and anything smaller) to
+//                2^(127/32) = 15.7 (raw 1023, saturating: "no information");
+//              15 correlations, i8 each, rho = raw / 127 (LSB 0.0079, rounding +-0.004), the upper
+//                triangle row by row ((0,1), (0,2), ... (4,5)); raw -128 is invalid (kBadValue).
+//              A log scale because the sigmas span decades (um from the camera, mm along a poor
+//              axis); 180 bits for what 21 floats would need 672. Near-singular covariances can
+//              come back slightly indefinite after rounding the correlations: the host regularizes.
 //   blobs      count 7 (0..64), then per blob: x 16 | y 16 (uq10.6 px) | area 16 (px, saturating) |
 //              colour class 4 (the LUT's 16 classes) | peak 8 (DN, 8-bit camera).
 //   point      triangulated beacon, stereo rig frame: 3 x i20 LSB 2^-16 m (15 um, +-8 m); stereo
@@ -60,6 +71,8 @@ inline constexpr std::size_t kRangers = 4;
 inline constexpr std::size_t kMaxFiducials = 8;
 inline constexpr std::size_t kMaxBlobs = 64;
 inline constexpr std::uint16_t kNoEcho = 0xFFFF;
+inline constexpr std::size_t kPoseDof = 6;                                       // t_x t_y t_z r_x r_y r_z
+inline constexpr std::size_t kPoseCorrelations = kPoseDof * (kPoseDof - 1) / 2;  // upper triangle
 
 struct Fiducial {
   std::uint8_t id = 0;     // 4 bits
@@ -87,8 +100,10 @@ struct MeasurementReport {
   std::uint16_t plane_distance_raw = 0;             // LSB 2^-16 m
   std::uint8_t fiducial_count = 0;
   std::array<Fiducial, kMaxFiducials> fiducials{};
-  std::array<std::int32_t, 3> translation_raw{};  // i20, LSB 2^-18 m
-  std::array<std::int32_t, 3> rotation_raw{};     // i18, LSB 2^-15 rad
+  std::array<std::int32_t, 3> translation_raw{};                      // i20, LSB 2^-18 m
+  std::array<std::int32_t, 3> rotation_raw{};                         // i18, LSB 2^-15 rad
+  std::array<std::uint16_t, kPoseDof> pose_sigma_raw{};               // u10, sigma = 2^((raw - 896) / 32)
+  std::array<std::int8_t, kPoseCorrelations> pose_correlation_raw{};  // i8 in [-127, 127], rho = raw / 127
   std::uint8_t blob_count = 0;
   std::array<Blob, kMaxBlobs> blobs{};
   std::array<std::int32_t, 3> point_raw{};  // i20, LSB 2^-16 m
@@ -101,7 +116,9 @@ inline constexpr std::size_t kRanges = kRangers * 16;
 inline constexpr std::size_t kPlane = 16 + 16 + 16;
 inline constexpr std::size_t kFiducial = 4 + 16 + 16;
 inline constexpr std::size_t kFiducialsHeader = 4;
-inline constexpr std::size_t kPose = 3 * 20 + 3 * 18;
+inline constexpr std::size_t kPoseSigma = 10;
+inline constexpr std::size_t kPoseCorrelation = 8;
+inline constexpr std::size_t kPose = 3 * 20 + 3 * 18 + kPoseDof * kPoseSigma + kPoseCorrelations * kPoseCorrelation;
 inline constexpr std::size_t kBlob = 16 + 16 + 16 + 4 + 8;
 inline constexpr std::size_t kBlobsHeader = 7;
 inline constexpr std::size_t kPoint = 3 * 20;
@@ -125,5 +142,25 @@ inline constexpr double kPixelLsbPx = 1.0 / 64.0;
 inline constexpr double kTranslationLsbM = 1.0 / 262144.0;
 inline constexpr double kRotationLsbRad = 1.0 / 32768.0;
 inline constexpr double kPointLsbM = 1.0 / 65536.0;
+
+// The pose covariance's encoding (see the layout above). Pure float/integer arithmetic, no libm
+// but sqrtf, the same bits on both targets.
+inline constexpr std::uint16_t kPoseSigmaRawMax = 1023;
+inline constexpr int kPoseSigmaRawOffset = 896;  // raw of sigma = 1 (2^0)
+inline constexpr int kPoseSigmaStepsPerOctave = 32;
+inline constexpr int kPoseCorrelationScale = 127;
+// Nearest raw of sigma (m or rad) in the log scale; NaN, infinity and values above the range
+// saturate at kPoseSigmaRawMax, zero, negative and tiny values give 0.
+std::uint16_t quantize_pose_sigma(float sigma);
+double pose_sigma(std::uint16_t raw);
+// Nearest raw of a correlation coefficient, clamped to [-1, 1]; NaN -> 0.
+std::int8_t quantize_pose_correlation(float rho);
+// Sets the report's sigma and correlation fields from a 6 x 6 covariance (row-major, order
+// t_x t_y t_z r_x r_y r_z, of the reported square_T_camera numbers; only the upper triangle and
+// diagonal are read). A zero variance gives correlations 0 in its row and column.
+void set_pose_covariance(std::span<const float, kPoseDof * kPoseDof> covariance, MeasurementReport& report);
+// The 6 x 6 covariance the report's fields stand for (row-major, symmetric), as set_pose_covariance
+// laid it out.
+std::array<double, kPoseDof * kPoseDof> pose_covariance(const MeasurementReport& report);
 
 }  // namespace kincal::shared

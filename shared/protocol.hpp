@@ -43,7 +43,10 @@
 namespace kincal::shared {
 
 // Major changes break the wire format; minor ones only add (new messages or reserved bits used).
-inline constexpr std::uint8_t kProtocolVersionMajor = 1;
+// The heartbeat carries both; the host refuses a platform of another major version.
+//   2.0: the measurement report's pose section carries the pose's covariance
+//        (measurement_report.hpp); a 1.x report's pose section is 180 bits shorter.
+inline constexpr std::uint8_t kProtocolVersionMajor = 2;
 inline constexpr std::uint8_t kProtocolVersionMinor = 0;
 
 namespace can_id {

@@ -2,6 +2,30 @@
 
 namespace kincal::can {
 
+const char* to_string(shared::DecodeStatus status) {
+  switch (status) {
+    case shared::DecodeStatus::kOk:
+      return "ok";
+    case shared::DecodeStatus::kWrongId:
+      return "not a measurement report";
+    case shared::DecodeStatus::kWrongFormat:
+      return "wrong frame format";
+    case shared::DecodeStatus::kWrongLength:
+      return "wrong length for its sections";
+    case shared::DecodeStatus::kBadValue:
+      return "a value out of range or non-zero padding";
+  }
+  return "?";
+}
+
+std::string protocol_version_mismatch(const shared::Heartbeat& h) {
+  if (h.version_major == shared::kProtocolVersionMajor) return {};
+  return "the platform speaks protocol " + std::to_string(h.version_major) + "." + std::to_string(h.version_minor) +
+         ", this host speaks " + std::to_string(shared::kProtocolVersionMajor) + "." +
+         std::to_string(shared::kProtocolVersionMinor) +
+         ": their messages differ (update the platform's firmware or use a matching kincal)";
+}
+
 const char* to_string(shared::ErrorReason reason) {
   switch (reason) {
     case shared::ErrorReason::kUnknownId:
@@ -100,8 +124,11 @@ bool PlatformClient::wait_for(Milliseconds timeout, Accept accept) {
     if (!transport_.receive(r, left)) return false;
     if (r.kind == Received::Kind::kFrame) {
       shared::Heartbeat h;
-      if (r.frame.id == shared::can_id::kHeartbeat && shared::decode(r.frame, h) == shared::DecodeStatus::kOk)
+      if (r.frame.id == shared::can_id::kHeartbeat && shared::decode(r.frame, h) == shared::DecodeStatus::kOk) {
         heartbeat_ = h;
+        if (const std::string mismatch = protocol_version_mismatch(h); !mismatch.empty())
+          throw PlatformError(mismatch + " (heartbeat on " + transport_.name() + ")");
+      }
       shared::ErrorReport e;
       if (r.frame.id == shared::can_id::kErrorReport && shared::decode(r.frame, e) == shared::DecodeStatus::kOk)
         errors_.push_back(e);
@@ -151,8 +178,16 @@ shared::MeasurementReport PlatformClient::measure(std::uint8_t sections, Millise
       rejected = true;
       return true;
     }
-    return r.kind == Received::Kind::kMessage && shared::decode(r.message, report) == shared::DecodeStatus::kOk &&
-           report.sequence == sequence;
+    if (r.kind != Received::Kind::kMessage || r.message.size() < 2 ||
+        r.message[0] != static_cast<std::uint8_t>(shared::MessageType::kMeasurementReport) || r.message[1] != sequence)
+      return false;
+    const shared::DecodeStatus status = shared::decode(r.message, report);
+    if (status != shared::DecodeStatus::kOk)
+      throw PlatformError("measurement " + std::to_string(sequence) + ": the report of " +
+                          std::to_string(r.message.size()) + " bytes does not decode (" + to_string(status) +
+                          "; protocol " + std::to_string(shared::kProtocolVersionMajor) + "." +
+                          std::to_string(shared::kProtocolVersionMinor) + " expected)");
+    return true;
   });
   if (!ok || rejected) fail_with_last_error("measurement " + std::to_string(sequence), shared::can_id::kMeasureTrigger);
   return report;

@@ -5,6 +5,9 @@
 // Every call waits at most its timeout. Failures throw:
 //   PlatformError  the platform answered with an ErrorReport or a non-OK ParameterAck (the
 //                  message names the reason), or did not answer in time (names what was awaited);
+//                  a heartbeat of another protocol major version (names both versions; any call
+//                  that receives one refuses the platform); the report of a measurement that does
+//                  not decode (names why);
 //   CanError       the transport failed.
 // Heartbeats and error reports that arrive while waiting are recorded (last_heartbeat(),
 // error_reports()). Thread safety: one thread per client.
@@ -34,6 +37,10 @@ const char* to_string(shared::ErrorReason reason);
 const char* to_string(shared::AckStatus status);
 const char* to_string(shared::PlatformState state);
 const char* to_string(shared::MeasureStatus status);
+const char* to_string(shared::DecodeStatus status);
+// Empty if the heartbeat's protocol major version is this host's, else the refusal's message
+// naming both versions.
+std::string protocol_version_mismatch(const shared::Heartbeat& heartbeat);
 
 class PlatformClient {
  public:

@@ -3,6 +3,7 @@
 #include <doctest.h>
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
@@ -30,6 +31,10 @@ MeasurementReport full_report() {
                       static_cast<std::uint16_t>(65535u - i)};
   r.translation_raw = {-524288, 524287, 1};
   r.rotation_raw = {-131072, 131071, -1};
+  r.pose_sigma_raw = {0, 1, 512, 896, 1022, kPoseSigmaRawMax};
+  for (std::size_t i = 0; i < kPoseCorrelations; ++i)
+    r.pose_correlation_raw[i] =
+        static_cast<std::int8_t>(i % 2 == 0 ? 127 - 17 * static_cast<int>(i) : -127 + 9 * static_cast<int>(i));
   r.blob_count = kMaxBlobs;
   for (std::size_t i = 0; i < kMaxBlobs; ++i)
     r.blobs[i] = {static_cast<std::uint16_t>(i * 1000u), static_cast<std::uint16_t>(65535u - i * 3u),
@@ -56,6 +61,8 @@ void check_equal(const MeasurementReport& a, const MeasurementReport& b) {
   }
   CHECK(a.translation_raw == b.translation_raw);
   CHECK(a.rotation_raw == b.rotation_raw);
+  CHECK(a.pose_sigma_raw == b.pose_sigma_raw);
+  CHECK(a.pose_correlation_raw == b.pose_correlation_raw);
   REQUIRE(a.blob_count == b.blob_count);
   for (std::size_t i = 0; i < a.blob_count; ++i) {
     CHECK(a.blobs[i].x_q6 == b.blobs[i].x_q6);
@@ -253,4 +260,81 @@ TEST_CASE("parameter messages: framing, CRC, version, block") {
   REQUIRE(decode_parameter_read(read, block) == DecodeStatus::kOk);
   CHECK(block == 2);
   CHECK(decode_parameter_read(std::span<const std::uint8_t>(read).first(1), block) == DecodeStatus::kWrongLength);
+}
+
+TEST_CASE("measurement report: pose covariance encoding, its resolution and range") {
+  // Sigma: 1/32 octave steps, so any sigma in range comes back within 2^(1/64) (1.09 %).
+  for (float sigma = 4.0e-9f; sigma < 15.0f; sigma *= 1.037f) {
+    const double back = pose_sigma(quantize_pose_sigma(sigma));
+    CHECK(back / static_cast<double>(sigma) <= 1.0109);
+    CHECK(back / static_cast<double>(sigma) >= 1.0 / 1.0109);
+  }
+  CHECK(quantize_pose_sigma(1.0f) == kPoseSigmaRawOffset);
+  CHECK(pose_sigma(static_cast<std::uint16_t>(kPoseSigmaRawOffset)) == 1.0);
+  CHECK(pose_sigma(static_cast<std::uint16_t>(kPoseSigmaRawOffset - 32 * 10)) == 1.0 / 1024.0);
+  CHECK(quantize_pose_sigma(1.0e-3f) == kPoseSigmaRawOffset - 319);  // log2(1e-3) * 32 = -318.9
+  CHECK(quantize_pose_sigma(0.0f) == 0);
+  CHECK(quantize_pose_sigma(-1.0f) == 0);
+  CHECK(quantize_pose_sigma(1.0e-12f) == 0);
+  CHECK(quantize_pose_sigma(100.0f) == kPoseSigmaRawMax);
+  CHECK(quantize_pose_sigma(std::numeric_limits<float>::infinity()) == kPoseSigmaRawMax);
+  CHECK(quantize_pose_sigma(std::numeric_limits<float>::quiet_NaN()) == kPoseSigmaRawMax);
+  // Correlation: LSB 1/127, clamped, NaN -> 0.
+  CHECK(quantize_pose_correlation(0.5f) == 64);
+  CHECK(quantize_pose_correlation(-0.5f) == -64);
+  CHECK(quantize_pose_correlation(1.5f) == 127);
+  CHECK(quantize_pose_correlation(-2.0f) == -127);
+  CHECK(quantize_pose_correlation(std::numeric_limits<float>::quiet_NaN()) == 0);
+
+  // A covariance with decades between its sigmas and strong correlations survives the report.
+  const std::array<double, kPoseDof> sigma = {2e-5, 3e-5, 1.5e-4, 4e-5, 6e-5, 1e-5};
+  std::array<double, kPoseCorrelations> rho{};
+  for (std::size_t k = 0; k < kPoseCorrelations; ++k) rho[k] = 0.9 * std::sin(1.7 * static_cast<double>(k) + 0.3);
+  std::array<float, kPoseDof * kPoseDof> covariance{};
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < kPoseDof; ++i) {
+    covariance[i * kPoseDof + i] = static_cast<float>(sigma[i] * sigma[i]);
+    for (std::size_t j = i + 1; j < kPoseDof; ++j, ++k)
+      covariance[i * kPoseDof + j] = covariance[j * kPoseDof + i] = static_cast<float>(rho[k] * sigma[i] * sigma[j]);
+  }
+  MeasurementReport r;
+  r.sections = section::kPose;
+  set_pose_covariance(covariance, r);
+  std::array<std::uint8_t, kMaxReportBytes> buf{};
+  const std::size_t n = encode(r, buf);
+  REQUIRE(n == report_size(r));
+  MeasurementReport back;
+  REQUIRE(decode(std::span<const std::uint8_t>(buf).first(n), back) == DecodeStatus::kOk);
+  const std::array<double, kPoseDof* kPoseDof> c = pose_covariance(back);
+  k = 0;
+  for (std::size_t i = 0; i < kPoseDof; ++i) {
+    CHECK(std::sqrt(c[i * kPoseDof + i]) == doctest::Approx(sigma[i]).epsilon(0.011));
+    for (std::size_t j = i + 1; j < kPoseDof; ++j, ++k) {
+      CHECK(c[i * kPoseDof + j] == c[j * kPoseDof + i]);
+      CHECK(std::abs(c[i * kPoseDof + j] / std::sqrt(c[i * kPoseDof + i] * c[j * kPoseDof + j]) - rho[k]) <=
+            0.5 / kPoseCorrelationScale + 1e-6);
+    }
+  }
+  // A zero variance: its correlations are 0, not NaN.
+  covariance[0] = 0.0f;
+  set_pose_covariance(covariance, r);
+  CHECK(r.pose_sigma_raw[0] == 0);
+  for (std::size_t j = 0; j + 1 < kPoseDof; ++j) CHECK(r.pose_correlation_raw[j] == 0);
+}
+
+TEST_CASE("measurement report: pose section size and the invalid correlation -128") {
+  MeasurementReport r;
+  r.sections = section::kPose;
+  // 58 header bits + 114 pose + 60 sigma + 120 correlation bits = 352 bits -> 44 bytes.
+  REQUIRE(report_size(r) == 44);
+  std::array<std::uint8_t, 44> buf{};
+  REQUIRE(encode(r, buf) == 44);
+  MeasurementReport back;
+  REQUIRE(decode(buf, back) == DecodeStatus::kOk);
+  // The last correlation is bits 344..351: byte 43.
+  buf[43] = 0x80;
+  CHECK(decode(buf, back) == DecodeStatus::kBadValue);
+  buf[43] = 0x81;  // -127: valid
+  REQUIRE(decode(buf, back) == DecodeStatus::kOk);
+  CHECK(back.pose_correlation_raw[kPoseCorrelations - 1] == -127);
 }
