@@ -162,6 +162,15 @@ std::size_t encode_block(const CorrectionParameters& b, std::span<std::uint8_t> 
   }
   for (const float v : b.tool_offset) o.f32(v);
   for (const float v : b.tool_error) o.f32(v);
+  for (const JointMapValues& m : b.joint_maps) {
+    o.u8(m.coupled ? 1 : 0);
+    for (const float v : m.coupling) o.f32(v);
+    for (const float v : {m.scale, m.scale_error, m.compliance, m.compliance_error, m.mass_kg}) o.f32(v);
+    for (const float v : m.centre_of_mass_m) o.f32(v);
+  }
+  o.f32(b.payload_mass_kg);
+  for (const float v : b.payload_centre_of_mass_m) o.f32(v);
+  for (const float v : b.gravity_mps2) o.f32(v);
   return o.position();
 }
 
@@ -181,6 +190,17 @@ DecodeStatus decode_block(std::span<const std::uint8_t> image, CorrectionParamet
   }
   for (float& f : v.tool_offset) f = in.f32();
   for (float& f : v.tool_error) f = in.f32();
+  for (JointMapValues& m : v.joint_maps) {
+    const std::uint8_t coupled = in.u8();
+    kinds_known = kinds_known && coupled <= 1;
+    m.coupled = coupled == 1;
+    for (float& f : m.coupling) f = in.f32();
+    for (float* f : {&m.scale, &m.scale_error, &m.compliance, &m.compliance_error, &m.mass_kg}) *f = in.f32();
+    for (float& f : m.centre_of_mass_m) f = in.f32();
+  }
+  v.payload_mass_kg = in.f32();
+  for (float& f : v.payload_centre_of_mass_m) f = in.f32();
+  for (float& f : v.gravity_mps2) f = in.f32();
   if (!in.finite() || !kinds_known || v.joint_count > kJoints) return DecodeStatus::kBadValue;
   b = v;
   return DecodeStatus::kOk;

@@ -10,15 +10,28 @@
 //                    two cells per byte, even cell in the low nibble; class 0 is background.
 //   kGeometry    v1  193 bytes: four ranger beams in the camera frame, each origin (m) and unit
 //                    direction; fiducial count (u8, <= 8) and their positions in the square frame (m).
-//   kCorrection  v2  301 bytes: joint count (u8, <= 6); per joint its type (u8: 0 revolute, 1
+//   kCorrection  v3  671 bytes: joint count (u8, <= 6); per joint its type (u8: 0 revolute, 1
 //                    prismatic), its link convention (u8: 0 standard DH, 1 modified DH, 2 Doty's
 //                    (d, theta, beta, a, alpha); link_model.hpp), the nominal values and their
 //                    identified errors (a m, alpha rad, d m, theta rad, beta rad; 2 x 5 float32);
 //                    then the nominal tool offset flange_T_tool, x y z (m) rx ry rz (rotation
 //                    vector, rad), and its identified error, a small motion of the tool frame
 //                    along and about its own axes (error_model.hpp's tool_x..tool_rz), 2 x 6 float32.
+//                    Format 3 adds the joint map (host/model/robot_model.hpp's top comment), 370
+//                    bytes more (671 in all; an ISO-TP message carries up to 4095): per joint a
+//                    coupling flag (u8: 0 the joint's own reading, 1 the row follows) and row
+//                    (6 float32: v_i = sum_k row_k u_k; not read when the flag is 0), the nominal
+//                    scale and its identified error, the nominal compliance (rad/(N m) or m/N)
+//                    and its identified error (4 float32), the mass (kg) of the link the joint
+//                    moves and its centre of mass in the frame at the link's end (m) (4 float32);
+//                    then the payload's mass and centre of mass in the flange frame, and the
+//                    gravity vector in frame 0 (m/s^2) (7 float32). Coupling, masses, payload
+//                    and gravity are inputs, the same for the nominal and the identified model;
+//                    a block without compliance carries them all the same (zeros are fine).
 //   Format version 2 (all blocks): v1's correction block had no joint type or convention (every
 //   joint revolute, modified DH), which cannot describe a prismatic axis or Doty's links.
+//   Format version 3 (all blocks): the correction block's joint map; a platform refuses a
+//   version 2 block (AckStatus kBadVersion) and ignores a stored one at start.
 //
 // Messages (ISO-TP payloads, little-endian):
 //   ParameterWrite  host -> platform: type 0x01 | block u8 | version u16 | length u16 | crc32 u32 | payload
@@ -41,7 +54,7 @@
 
 namespace kincal::shared {
 
-inline constexpr std::uint16_t kBlockFormatVersion = 2;
+inline constexpr std::uint16_t kBlockFormatVersion = 3;
 
 struct CameraIntrinsics {
   float fx_px = 0, fy_px = 0, cx_px = 0, cy_px = 0;
@@ -84,13 +97,29 @@ struct JointModel {
   DhValues nominal;
   DhValues error;  // identified deviation: true = nominal + error
 };
+// One joint's part of the joint map (format 3). Defaults: the joint's own reading, scale 1, no
+// compliance, no mass.
+struct JointMapValues {
+  bool coupled = false;
+  std::array<float, kJoints> coupling{};  // read only when coupled
+  float scale = 1.0f, scale_error = 0.0f;
+  float compliance = 0.0f, compliance_error = 0.0f;  // rad/(N m) or m/N
+  float mass_kg = 0.0f;
+  std::array<float, 3> centre_of_mass_m{};  // in the frame at the end of the link
+};
 struct CorrectionParameters {
   std::uint8_t joint_count = 0;
   std::array<JointModel, kJoints> joints{};
   std::array<float, 6> tool_offset{};  // x y z (m), rx ry rz (rad)
   std::array<float, 6> tool_error{};   // along x y z (m), about x y z (rad), in the tool frame
+  std::array<JointMapValues, kJoints> joint_maps{};
+  float payload_mass_kg = 0.0f;
+  std::array<float, 3> payload_centre_of_mass_m{};           // flange frame
+  std::array<float, 3> gravity_mps2{0.0f, 0.0f, -9.80665f};  // frame 0
 };
-inline constexpr std::size_t kCorrectionBytes = 1 + kJoints * (2 + 10 * 4) + 12 * 4;
+inline constexpr std::size_t kJointMapBytes = 1 + kJoints * 4 + 4 * 4 + 4 * 4;
+inline constexpr std::size_t kCorrectionBytes = 1 + kJoints * (2 + 10 * 4) + 12 * 4 + kJoints * kJointMapBytes + 7 * 4;
+static_assert(kCorrectionBytes == 671);
 
 inline constexpr std::size_t kParameterHeaderBytes = 10;
 inline constexpr std::size_t kMaxBlockBytes = kColourLutBytes;

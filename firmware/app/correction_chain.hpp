@@ -17,6 +17,13 @@
 //   tool_error                its identified error: error_model.hpp's tool_x..tool_rz, a small
 //                             motion along and about the tool frame's own axes;
 //   base                      base_T_frame0 is the identity, with no error.
+//   joint map (format 3)      correction_joint_maps(): the coupling rows (a joint without its
+//                             flag: its own reading), nominal scale and compliance, identified =
+//                             nominal + error, for two core::JointMap; masses, centres of mass,
+//                             payload and gravity as a core::MassModel (joint_map.hpp). Whether the
+//                             map is usable (scales > 0, coupling invertible) is for
+//                             core::prepare_joint_map to judge; a coupling coefficient on a joint
+//                             at or beyond joint_count is kBadCoupling.
 // Statuses: kNoJoints (joint_count 0 or above core::kMaxJoints), kPitchSet (a beta on a DH link).
 // Outputs are written only on kOk. Cost: O(joints), no trigonometry but the tool's rotation
 // (one sin_cos); no heap; stack a few hundred bytes (the outputs are the caller's).
@@ -26,12 +33,13 @@
 
 #include "firmware/app/rotation_vector.hpp"
 #include "firmware/core/error_model.hpp"
+#include "firmware/core/joint_map.hpp"
 #include "firmware/core/link_model.hpp"
 #include "shared/parameters.hpp"
 
 namespace kincal::app {
 
-enum class [[nodiscard]] ChainStatus : std::uint8_t{kOk, kNoJoints, kPitchSet};
+enum class [[nodiscard]] ChainStatus : std::uint8_t{kOk, kNoJoints, kPitchSet, kBadCoupling};
 
 template <class S>
 ChainStatus correction_chain(const shared::CorrectionParameters& block, core::ChainModel<S>& nominal,
@@ -104,6 +112,44 @@ ChainStatus correction_chain(const shared::CorrectionParameters& block, core::Ch
         break;  // base motions: not in the block, and not asked of full_parameter_set
     }
     errors(i) = S(value);
+  }
+  return ChainStatus::kOk;
+}
+
+template <class S>
+ChainStatus correction_joint_maps(const shared::CorrectionParameters& block, core::JointMap<S>& nominal,
+                                  core::JointMap<S>& identified, core::MassModel<S>& masses) noexcept {
+  if (block.joint_count == 0 || block.joint_count > core::kMaxJoints || block.joint_count > shared::kJoints)
+    return ChainStatus::kNoJoints;
+  const int n = block.joint_count;
+  for (int i = 0; i < n; ++i) {
+    const shared::JointMapValues& m = block.joint_maps[static_cast<std::size_t>(i)];
+    for (std::size_t k = static_cast<std::size_t>(n); m.coupled && k < shared::kJoints; ++k)
+      if (m.coupling[k] != 0.0f) return ChainStatus::kBadCoupling;
+  }
+  nominal = core::JointMap<S>{};
+  nominal.joint_count = n;
+  masses = core::MassModel<S>{};
+  for (int i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const shared::JointMapValues& m = block.joint_maps[k];
+    if (m.coupled)
+      for (int c = 0; c < n; ++c) nominal.coupling(i, c) = S(m.coupling[static_cast<std::size_t>(c)]);
+    nominal.scale(i) = S(m.scale);
+    nominal.compliance(i) = S(m.compliance);
+    masses.link_mass_kg[k] = S(m.mass_kg);
+    for (std::size_t r = 0; r < 3; ++r) masses.link_centre_of_mass_m[k][r] = S(m.centre_of_mass_m[r]);
+  }
+  identified = nominal;
+  for (int i = 0; i < n; ++i) {
+    const shared::JointMapValues& m = block.joint_maps[static_cast<std::size_t>(i)];
+    identified.scale(i) = S(m.scale) + S(m.scale_error);
+    identified.compliance(i) = S(m.compliance) + S(m.compliance_error);
+  }
+  masses.payload_mass_kg = S(block.payload_mass_kg);
+  for (std::size_t r = 0; r < 3; ++r) {
+    masses.payload_centre_of_mass_m[r] = S(block.payload_centre_of_mass_m[r]);
+    masses.gravity_mps2[r] = S(block.gravity_mps2[r]);
   }
   return ChainStatus::kOk;
 }

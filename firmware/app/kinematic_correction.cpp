@@ -20,8 +20,14 @@ bool same_block(const shared::CorrectionParameters& a, const shared::CorrectionP
     if (x.type != y.type || x.convention != y.convention || !same_values(x.nominal, y.nominal) ||
         !same_values(x.error, y.error))
       return false;
+    const shared::JointMapValues &u = a.joint_maps[j], &w = b.joint_maps[j];
+    if (u.coupled != w.coupled || u.coupling != w.coupling || u.scale != w.scale || u.scale_error != w.scale_error ||
+        u.compliance != w.compliance || u.compliance_error != w.compliance_error || u.mass_kg != w.mass_kg ||
+        u.centre_of_mass_m != w.centre_of_mass_m)
+      return false;
   }
-  return true;
+  return a.payload_mass_kg == b.payload_mass_kg && a.payload_centre_of_mass_m == b.payload_centre_of_mass_m &&
+         a.gravity_mps2 == b.gravity_mps2;
 }
 
 }  // namespace
@@ -31,6 +37,9 @@ void KinematicCorrection::load(const shared::CorrectionParameters& parameters) n
   loaded_ = true;
   usable_ = correction_chain(parameters, nominal_, parameter_ids_, errors_) == ChainStatus::kOk &&
             core::prepare_correction(nominal_, parameter_ids_, errors_, core::CorrectionOptions{}, model_) ==
+                core::CorrectionStatus::ok &&
+            correction_joint_maps(parameters, nominal_map_, identified_map_, masses_) == ChainStatus::kOk &&
+            core::prepare_joint_map(model_, nominal_map_, identified_map_, masses_, workspace_, joint_map_) ==
                 core::CorrectionStatus::ok;
 }
 
@@ -42,11 +51,11 @@ CorrectStatus KinematicCorrection::correct(const shared::CorrectionParameters& p
   const int n = model_.nominal.joint_count;
   core::JointVector<float> q = core::JointVector<float>::Zero();
   for (int i = 0; i < n; ++i) q(i) = shared::joint_angle_rad<float>(in[static_cast<std::size_t>(i)]);
-  if (core::correct_joint_target(model_, workspace_, q, correction_) != core::CorrectionStatus::ok)
+  if (core::correct_joint_readings(model_, joint_map_, workspace_, q, correction_, corrected_) !=
+      core::CorrectionStatus::ok)
     return CorrectStatus::kNotCorrectable;
   out = in;
-  for (int i = 0; i < n; ++i)
-    out[static_cast<std::size_t>(i)] = shared::quantize_joint_angle(correction_.corrected_joint_target(i));
+  for (int i = 0; i < n; ++i) out[static_cast<std::size_t>(i)] = shared::quantize_joint_angle(corrected_(i));
   return CorrectStatus::kOk;
 }
 

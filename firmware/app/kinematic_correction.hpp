@@ -4,7 +4,8 @@
 // What: the robot controller computes joint targets q_nom with its nominal model, expecting the
 // tool at FK_nominal(q_nom). The real arm follows the calibrated model (nominal + identified
 // errors), so it would put the tool at FK_calibrated(q_nom). correct() returns the target q_corr
-// with FK_calibrated(q_corr) = FK_nominal(q_nom) to the correction's order: core's damped
+// with FK_calibrated(q_corr) = FK_nominal(q_nom) to the correction's order, each FK through its
+// model's joint map (coupling, scale, gravity compliance: core::correct_joint_readings): core's damped
 // first-order step plus one chord refinement (CorrectionOptions defaults: rotation weight 0.5 m,
 // damping 1e-3, at most 0.05 rad (or m) of correction per joint). How the block becomes the two
 // chains: correction_chain.hpp (each joint's type and convention, tool offset and its error).
@@ -45,6 +46,10 @@ class KinematicCorrection {
   core::CorrectionModel model_{};
   core::CorrectionWorkspace workspace_{};
   core::Correction correction_{};
+  core::JointMap<float> nominal_map_{}, identified_map_{};
+  core::MassModel<float> masses_{};
+  core::JointMapModel joint_map_{};
+  core::JointVector<float> corrected_ = core::JointVector<float>::Zero();
 };
 
 static_assert(CorrectionStep<KinematicCorrection>);

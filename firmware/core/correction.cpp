@@ -256,4 +256,74 @@ CorrectionStatus correct_joint_target(const CorrectionModel& model, CorrectionWo
   return CorrectionStatus::ok;
 }
 
+namespace {
+
+bool finite_map(const JointMap<float>& map, int n) {
+  for (int i = 0; i < n; ++i) {
+    if (!(map.scale(i) > 0.0f) || !std::isfinite(map.scale(i)) || !std::isfinite(map.compliance(i))) return false;
+    for (int k = 0; k < n; ++k)
+      if (!std::isfinite(map.coupling(i, k))) return false;
+  }
+  return true;
+}
+
+bool any_compliance(const JointMap<float>& map, int n) {
+  bool any = false;
+  for (int i = 0; i < n; ++i) any = any || map.compliance(i) != 0.0f;
+  return any;
+}
+
+}  // namespace
+
+CorrectionStatus prepare_joint_map(const CorrectionModel& model, const JointMap<float>& nominal,
+                                   const JointMap<float>& identified, const MassModel<float>& masses,
+                                   CorrectionWorkspace& ws, JointMapModel& map) noexcept {
+  const int n = model.nominal.joint_count;
+  if (nominal.joint_count != n || identified.joint_count != n || !finite_map(nominal, n) || !finite_map(identified, n))
+    return CorrectionStatus::bad_model;
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < n; ++k)
+      if (nominal.coupling(i, k) != identified.coupling(i, k)) return CorrectionStatus::bad_model;
+  bool masses_ok = masses.payload_mass_kg >= 0.0f && std::isfinite(masses.payload_mass_kg);
+  for (std::size_t r = 0; r < 3; ++r)
+    masses_ok = masses_ok && std::isfinite(masses.payload_centre_of_mass_m[r]) && std::isfinite(masses.gravity_mps2[r]);
+  for (std::size_t i = 0; i < static_cast<std::size_t>(n); ++i) {
+    masses_ok = masses_ok && masses.link_mass_kg[i] >= 0.0f && std::isfinite(masses.link_mass_kg[i]);
+    for (std::size_t r = 0; r < 3; ++r) masses_ok = masses_ok && std::isfinite(masses.link_centre_of_mass_m[i][r]);
+  }
+  if (!masses_ok || !invert_coupling(identified, ws.normal, map.inverse_coupling)) return CorrectionStatus::bad_model;
+  map.nominal = nominal;
+  map.identified = identified;
+  map.masses = masses;
+  map.nominal_deflects = any_compliance(nominal, n);
+  map.identified_deflects = any_compliance(identified, n);
+  return CorrectionStatus::ok;
+}
+
+CorrectionStatus correct_joint_readings(const CorrectionModel& model, const JointMapModel& map, CorrectionWorkspace& ws,
+                                        const JointVector<float>& readings, Correction& correction,
+                                        JointVector<float>& corrected_readings) noexcept {
+  const int n = model.nominal.joint_count;
+  if (n < 1 || n > kMaxJoints || map.nominal.joint_count != n || map.identified.joint_count != n)
+    return CorrectionStatus::bad_model;
+  corrected_readings = readings;
+  for (int i = 0; i < n; ++i) {
+    if (!(std::fabs(readings(i)) <= kSinCosMaxArgumentRad)) return CorrectionStatus::non_finite_input;
+  }
+  coupled_values(map.nominal, readings, ws.coupled);
+  if (map.nominal_deflects)
+    deflect(model.nominal, map.masses, map.nominal.compliance, ws.coupled, ws.deflection, ws.chain_target);
+  else
+    ws.chain_target = ws.coupled;
+  const CorrectionStatus status = correct_joint_target(model, ws, ws.chain_target, correction);
+  if (status != CorrectionStatus::ok) return status;
+  if (map.identified_deflects)
+    undeflect(model.calibrated, map.masses, map.identified.compliance, correction.corrected_joint_target,
+              kUndeflectPasses, ws.deflection, ws.coupled);
+  else
+    ws.coupled = correction.corrected_joint_target;
+  readings_from_coupled(map.identified, map.inverse_coupling, ws.coupled, corrected_readings);
+  return CorrectionStatus::ok;
+}
+
 }  // namespace kincal::core

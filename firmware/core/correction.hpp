@@ -51,6 +51,7 @@
 #include <cstdint>
 
 #include "firmware/core/error_model.hpp"
+#include "firmware/core/joint_map.hpp"
 #include "firmware/core/link_model.hpp"
 
 namespace kincal::core {
@@ -92,6 +93,10 @@ struct CorrectionWorkspace {
   Twist<float> error;
   JointVector<float> step;
   JointVector<float> target;
+  // correct_joint_readings: the chain target, the coupled values, the deflection's passes.
+  JointVector<float> chain_target;
+  JointVector<float> coupled;
+  DeflectionWorkspace<float> deflection;
 };
 
 struct Correction {
@@ -109,5 +114,37 @@ CorrectionStatus prepare_correction(const ChainModel<float>& nominal, const Para
 
 CorrectionStatus correct_joint_target(const CorrectionModel& model, CorrectionWorkspace& workspace,
                                       const JointVector<float>& nominal_joint_target, Correction& correction) noexcept;
+
+// ---- With the joint map (joint_map.hpp) ---------------------------------------------------------
+// The correction of controller readings r when the chains' variables are not the readings:
+//   w_nom = C S_nom r,  v_nom = w_nom + c_nom G_nom(w_nom)      the nominal map: what the controller means
+//   v*    = correct_joint_target(v_nom)                         the calibrated chain's variables
+//   w*    = undeflect_identified(v*)   (kUndeflectPasses passes; skipped without compliance)
+//   r*    = S_id^-1 C^-1 w*                                     the readings that make the real arm reach it
+// The coupling C is one input of both models (never identified); the scales and compliances are
+// the nominal model's and the identified one's; the masses and gravity are shared. A map with no
+// compliance skips its deflection pass, so an identity map gives the same bits as
+// correct_joint_target. The chain-variable change is bounded by max_joint_step as there.
+// Cost on the M4F for a 6-joint arm with coupling, scale and compliance in both models: the
+// correction plus three forward kinematics passes (correction_joint_map_m4_instructions).
+struct JointMapModel {
+  JointMap<float> nominal, identified;     // coupling equal in both
+  CouplingMatrix<float> inverse_coupling;  // identified.coupling^-1
+  MassModel<float> masses;
+  bool nominal_deflects = false, identified_deflects = false;  // any compliance != 0
+};
+
+// bad_model: joint counts differ from the correction model's, a scale not > 0, a non-finite
+// value or negative mass, or a coupling that is singular (pivot below kMinCouplingPivot) or
+// differs between the models. `workspace` is scratch for the elimination.
+CorrectionStatus prepare_joint_map(const CorrectionModel& model, const JointMap<float>& nominal,
+                                   const JointMap<float>& identified, const MassModel<float>& masses,
+                                   CorrectionWorkspace& workspace, JointMapModel& map) noexcept;
+
+// Statuses as correct_joint_target (on step_too_large and non_finite_input, corrected_readings =
+// readings); `correction` describes the chain-variable step.
+CorrectionStatus correct_joint_readings(const CorrectionModel& model, const JointMapModel& map,
+                                        CorrectionWorkspace& workspace, const JointVector<float>& readings,
+                                        Correction& correction, JointVector<float>& corrected_readings) noexcept;
 
 }  // namespace kincal::core

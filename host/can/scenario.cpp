@@ -33,6 +33,25 @@ shared::CorrectionParameters scenario_correction_parameters() {
   }
   c.tool_offset = {0.0f, 0.0f, 0.12f, 0.0f, 0.0f, 0.0f};
   c.tool_error = {1.0e-4f, -1.0e-4f, 2.0e-4f, 1.0e-4f, 2.0e-4f, -1.0e-4f};
+  // The joint map: the controller reports the elbow relative to the shoulder (Fanuc-style: the
+  // chain's joint 3 is reading 2 + reading 3), the gears of joints 1-3 are off by a few hundred
+  // ppm, and shoulder and elbow give way under gravity (the controller's model knows none of it:
+  // nominal compliance 0). Masses after Armstrong et al.'s PUMA 560, a 2 kg payload.
+  c.joint_maps[2].coupled = true;
+  c.joint_maps[2].coupling = {0.0f, 1.0f, 1.0f, 0.0f, 0.0f, 0.0f};
+  const float scale_errors[6] = {3.0e-4f, -2.0e-4f, 4.0e-4f, 0.0f, 0.0f, 0.0f};
+  const float compliance_errors[6] = {0.0f, 1.5e-5f, 2.5e-5f, 0.0f, 0.0f, 0.0f};  // rad/(N m)
+  const float mass_kg[6] = {0.0f, 17.4f, 4.8f, 0.82f, 0.34f, 0.09f};
+  const std::array<float, 3> centre_m[6] = {
+      {0, 0, 0}, {0.068f, 0.006f, -0.016f}, {0, -0.07f, 0.014f}, {0, 0, -0.019f}, {0, 0, 0}, {0, 0, 0.032f}};
+  for (std::size_t j = 0; j < shared::kJoints; ++j) {
+    c.joint_maps[j].scale_error = scale_errors[j];
+    c.joint_maps[j].compliance_error = compliance_errors[j];
+    c.joint_maps[j].mass_kg = mass_kg[j];
+    c.joint_maps[j].centre_of_mass_m = centre_m[j];
+  }
+  c.payload_mass_kg = 2.0f;
+  c.payload_centre_of_mass_m = {0.0f, 0.0f, 0.1f};
   return c;
 }
 
@@ -44,12 +63,23 @@ std::array<double, shared::kJoints> reference_correction(const shared::Correctio
   if (app::correction_chain(parameters, nominal, ids, errors) != app::ChainStatus::kOk ||
       core::apply_parameter_errors(nominal, ids, errors, calibrated) != core::ErrorModelStatus::ok)
     throw std::invalid_argument("reference_correction: the correction block does not describe a chain");
+  core::JointMap<double> nominal_map, identified_map;
+  core::MassModel<double> masses;
+  core::CouplingMatrix<double> scratch, inverse_coupling;
+  if (app::correction_joint_maps(parameters, nominal_map, identified_map, masses) != app::ChainStatus::kOk ||
+      !core::invert_coupling(identified_map, scratch, inverse_coupling))
+    throw std::invalid_argument("reference_correction: the correction block's joint map cannot be inverted");
   core::PreparedChain<double> nominal_chain, calibrated_chain;
   core::prepare_chain(nominal, nominal_chain);
   core::prepare_chain(calibrated, calibrated_chain);
   const int n = nominal.joint_count;
-  core::JointVector<double> q = core::JointVector<double>::Zero();
-  for (int i = 0; i < n; ++i) q(i) = shared::joint_angle_rad<double>(joints[static_cast<std::size_t>(i)]);
+  core::JointVector<double> readings = core::JointVector<double>::Zero();
+  for (int i = 0; i < n; ++i) readings(i) = shared::joint_angle_rad<double>(joints[static_cast<std::size_t>(i)]);
+  // The nominal joint map (core::correct_joint_readings): readings -> the nominal chain's variables.
+  core::DeflectionWorkspace<double> deflection;
+  core::JointVector<double> coupled, q;
+  core::coupled_values(nominal_map, readings, coupled);
+  core::deflect(nominal_chain, masses, nominal_map.compliance, coupled, deflection, q);
 
   std::array<core::SinCos<double>, core::kMaxJoints> trig;
   core::joint_trig(nominal_chain, q, trig);
@@ -81,9 +111,14 @@ std::array<double, shared::kJoints> reference_correction(const shared::Correctio
     const Eigen::VectorXd rhs = j.transpose() * w.asDiagonal() * error;
     target.head(n) += factor.solve(rhs);
   }
+  // The identified joint map's inverse: chain variables -> readings.
+  core::undeflect(calibrated_chain, masses, identified_map.compliance, target, core::kUndeflectPasses, deflection,
+                  coupled);
+  core::JointVector<double> corrected;
+  core::readings_from_coupled(identified_map, inverse_coupling, coupled, corrected);
   std::array<double, shared::kJoints> out{};
   for (std::size_t i = 0; i < shared::kJoints; ++i)
-    out[i] = static_cast<int>(i) < n ? target(static_cast<int>(i)) : shared::joint_angle_rad<double>(joints[i]);
+    out[i] = static_cast<int>(i) < n ? corrected(static_cast<int>(i)) : shared::joint_angle_rad<double>(joints[i]);
   return out;
 }
 
@@ -149,9 +184,10 @@ ScenarioResult run_platform_scenario(PlatformClient& client, const ScenarioOptio
   const shared::CorrectionParameters params = scenario_correction_parameters();
   std::vector<double> round_trips_us;
   for (int i = 0; i < options.corrections; ++i) {
-    // Around a posture clear of the PUMA's singularities (elbow at tan q3 = d4 / a3, i.e. q3 =
-    // 1.524 or -1.618 rad; wrist at q5 = 0 or pi), +-0.5 rad on every joint.
-    const double home_rad[shared::kJoints] = {0.0, -0.6, -0.3, 0.3, 1.0, 0.2};
+    // Around a posture clear of the PUMA's singularities (elbow at tan q3 = d4 / a3, i.e. chain
+    // q3 = 1.524 or -1.618 rad; wrist at q5 = 0 or pi), +-0.5 rad on every reading. Reading 3 is
+    // the elbow relative to the shoulder (the block's coupling): chain q3 = -0.3 +- 0.88 rad.
+    const double home_rad[shared::kJoints] = {0.0, -0.6, 0.3, 0.3, 1.0, 0.2};
     std::array<std::int32_t, shared::kJoints> joints{};
     for (std::size_t j = 0; j < shared::kJoints; ++j)
       joints[j] = shared::quantize_joint_angle(home_rad[j] + 0.5 * std::sin(0.01 * i + static_cast<double>(j)));

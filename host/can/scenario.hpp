@@ -5,8 +5,8 @@
 // checked against the platform's kinematic correction (firmware/app/kinematic_correction.hpp)
 // computed here in double precision: the same reading of the block (correction_chain.hpp) and
 // the same damped first-order step and chord refinement, with firmware/core's link and error
-// models instantiated for double. A corrected joint may differ from the double result by one
-// LSB (2^-16 rad: the float result and the double one round to neighbouring values).
+// models instantiated for double, and its joint map (joint_map.hpp). A corrected joint may differ from the double
+// result by one LSB (2^-16 rad: the float result and the double one round to neighbouring values).
 #pragma once
 
 #include <array>
@@ -38,7 +38,9 @@ struct ScenarioResult {
 };
 
 // The correction parameters the scenario uploads: a PUMA 560 (Craig's modified DH) with
-// identified errors of a few tenths of a mrad and of a mm, and a 12 cm tool, itself off by as much.
+// identified errors of a few tenths of a mrad and of a mm, and a 12 cm tool, itself off by as much;
+// a joint map (format 3) with Fanuc-style elbow coupling (chain joint 3 = reading 2 + reading 3),
+// scale errors on joints 1-3 and gravity compliance of shoulder and elbow (PUMA link masses).
 shared::CorrectionParameters scenario_correction_parameters();
 
 // The corrected joint targets the platform should return for `joints`, in double precision

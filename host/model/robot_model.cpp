@@ -5,6 +5,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "firmware/core/joint_map.hpp"
+
 namespace kincal::model {
 
 namespace {
@@ -214,31 +216,23 @@ ChainAtJoints chain_at_joints(const RobotModel& model, std::span<const double> q
 
 core::JointVector<double> gravity_forces(const RobotModel& model, const core::PreparedChain<double>& chain,
                                          const core::JointVector<double>& v) {
-  std::array<core::SinCos<double>, core::kMaxJoints> trig{};
-  core::ChainFrames<double> frames;
-  core::joint_trig(chain, v, trig);
-  core::forward_kinematics(chain, v, trig, frames);
-  core::JointJacobian<double> j;
-  core::joint_jacobian(chain, frames, j);
-  const Vector3 g = chain.base_T_frame0.rotation * model.gravity_mps2;
-  const Vector3& tool = frames.base_T_tool.translation;
-  const std::size_t n = model.joints.size();
-  core::JointVector<double> forces = core::JointVector<double>::Zero();
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto c = static_cast<Eigen::Index>(i);
-    // The velocity of a point x moved by joint i: v + w x (x - tool), from the twist at the tool.
-    const auto moved = [&](const Vector3& x) -> Vector3 {
-      return j.col(c).head<3>() + j.col(c).tail<3>().cross(x - tool);
-    };
-    double f = 0.0;
-    for (std::size_t b = i; b < n; ++b)
-      if (model.joints[b].mass_kg != 0.0)
-        f += model.joints[b].mass_kg * g.dot(moved(frames.base_T_frame[b + 1] * model.joints[b].centre_of_mass_m));
-    if (model.payload.mass_kg != 0.0)
-      f += model.payload.mass_kg * g.dot(moved(frames.base_T_frame[n] * model.payload.centre_of_mass_m));
-    forces(c) = f;
+  // The firmware core's definition (joint_map.hpp), which the platform's correction runs in float.
+  core::MassModel<double> masses;
+  for (std::size_t b = 0; b < model.joints.size() && b < static_cast<std::size_t>(core::kMaxJoints); ++b) {
+    masses.link_mass_kg[b] = model.joints[b].mass_kg;
+    for (int k = 0; k < 3; ++k)
+      masses.link_centre_of_mass_m[b][static_cast<std::size_t>(k)] = model.joints[b].centre_of_mass_m(k);
   }
-  return forces;
+  masses.payload_mass_kg = model.payload.mass_kg;
+  for (int k = 0; k < 3; ++k) {
+    masses.payload_centre_of_mass_m[static_cast<std::size_t>(k)] = model.payload.centre_of_mass_m(k);
+    masses.gravity_mps2[static_cast<std::size_t>(k)] = model.gravity_mps2(k);
+  }
+  core::DeflectionWorkspace<double> ws;
+  core::joint_trig(chain, v, ws.trig);
+  core::forward_kinematics(chain, v, ws.trig, ws.frames);
+  core::gravity_forces(chain, ws.frames, masses, ws.forces);
+  return ws.forces;
 }
 
 Eigen::MatrixXd joint_jacobian(const RobotModel& model, std::span<const double> q) {

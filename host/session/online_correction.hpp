@@ -12,7 +12,10 @@
 // theta or d) and the differences identified - controller; the controller's tool and the tool's
 // error as a small motion in the tool frame (t, r) with identified_tool = controller_tool *
 // [exp(r), t]. The base is not in the block: the controller works in the robot's own base frame,
-// and the base registration belongs to the measuring device, not to the arm.
+// and the base registration belongs to the measuring device, not to the arm. The joint map
+// (block format 3): each joint's coupling row, the controller's scale and compliance (absent: 1
+// and 0) and identified - controller, the link masses and centres of mass, payload and gravity;
+// coupling, masses, payload and gravity must be the same in both models (inputs, not identified).
 //
 // Errors: model::InputError when the models do not match (joint count, type, convention), have
 // more joints than the protocol carries (shared::kJoints), or a value does not fit a float.
