@@ -138,6 +138,48 @@ kincal exercise --can vcan0 --measurements 2 --corrections 20 --correction-timeo
   { show /tmp/ex3.txt; bad platform_alive_after_flood; }
 stop_platform platform_stops_cleanly_after_flood
 
+# 6. A live camera: the kernel's virtual capture driver vivid as /dev/video0 (capture node only);
+#    kincal_platform --camera streams from it and answers a blob measurement without a camera
+#    failure; then the device is unbound (a camera unplugged mid-stream): the next measurement
+#    reports a camera failure and the platform keeps answering.
+step "6: live V4L2 camera (vivid)"
+for m in mc videodev v4l2-dv-timings videobuf2-common videobuf2-memops videobuf2-v4l2 videobuf2-vmalloc \
+  videobuf2-dma-contig v4l2-tpg rc-core cec; do insmod /modules/$m.ko || bad "insmod_$m"; done
+insmod /modules/vivid.ko n_devs=1 node_types=0x1 && [ -c /dev/video0 ] && ok vivid_video0 || bad vivid_video0
+platform --camera /dev/video0
+grep -q "camera /dev/video0 ('vivid" /tmp/platform.err && ok camera_streams || { show /tmp/platform.err; bad camera_streams; }
+# measure SEQ FILE: a blob measurement (sections 0x10) with its report decoded by our monitor.
+measure() {
+  candump -L vcan0 >/tmp/camera.log &
+  C=$!
+  listening $C
+  timeout 20 isotprecv -s 150 -d 158 -p CC vcan0 >/dev/null &
+  R=$!
+  listening $R
+  cansend vcan0 "120#${1}10"
+  wait $R
+  # candump may log the report's last frame after isotprecv has it: wait (at most 10 s) for it.
+  i=0
+  while [ $i -lt 20 ] && ! kincal monitor --replay /tmp/camera.log 2>&1 | grep "MeasurementReport seq=$((0x$1))" >"$2"; do
+    sleep 0.5
+    i=$((i + 1))
+  done
+  kill $C
+  wait $C 2>/dev/null
+}
+cansend vcan0 100#01  # ModeCommand: measurement triggers accepted
+measure 01 /tmp/camera1.txt
+grep -q "sections=0x10 blobs=" /tmp/camera1.txt && ! grep -q "camera failure" /tmp/camera1.txt &&
+  ok camera_measurement || { show /tmp/camera1.txt; show /tmp/platform.err; bad camera_measurement; }
+cat /tmp/camera1.txt
+basename "$(ls -d /sys/bus/platform/drivers/vivid/vivid*)" >/sys/bus/platform/drivers/vivid/unbind && ok vivid_unplugged || bad vivid_unplugged
+measure 02 /tmp/camera2.txt
+grep -q "status=camera failure" /tmp/camera2.txt && grep -q "camera /dev/video0: .*unplugged" /tmp/platform.err &&
+  ok camera_unplugged_reported || { show /tmp/camera2.txt; show /tmp/platform.err; bad camera_unplugged_reported; }
+kincal exercise --can vcan0 --measurements 1 --corrections 10 --correction-timeout-ms 3000 >/tmp/ex4.txt 2>&1 &&
+  ok platform_alive_after_unplug || { show /tmp/ex4.txt; bad platform_alive_after_unplug; }
+stop_platform platform_stops_cleanly_after_unplug
+
 step done
 echo "VMTEST DONE"
 poweroff -f

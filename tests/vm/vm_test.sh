@@ -42,6 +42,13 @@ copy_with_libs "$platform"
 copy_with_libs "$kincal"
 cp "$modules/net/can/can.ko" "$modules/net/can/can-raw.ko" "$modules/net/can/can-isotp.ko" \
    "$modules/drivers/net/can/dev/can-dev.ko" "$modules/drivers/net/can/vcan.ko" "$root/modules/"
+# The virtual V4L2 capture driver vivid and the media modules it needs (the live-camera check).
+for m in media/mc/mc media/v4l2-core/videodev media/v4l2-core/v4l2-dv-timings media/common/videobuf2/videobuf2-common \
+  media/common/videobuf2/videobuf2-memops media/common/videobuf2/videobuf2-v4l2 media/common/videobuf2/videobuf2-vmalloc \
+  media/common/videobuf2/videobuf2-dma-contig media/common/v4l2-tpg/v4l2-tpg media/rc/rc-core media/cec/core/cec \
+  media/test-drivers/vivid/vivid; do
+  cp "$modules/drivers/$m.ko" "$root/modules/" || die "no $modules/drivers/$m.ko (the live-camera check needs vivid)"
+done
 cp "$here/init.sh" "$root/init"
 chmod +x "$root/init"
 
