@@ -13,19 +13,6 @@ bool intrinsics_ok(const CameraIntrinsics& c) {
          std::isfinite(k.p1) && std::isfinite(k.p2) && std::isfinite(k.k3) && c.max_normalized_radius > 0.0f;
 }
 
-// d(x_d, y_d)/d(x, y) of distort_normalized.
-Eigen::Matrix2f distortion_jacobian(const Distortion<float>& k, float x, float y) {
-  const float r2 = x * x + y * y;
-  const float radial = 1.0f + r2 * (k.k1 + r2 * (k.k2 + r2 * k.k3));
-  const float dradial_dr2 = k.k1 + r2 * (2.0f * k.k2 + 3.0f * r2 * k.k3);
-  Eigen::Matrix2f j;
-  j(0, 0) = radial + 2.0f * x * x * dradial_dr2 + 2.0f * k.p1 * y + 6.0f * k.p2 * x;
-  j(0, 1) = 2.0f * x * y * dradial_dr2 + 2.0f * k.p1 * x + 2.0f * k.p2 * y;
-  j(1, 0) = 2.0f * x * y * dradial_dr2 + 2.0f * k.p1 * x + 2.0f * k.p2 * y;
-  j(1, 1) = radial + 2.0f * y * y * dradial_dr2 + 6.0f * k.p1 * y + 2.0f * k.p2 * x;
-  return j;
-}
-
 }  // namespace
 
 CameraStatus project_point(const CameraIntrinsics& camera, const Vector3<float>& point_camera_m,

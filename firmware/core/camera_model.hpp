@@ -77,6 +77,21 @@ Vector2<S> distort_normalized(const Distortion<S>& k, const Vector2<S>& xy) noex
                     y * radial + k.p1 * (r2 + S(2) * y * y) + k.p2 * two_xy);
 }
 
+// d(x_d, y_d)/d(x, y) of distort_normalized: pixel_to_normalized's Newton steps and
+// planar_pose.hpp's Gauss-Newton Jacobian.
+template <class S>
+Eigen::Matrix<S, 2, 2> distortion_jacobian(const Distortion<S>& k, const S& x, const S& y) noexcept {
+  const S r2 = x * x + y * y;
+  const S radial = S(1) + r2 * (k.k1 + r2 * (k.k2 + r2 * k.k3));
+  const S dradial_dr2 = k.k1 + r2 * (S(2) * k.k2 + S(3) * r2 * k.k3);
+  Eigen::Matrix<S, 2, 2> j;
+  j(0, 0) = radial + S(2) * x * x * dradial_dr2 + S(2) * k.p1 * y + S(6) * k.p2 * x;
+  j(0, 1) = S(2) * x * y * dradial_dr2 + S(2) * k.p1 * x + S(2) * k.p2 * y;
+  j(1, 0) = j(0, 1);
+  j(1, 1) = radial + S(2) * y * y * dradial_dr2 + S(6) * k.p1 * y + S(2) * k.p2 * x;
+  return j;
+}
+
 // A pixel turned into a ray: normalized (x, y) (the ray is (x, y, 1)), and d(x, y)/d(u, v),
 // which carries pixel noise to the ray (stereo.hpp's depth uncertainty uses it).
 struct NormalizedPoint {

@@ -32,6 +32,10 @@
 //              t += dt, R = q(dphi) R (q: unit quaternion (1, dphi/2) normalized), R kept
 //              orthonormal. Converged when |dphi|_inf <= kPlanarPoseStepTolerance and
 //              |dt|_inf <= kPlanarPoseStepTolerance * |t|.
+//   2a. gate   n >= 4 with a prior: step 2 runs on the image alone first; the prior joins (step 2
+//              again, from there) only if its disagreement with that pose is plausible under both
+//              covariances (options.prior_gate_chi2); otherwise the pose is the image's and
+//              out.prior_rejected says so. n = 3 needs the prior and always uses it.
 //   3. fiducial centres (options.perspective_passes = 1): the blob centroid of a fiducial is the
 //              centroid of its IMAGE, not the image of its centre (up to 0.26 px at 30 degrees
 //              tilt here). With the refined pose, each correspondence with a non-zero
@@ -130,6 +134,10 @@ struct PlanarPoseOptions {
   std::uint8_t max_iterations = 10;     // Gauss-Newton steps per pass
   std::uint8_t perspective_passes = 1;  // 0: blob centroids used as they are; 1: see step 3
   float min_spread_ratio = 1.0e-3f;     // collinearity test of the target points
+  // n >= 4 with a prior: the prior joins only if the chi^2 (3 degrees of freedom) of its
+  // disagreement with the image-only pose, under both covariances, is at most this (16.27: 0.1%
+  // of consistent priors refused). Infinity: always fuse.
+  float prior_gate_chi2 = 16.27f;
 };
 
 struct PlanarPose {
@@ -137,10 +145,14 @@ struct PlanarPose {
   RigidTransform<float> camera_T_target{};
   Eigen::Matrix<float, 6, 6> covariance = Eigen::Matrix<float, 6, 6>::Zero();  // [dt; dphi], camera frame
   float reprojection_rms_px = 0.0f;  // sqrt(mean over 2n coordinates of residual^2), corrected pixels
-  float prior_mahalanobis = 0.0f;    // |L^-1 (pose's plane - prior's)| at the result; 0 without prior
+  float prior_mahalanobis = 0.0f;    // |L^-1 (pose's plane - prior's)| at the result; 0 unless prior_used
   std::uint8_t iterations = 0;       // Gauss-Newton steps taken, all passes
   std::uint8_t point_count = 0;
   bool prior_used = false;
+  // n >= 4 with a prior: the gate's chi^2 (see prior_gate_chi2), and whether it refused the prior
+  // (then the pose is the image's alone, prior_used is false and the status is still ok).
+  float prior_innovation_chi2 = 0.0f;
+  bool prior_rejected = false;
 };
 
 // Caller-owned scratch memory (about 0.8 KiB): keep it out of the stack (a member, a static).

@@ -185,4 +185,52 @@ PlaneStatus fit_range_plane(const RangePlaneModel& model, const std::array<float
   return PlaneStatus::ok;
 }
 
+PlaneStatus range_plane_covariance(const RangePlaneModel& model, const CalibrationPlane& plane, float range_sigma_m,
+                                   Matrix3<float>& covariance) noexcept {
+  if (!(range_sigma_m > 0.0f && std::isfinite(range_sigma_m))) return PlaneStatus::bad_layout;
+  int used = 0, missing = 0;
+  for (int i = 0; i < kRangeSensorCount; ++i) {
+    if ((plane.sensors_used & (1u << i)) != 0) {
+      ++used;
+    } else {
+      missing = i;
+    }
+  }
+  if (used < kRangeSensorCount - 1) return PlaneStatus::range_missing;
+  if (!(plane.normal.z() > 0.0f)) return PlaneStatus::plane_not_facing;
+  const Eigen::Matrix<float, 3, kRangeSensorCount>& fit =
+      used == kRangeSensorCount ? model.least_squares : model.three_point[static_cast<std::size_t>(missing)];
+  // sigma^2 F F^T of the fitted coefficients, summed in a fixed order.
+  Matrix3<float> c;
+  for (int r = 0; r < 3; ++r) {
+    for (int k = 0; k < 3; ++k) {
+      float sum = 0.0f;
+      for (int i = 0; i < kRangeSensorCount; ++i) sum += fit(r, i) * fit(k, i);
+      c(r, k) = range_sigma_m * range_sigma_m * sum;
+    }
+  }
+  if (model.model == RangeModel::along_beam) {
+    covariance = c;  // the coefficients are (c0, slope_x, slope_y) already
+    return PlaneStatus::ok;
+  }
+  // Perpendicular: the coefficients are (a0, q_x, q_y) = (distance - n_z z0, -n_x, -n_y) with
+  // n_z = sqrt(1 - q_x^2 - q_y^2); c0 = a0 / n_z + z0, slope = q / n_z. J = d(c0, slope)/d(a0, q).
+  const float nz = plane.normal.z(), qx = -plane.normal.x(), qy = -plane.normal.y();
+  const float a0 = plane.distance_m - nz * model.origin_z_m;
+  const float inv_nz = 1.0f / nz, inv_nz3 = inv_nz * inv_nz * inv_nz;
+  Matrix3<float> j;
+  j << inv_nz, a0 * qx * inv_nz3, a0 * qy * inv_nz3,        //
+      0.0f, inv_nz + qx * qx * inv_nz3, qx * qy * inv_nz3,  //
+      0.0f, qx * qy * inv_nz3, inv_nz + qy * qy * inv_nz3;
+  for (int r = 0; r < 3; ++r) {
+    for (int k = 0; k < 3; ++k) {
+      float sum = 0.0f;
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) sum += j(r, a) * c(a, b) * j(k, b);
+      covariance(r, k) = sum;
+    }
+  }
+  return PlaneStatus::ok;
+}
+
 }  // namespace kincal::core
