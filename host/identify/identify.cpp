@@ -121,8 +121,16 @@ WhitenedFit whitened_fit(const Eigen::VectorXd& e, const Eigen::MatrixXd& j, con
   }
   const Eigen::HouseholderQR<Eigen::MatrixXd> qr(jw);
   WhitenedFit f;
-  f.q = qr.householderQ() * Eigen::MatrixXd::Identity(jw.rows(), jw.cols());
   f.r = qr.matrixQR().topRows(jw.cols()).triangularView<Eigen::Upper>();
+  // Q = J_w R^-1 (a blocked triangular solve, cheaper than accumulating the Householder
+  // reflections), unless R is too near singular for that to be accurate.
+  const Eigen::VectorXd diagonal = f.r.diagonal().cwiseAbs();
+  if (diagonal.size() == 0 || diagonal.minCoeff() > 1e-8 * diagonal.maxCoeff()) {
+    f.q = std::move(jw);
+    f.r.triangularView<Eigen::Upper>().solveInPlace<Eigen::OnTheRight>(f.q);
+  } else {
+    f.q = qr.householderQ() * Eigen::MatrixXd::Identity(jw.rows(), jw.cols());
+  }
   f.residual = ew - f.q * (f.q.transpose() * ew);
   return f;
 }
@@ -131,7 +139,7 @@ WhitenedFit whitened_fit(const Eigen::VectorXd& e, const Eigen::MatrixXd& j, con
 // scoring: g_k = (r^T V^-1 V_k V^-1 r - tr(V_k P)) / 2, F_kl = tr(V_k P V_l P) / 2, evaluated per
 // row block with whitened residuals and the thin Q of the whitened Jacobian (H = Q Q^T; with
 // M_k = L V_k L^T block-diagonal, tr(V_k P V_k P) = tr(M_k^2) - 2 tr(Q^T M_k^2 Q) + |Q^T M_k Q|^2).
-// A step is cut at a tenth of the current value, so the boundary at zero is approached
+// A step is cut at a hundredth of the current value, so the boundary at zero is approached
 // geometrically; a component below negligible2 (1e-6 of the instrument's variance) has reached
 // zero for every practical purpose and stays there.
 Components reml(const Eigen::VectorXd& e, const Eigen::MatrixXd& j, const std::vector<int>& rows,
@@ -151,7 +159,7 @@ Components reml(const Eigen::VectorXd& e, const Eigen::MatrixXd& j, const std::v
       const auto at = static_cast<Eigen::Index>(k) * size;
       const Eigen::Matrix3d& l = w.position[static_cast<std::size_t>(rows[k])];
       const Eigen::Matrix3d a = l * l.transpose();  // M_k's block for V_k = I on the position block
-      const Eigen::MatrixXd qp = f.q.middleRows(at, 3);
+      const auto qp = f.q.middleRows<3>(at);
       const Eigen::Vector3d rp = f.residual.segment<3>(at);
       num(0) += rp.dot(a * rp);
       trace(0) += a.trace() - a.cwiseProduct(qp * qp.transpose()).sum();
@@ -159,7 +167,7 @@ Components reml(const Eigen::VectorXd& e, const Eigen::MatrixXd& j, const std::v
       trace_qm2q(0) += (a * qp).squaredNorm();
       qmq[0] += qp.transpose() * a * qp;
       if (orientation_used) {
-        const Eigen::MatrixXd qo = f.q.middleRows(at + 3, 3);
+        const auto qo = f.q.middleRows<3>(at + 3);
         num(1) += w2 * f.residual.segment<3>(at + 3).squaredNorm();
         trace(1) += w2 * (3.0 - qo.squaredNorm());
         trace_m2(1) += 3.0 * w2 * w2;
@@ -185,7 +193,7 @@ Components reml(const Eigen::VectorXd& e, const Eigen::MatrixXd& j, const std::v
     const Eigen::Vector2d now(c.position2, c.orientation2);
     Eigen::Vector2d next = now;
     for (int m = 0; m < 2; ++m)
-      if (active[static_cast<std::size_t>(m)]) next(m) = std::max({now(m) + step(m), 0.1 * now(m), kVarianceFloor});
+      if (active[static_cast<std::size_t>(m)]) next(m) = std::max({now(m) + step(m), 0.01 * now(m), kVarianceFloor});
     c = {next(0), next(1)};
     if (((next - now).array().abs() <= 1e-6 * now.array()).all()) break;
   }
@@ -267,12 +275,14 @@ void check_data(const RobotModel& m, const model::Dataset& data) {
   }
 }
 
-// Identifiability over 100 random configurations within the limits (revolute joints without
+// Identifiability over random configurations within the limits (revolute joints without
 // limits: [-pi, pi]; prismatic: [-1, 1] m): what no choice of configurations can improve on.
+// Three equations per candidate and at least 20 configurations reach the generic rank with a
+// wide margin (the structural rank needs only as many equations as parameters).
 Identifiability structural_identifiability(const RobotModel& m, const ParameterIds& candidates, bool orientation) {
   std::mt19937_64 rng(12345);
   const int rows = orientation ? 6 : 3;
-  const int count = 100;
+  const int count = std::max(20, (3 * static_cast<int>(candidates.size()) + rows - 1) / rows);
   Eigen::MatrixXd j(rows * count, static_cast<Eigen::Index>(candidates.size()));
   for (int k = 0; k < count; ++k) {
     std::vector<double> q;
