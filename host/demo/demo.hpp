@@ -6,7 +6,10 @@
 //   ARID      Doty's platform rig: 40 random poses in view of the strip (full pose
 //             measurements) + 30 random validation poses; full identification from the nominal
 //             model; then the correction parameters go to the platform and the validation poses
-//             are measured again at the corrected joint targets the platform streams back.
+//             are measured again at the corrected joint targets the platform streams back, and
+//             the true tool pose at those targets (the simulator's truth) is compared with the
+//             targets' goals too, so the correction is judged with and without the platform's
+//             measurement noise.
 //   Kapucu    Kapucu & Baysec's stereo rig: their single-joint sweeps, 10 readings per joint +
 //             30 random validation poses (beacon in view); circle-point analysis, then the full
 //             identification started from it; the DH table beside their Table 1 and the truth.
@@ -41,8 +44,11 @@ struct DemoRigResult {
   identify::AccuracyStats before, after;  // nominal and identified model vs the measurements
   double identified_vs_truth_rms_m = 0;   // identified model vs the true tool positions
   double nominal_vs_truth_rms_m = 0;
-  double noise_rms_m = 0;  // measured vs true tool positions, on the same poses
-  std::optional<CorrectionCheck> correction;
+  double noise_rms_m = 0;                     // measured vs true tool positions, on the same poses
+  std::optional<CorrectionCheck> correction;  // measured by the platform (its noise included)
+  // The same check against the simulator's truth: the true tool pose at the corrected targets
+  // vs each target's goal (position and orientation), no measurement noise in it.
+  std::optional<identify::AccuracyStats> correction_vs_truth;
   double seconds = 0;
 };
 
