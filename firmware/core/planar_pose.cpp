@@ -32,7 +32,7 @@ float at(const Packed<N>& a, int i, int j) {
 constexpr float kMinRelativePivot = 1.0e-7f;
 
 template <int N>
-bool cholesky(Packed<N>& a) {
+[[gnu::noinline]] bool cholesky(Packed<N>& a) {
   for (int j = 0; j < N; ++j) {
     const float diagonal = at<N>(a, j, j);
     float d = diagonal;
@@ -51,7 +51,7 @@ bool cholesky(Packed<N>& a) {
 
 // Solves L L^T x = b in place (b becomes x).
 template <int N>
-void cholesky_solve(const Packed<N>& l, Vector<N>& b) {
+[[gnu::noinline]] void cholesky_solve(const Packed<N>& l, Vector<N>& b) {
   for (int i = 0; i < N; ++i) {
     float s = b[static_cast<std::size_t>(i)];
     for (int k = 0; k < i; ++k) s -= at<N>(l, i, k) * b[static_cast<std::size_t>(k)];
@@ -66,7 +66,7 @@ void cholesky_solve(const Packed<N>& l, Vector<N>& b) {
 
 // Adds w w^T to the packed matrix and w e to the gradient.
 template <int N>
-void accumulate(Packed<N>& normal, Vector<N>& gradient, const Vector<N>& w, float e) {
+[[gnu::noinline]] void accumulate(Packed<N>& normal, Vector<N>& gradient, const Vector<N>& w, float e) {
   for (int i = 0; i < N; ++i) {
     const float wi = w[static_cast<std::size_t>(i)];
     for (int j = 0; j <= i; ++j) at<N>(normal, i, j) += wi * w[static_cast<std::size_t>(j)];
@@ -135,7 +135,7 @@ bool finite_pose(const RigidTransform<float>& pose) {
 // ---- start: homography of the normalized points (n >= 4) -------------------------------------
 
 [[gnu::noinline]] PlanarPoseStatus homography_start(std::span<const PlanarCorrespondence> points,
-                                                    const PlanarPoseWorkspace& ws, RigidTransform<float>& pose) {
+                                                    PlanarPoseWorkspace& ws, RigidTransform<float>& pose) {
   const std::size_t n = points.size();
   const float inv_n = 1.0f / static_cast<float>(n);
   // Hartley normalization: centroids at the origin, RMS distance sqrt(2).
@@ -161,8 +161,10 @@ bool finite_pose(const RigidTransform<float>& pose) {
   const float ks = std::sqrt(2.0f / (s2 * inv_n)), ki = std::sqrt(2.0f / (i2 * inv_n));
 
   // DLT with h33 = 1: rows [X Y 1 0 0 0 -xX -xY] h = x and [0 0 0 X Y 1 -yX -yY] h = y.
-  Packed<8> normal{};
-  std::array<float, 8> rhs{};
+  Packed<8>& normal = ws.homography_normal;
+  Vector<8>& rhs = ws.homography_rhs;
+  normal.fill(0.0f);
+  rhs.fill(0.0f);
   for (std::size_t i = 0; i < n; ++i) {
     const float X = (points[i].target_m.x() - sx) * ks, Y = (points[i].target_m.y() - sy) * ks;
     const float x = (ws.normalized_xy[i].x() - ix) * ki, y = (ws.normalized_xy[i].y() - iy) * ki;
@@ -171,21 +173,26 @@ bool finite_pose(const RigidTransform<float>& pose) {
   }
   if (!cholesky<8>(normal)) return PlanarPoseStatus::degenerate_geometry;
   cholesky_solve<8>(normal, rhs);
-  Matrix3<float> hn;
-  hn << rhs[0], rhs[1], rhs[2], rhs[3], rhs[4], rhs[5], rhs[6], rhs[7], 1.0f;
-  // H = Ti^-1 Hn Ts with Ts = [ks 0 -ks sx; 0 ks -ks sy; 0 0 1], Ti^-1 = [1/ki 0 ix; 0 1/ki iy; 0 0 1].
-  Matrix3<float> ts, ti_inv;
-  ts << ks, 0.0f, -ks * sx, 0.0f, ks, -ks * sy, 0.0f, 0.0f, 1.0f;
-  ti_inv << 1.0f / ki, 0.0f, ix, 0.0f, 1.0f / ki, iy, 0.0f, 0.0f, 1.0f;
-  const Matrix3<float> h = multiply3(ti_inv, multiply3(hn, ts));
-  if (!h.allFinite()) return PlanarPoseStatus::degenerate_geometry;
+  // H = Ti^-1 Hn Ts with Ts = [ks 0 -ks sx; 0 ks -ks sy; 0 0 1], Ti^-1 = [1/ki 0 ix; 0 1/ki iy; 0 0 1],
+  // written out column by column (h33 of Hn is 1).
+  const auto hn = [&rhs](int r, int c) { return r == 2 && c == 2 ? 1.0f : rhs[static_cast<std::size_t>(3 * r + c)]; };
+  const float inv_ki = 1.0f / ki;
+  std::array<Vector3<float>, 3> columns;  // H's columns h1, h2, h3
+  for (int c = 0; c < 3; ++c) {
+    Vector3<float> m;  // column c of Hn Ts
+    for (int r = 0; r < 3; ++r) m(r) = c < 2 ? ks * hn(r, c) : hn(r, 2) - ks * sx * hn(r, 0) - ks * sy * hn(r, 1);
+    columns[static_cast<std::size_t>(c)] = Vector3<float>(m(0) * inv_ki + ix * m(2), m(1) * inv_ki + iy * m(2), m(2));
+  }
+  const Vector3<float>& h1 = columns[0];
+  const Vector3<float>& h2 = columns[1];
+  const Vector3<float>& h3 = columns[2];
+  if (!h1.allFinite() || !h2.allFinite() || !h3.allFinite()) return PlanarPoseStatus::degenerate_geometry;
 
   // H ~ [r1 r2 t]: the scale from the two rotation columns, the sign from the depth of the
   // target points' centroid (third row of H at it).
-  const Vector3<float> h1 = h.col(0), h2 = h.col(1), h3 = h.col(2);
   const float scale_norm = 0.5f * (norm3(h1) + norm3(h2));
   if (!(scale_norm > 0.0f)) return PlanarPoseStatus::degenerate_geometry;
-  const float depth = h(2, 0) * sx + h(2, 1) * sy + h(2, 2);
+  const float depth = h1.z() * sx + h2.z() * sy + h3.z();
   const float lambda = (depth > 0.0f ? 1.0f : -1.0f) / scale_norm;
   if (!rotation_from_two_columns(h1 * lambda, h2 * lambda, pose.rotation)) return PlanarPoseStatus::degenerate_geometry;
   pose.translation = h3 * lambda;
@@ -214,10 +221,7 @@ bool finite_pose(const RigidTransform<float>& pose) {
 
 // ---- the prior --------------------------------------------------------------------------------
 
-struct WhitenedPrior {
-  Vector3<float> slope_form;  // (c0, slope_x, slope_y) measured
-  Packed<3> chol;             // covariance = L L^T
-};
+using planar_pose_detail::WhitenedPrior;
 
 bool prepare_prior(const PlanePrior& prior, WhitenedPrior& w) {
   const CalibrationPlane& p = prior.plane;
@@ -291,12 +295,7 @@ bool prior_rows(const WhitenedPrior& prior, const RigidTransform<float>& pose, c
 // The perturbation used inside (better conditioned than the origin's): about the camera-frame
 // centroid c of the target points, p' = c + dt_c + exp([dphi]x) (p - c). Converted to the
 // header's origin convention for the covariance at the end.
-struct Linearization {
-  Packed<6> normal{};
-  std::array<float, 6> gradient{};
-  float image_sum2 = 0.0f;  // sum of squared whitened image residuals
-  float prior_sum2 = 0.0f;
-};
+using planar_pose_detail::Linearization;
 
 [[gnu::noinline]] PlanarPoseStatus linearize(const CameraIntrinsics& camera,
                                              std::span<const PlanarCorrespondence> points,
@@ -410,33 +409,22 @@ Vector3<float> centroid_in_camera(std::span<const PlanarCorrespondence> points, 
 // dt_origin = dt_c + dphi x (t - c), so cov = T N^-1 T^T with T = [I -[a]x; 0 I], a = t - c.
 [[gnu::noinline]] void covariance_at_origin(const Linearization& lin, const Vector3<float>& lever,
                                             Eigen::Matrix<float, 6, 6>& covariance) {
-  Eigen::Matrix<float, 6, 6> inverse;
   for (int c = 0; c < 6; ++c) {
-    std::array<float, 6> e{};
+    Vector<6> e{};
     e[static_cast<std::size_t>(c)] = 1.0f;
     cholesky_solve<6>(lin.normal, e);
-    for (int r = 0; r < 6; ++r) inverse(r, c) = e[static_cast<std::size_t>(r)];
+    for (int r = 0; r < 6; ++r) covariance(r, c) = e[static_cast<std::size_t>(r)];
   }
-  // T's rows: dt_origin_k = dt_c_k + (dphi x a)_k = dt_c_k + sum_j (-[a]x)(k, j) dphi_j.
+  // In place: T's rows k < 3 add sum_j (-[a]x)(k, j) times row 3 + j (rows 3..5 stay), then the
+  // same on the columns for T^T (columns 3..5 stay).
   const float neg_skew[3][3] = {
       {0.0f, lever.z(), -lever.y()}, {-lever.z(), 0.0f, lever.x()}, {lever.y(), -lever.x(), 0.0f}};
-  Eigen::Matrix<float, 6, 6> t_inverse;  // T N^-1
-  for (int c = 0; c < 6; ++c) {
-    for (int k = 0; k < 3; ++k) {
-      float s = inverse(k, c);
-      for (int j = 0; j < 3; ++j) s += neg_skew[k][j] * inverse(3 + j, c);
-      t_inverse(k, c) = s;
-      t_inverse(3 + k, c) = inverse(3 + k, c);
-    }
-  }
-  for (int r = 0; r < 6; ++r) {  // (T N^-1) T^T
-    for (int k = 0; k < 3; ++k) {
-      float s = t_inverse(r, k);
-      for (int j = 0; j < 3; ++j) s += t_inverse(r, 3 + j) * neg_skew[k][j];
-      covariance(r, k) = s;
-      covariance(r, 3 + k) = t_inverse(r, 3 + k);
-    }
-  }
+  for (int k = 0; k < 3; ++k)
+    for (int c = 0; c < 6; ++c)
+      for (int j = 0; j < 3; ++j) covariance(k, c) += neg_skew[k][j] * covariance(3 + j, c);
+  for (int k = 0; k < 3; ++k)
+    for (int r = 0; r < 6; ++r)
+      for (int j = 0; j < 3; ++j) covariance(r, k) += covariance(r, 3 + j) * neg_skew[k][j];
 }
 
 PlanarPoseStatus finish(PlanarPose& out, PlanarPoseStatus status) {
@@ -449,14 +437,24 @@ PlanarPoseStatus finish(PlanarPose& out, PlanarPoseStatus status) {
 PlanarPoseStatus planar_pose(const CameraIntrinsics& camera, std::span<const PlanarCorrespondence> points,
                              const PlanePrior* prior, const PlanarPoseOptions& options, PlanarPoseWorkspace& workspace,
                              PlanarPose& out) noexcept {
-  out = PlanarPose{};
+  // Field by field: a PlanarPose temporary would be 0.2 KiB of stack.
+  out.status = PlanarPoseStatus::not_converged;
+  out.camera_T_target = RigidTransform<float>{};
+  out.covariance.setZero();
+  out.reprojection_rms_px = 0.0f;
+  out.prior_mahalanobis = 0.0f;
+  out.iterations = 0;
+  out.point_count = 0;
+  out.prior_used = false;
+  out.prior_innovation_chi2 = 0.0f;
+  out.prior_rejected = false;
   const std::size_t n = points.size();
   if (n > static_cast<std::size_t>(kPlanarPoseMaxPoints)) return finish(out, PlanarPoseStatus::too_many_points);
   if (n < (prior != nullptr ? 3u : 4u)) return finish(out, PlanarPoseStatus::too_few_points);
   if (!(options.pixel_sigma_px > 0.0f && std::isfinite(options.pixel_sigma_px))) {
     return finish(out, PlanarPoseStatus::non_finite);
   }
-  WhitenedPrior whitened{};
+  WhitenedPrior& whitened = workspace.prior;
   if (prior != nullptr && !prepare_prior(*prior, whitened)) return finish(out, PlanarPoseStatus::bad_prior);
   const WhitenedPrior* used_prior = prior != nullptr ? &whitened : nullptr;
 
@@ -496,7 +494,7 @@ PlanarPoseStatus planar_pose(const CameraIntrinsics& camera, std::span<const Pla
   if (status != PlanarPoseStatus::ok) return finish(out, status);
   if (!finite_pose(pose)) return finish(out, PlanarPoseStatus::non_finite);
 
-  Linearization lin;
+  Linearization& lin = workspace.linearization;
   Vector3<float> centre;
   bool image_only_done = false;
   if (used_prior != nullptr && n >= 4) {

@@ -76,8 +76,9 @@
 // steps per pass. Measured figure: tests/bench/geometry_m4_bench.cpp
 // (planar_pose_m4_instructions). fiducial_centroid_bias_px: kFiducialEdgeSegments * 4 + 1
 // projections.
-// Stack: the per-point data live in the caller's PlanarPoseWorkspace; the call itself stays within
-// the core's checked per-entry budget (m4.kincal_core.stack).
+// Stack: the per-point data and the solver's state live in the caller's PlanarPoseWorkspace; the
+// call itself needs 824 bytes on the M4 at -O3 (deepest path, toolchain/check_stack.py; the core's
+// budget is 896 for it, m4.kincal_core.stack); fiducial_centroid_bias_px 128 bytes.
 // Numerics: the same bits natively and on the Cortex-M4 (sums in fixed order, explicit fma only;
 // tests/firmware/core/geometry_digest.cpp). No state; reentrant as long as each caller has its
 // own workspace.
@@ -155,11 +156,30 @@ struct PlanarPose {
   bool prior_rejected = false;
 };
 
-// Caller-owned scratch memory (about 0.8 KiB): keep it out of the stack (a member, a static).
+// The solver's state between its steps (part of the workspace, so that it is not on the stack;
+// callers neither read nor write it).
+namespace planar_pose_detail {
+struct Linearization {
+  std::array<float, 21> normal{};  // packed lower triangle of the 6x6 normal matrix, or its factor
+  std::array<float, 6> gradient{};
+  float image_sum2 = 0.0f;  // sum of squared whitened image residuals
+  float prior_sum2 = 0.0f;
+};
+struct WhitenedPrior {
+  Vector3<float> slope_form = Vector3<float>::Zero();  // (c0, slope_x, slope_y) measured
+  std::array<float, 6> chol{};                         // packed factor L of the covariance
+};
+}  // namespace planar_pose_detail
+
+// Caller-owned scratch memory (about 1.2 KiB): keep it out of the stack (a member, a static).
 struct PlanarPoseWorkspace {
   std::array<Vector2<float>, kPlanarPoseMaxPoints> normalized_xy{};  // undistorted pixels
   std::array<Vector2<float>, kPlanarPoseMaxPoints> pixel_px{};       // pixels after bias correction
   std::array<Vector3<float>, kPlanarPoseMaxPoints> scratch3{};       // three-point start
+  planar_pose_detail::Linearization linearization{};
+  planar_pose_detail::WhitenedPrior prior{};
+  std::array<float, 36> homography_normal{};  // packed 8x8 of the DLT
+  std::array<float, 8> homography_rhs{};
 };
 
 // The pose; returns out.status. prior may be null (image only). Never traps on bad data.

@@ -28,7 +28,9 @@
 #include "firmware/core/camera_model.hpp"
 #include "firmware/core/correction.hpp"
 #include "firmware/core/error_model.hpp"
+#include "firmware/core/joint_map.hpp"
 #include "firmware/core/link_model.hpp"
+#include "firmware/core/planar_pose.hpp"
 #include "firmware/core/pose_from_points.hpp"
 #include "firmware/core/range_plane.hpp"
 #include "firmware/core/rigid_transform.hpp"
@@ -506,6 +508,199 @@ void digest_correction() {
   }
 }
 
+// --- Joint map (issue #12) -----------------------------------------------------------------------
+
+MassModel<float> random_masses(FloatSource& r) {
+  MassModel<float> m;
+  for (std::size_t i = 0; i < kMaxJoints; ++i) {
+    m.link_mass_kg[i] = r.uniform(0.0f, 20.0f);
+    const Vector3<float> c = r.vector(0.3f);
+    m.link_centre_of_mass_m[i] = {c(0), c(1), c(2)};
+  }
+  m.payload_mass_kg = r.uniform(0.0f, 5.0f);
+  const Vector3<float> c = r.vector(0.2f), g = r.vector(9.8f);
+  m.payload_centre_of_mass_m = {c(0), c(1), c(2)};
+  m.gravity_mps2 = {g(0), g(1), g(2)};
+  return m;
+}
+
+// Identity rows but for a few couplings to earlier or later joints, scales near 1.
+JointMap<float> random_map(FloatSource& r, int joint_count, float max_compliance) {
+  JointMap<float> map;
+  map.joint_count = joint_count;
+  for (int i = 0; i < joint_count; ++i) {
+    if (r.index(3) == 0) map.coupling(i, r.index(joint_count)) += r.uniform(-1.0f, 1.0f);
+    map.scale(i) = r.uniform(0.999f, 1.001f);
+    map.compliance(i) = r.uniform(0.0f, max_compliance);
+  }
+  return map;
+}
+
+void digest_joint_map() {
+  {
+    Digest d("gravity_forces");
+    FloatSource r(90);
+    for (int i = 0; i < kCases; ++i) {
+      const ChainModel<float> m = random_chain(r, 1 + r.index(kMaxJoints));
+      const MassModel<float> masses = random_masses(r);
+      PreparedChain<float> chain;
+      prepare_chain(m, chain);
+      DeflectionWorkspace<float> ws;
+      const JointVector<float> q = random_joints(r, m, 3.0f);
+      joint_trig(chain, q, ws.trig);
+      forward_kinematics(chain, q, ws.trig, ws.frames);
+      gravity_forces(chain, ws.frames, masses, ws.forces);
+      d.add_case(true);
+      d.add(ws.forces);
+    }
+  }
+  {
+    Digest d("coupled_values+invert_coupling+readings_from_coupled");
+    FloatSource r(91);
+    for (int i = 0; i < kCases; ++i) {
+      const int n = 1 + r.index(kMaxJoints);
+      const JointMap<float> map = random_map(r, n, 0.0f);
+      JointVector<float> readings = JointVector<float>::Zero(), coupled, back;
+      for (int k = 0; k < n; ++k) readings(k) = r.uniform(-3.0f, 3.0f);
+      CouplingMatrix<float> scratch, inverse;
+      const bool ok = invert_coupling(map, scratch, inverse);
+      coupled_values(map, readings, coupled);
+      readings_from_coupled(map, inverse, coupled, back);
+      d.add_case(ok);
+      d.add(coupled);
+      if (ok) {
+        d.add(inverse);
+        d.add(back);
+      }
+    }
+  }
+  {
+    Digest d("deflect+undeflect");
+    FloatSource r(92);
+    for (int i = 0; i < kCases; ++i) {
+      const ChainModel<float> m = random_chain(r, 1 + r.index(kMaxJoints));
+      const MassModel<float> masses = random_masses(r);
+      const JointMap<float> map = random_map(r, m.joint_count, 3e-5f);
+      PreparedChain<float> chain;
+      prepare_chain(m, chain);
+      DeflectionWorkspace<float> ws;
+      JointVector<float> v, w;
+      deflect(chain, masses, map.compliance, random_joints(r, m, 3.0f), ws, v);
+      w = v;
+      undeflect(chain, masses, map.compliance, v, 1 + r.index(2), ws, w);
+      d.add_case(true);
+      d.add(v);
+      d.add(w);
+    }
+  }
+  {
+    Digest prepare("prepare_joint_map");
+    Digest correct("correct_joint_readings");
+    FloatSource r(93);
+    kincal::test::RandomSource signs(94);
+    static CorrectionModel model;
+    static CorrectionWorkspace workspace;
+    static JointMapModel map_model;
+    const ChainModel<float> arm = kincal::test::to_float(kincal::test::puma_like_arm());
+    for (int i = 0; i < kCases; ++i) {
+      const bool puma = r.index(2) == 0;
+      const ChainModel<float> nominal = puma ? arm : random_chain(r, 1 + r.index(kMaxJoints));
+      const ParameterSet set = full_parameter_set(nominal, true, true);
+      CorrectionOptions options;
+      options.max_joint_step = 0.5f;
+      if (prepare_correction(nominal, set, sign_errors(signs, set, 0.0087, 0.001), options, model) !=
+          CorrectionStatus::ok)
+        continue;
+      const MassModel<float> masses = random_masses(r);
+      const JointMap<float> nominal_map = random_map(r, nominal.joint_count, r.index(2) == 0 ? 0.0f : 1e-5f);
+      JointMap<float> identified_map = nominal_map;
+      for (int k = 0; k < nominal.joint_count; ++k) {
+        identified_map.scale(k) = nominal_map.scale(k) + r.uniform(-5e-4f, 5e-4f);
+        identified_map.compliance(k) = nominal_map.compliance(k) + r.uniform(0.0f, 3e-5f);
+      }
+      const CorrectionStatus prepared =
+          prepare_joint_map(model, nominal_map, identified_map, masses, workspace, map_model);
+      prepare.add_call(prepared, CorrectionStatus::ok, map_model.inverse_coupling);
+      if (prepared != CorrectionStatus::ok) continue;
+      Correction correction;
+      correction.pose_error.setZero();
+      correction.corrected_joint_target.setZero();
+      JointVector<float> corrected = JointVector<float>::Zero();
+      const CorrectionStatus status =
+          correct_joint_readings(model, map_model, workspace, random_joints(r, nominal, 2.5f), correction, corrected);
+      correct.add_call(status, CorrectionStatus::ok, correction.base_T_target, correction.corrected_joint_target,
+                       corrected);
+    }
+  }
+}
+
+// Issue #13: the camera-first planar pose, its prior's covariance and the fiducial bias.
+void digest_planar_pose() {
+  Digest pose_digest("planar_pose");
+  Digest covariance_digest("range_plane_covariance");
+  Digest bias_digest("fiducial_centroid_bias_px");
+  FloatSource r(130);
+  RangePlaneModel plane_model;
+  if (prepare_range_plane(plus_pattern_layout(0.1f, RangeModel::along_beam), plane_model) != PlaneStatus::ok) return;
+  PlanarPoseWorkspace workspace;
+  for (int i = 0; i < kCases; ++i) {
+    CameraIntrinsics camera;
+    camera.fx_px = r.uniform(500.0f, 700.0f);
+    camera.fy_px = camera.fx_px;
+    camera.cx_px = r.uniform(300.0f, 340.0f);
+    camera.cy_px = r.uniform(220.0f, 260.0f);
+    camera.distortion = {r.uniform(-0.1f, 0.0f), r.uniform(0.0f, 0.02f), 0.0f, 0.0f, 0.0f};
+    // The target facing the camera (its z toward it: columns 1 and 2 negated), tilted.
+    RigidTransform<float> camera_T_target;
+    camera_T_target.rotation = r.rotation(0.3f);
+    camera_T_target.rotation.col(1) = -camera_T_target.rotation.col(1);
+    camera_T_target.rotation.col(2) = -camera_T_target.rotation.col(2);
+    camera_T_target.translation = {r.uniform(-0.03f, 0.03f), r.uniform(-0.03f, 0.03f), r.uniform(0.15f, 0.5f)};
+    const int n = 3 + r.index(8);
+    std::array<PlanarCorrespondence, 10> points{};
+    const bool collinear = r.index(16) == 0;
+    for (std::size_t k = 0; k < static_cast<std::size_t>(n); ++k) {
+      points[k].target_m = {r.uniform(-0.05f, 0.05f), collinear ? 0.0f : r.uniform(-0.05f, 0.05f)};
+      points[k].fiducial_half_size_m = {0.003175f, r.index(6) == 0 ? 0.00635f : 0.003175f};
+      const Vector3<float> p = camera_T_target * Vector3<float>{points[k].target_m.x(), points[k].target_m.y(), 0.0f};
+      Vector2<float> pixel(0.0f, 0.0f);
+      (void)project_point(camera, p, pixel);
+      points[k].pixel_px = {pixel.x() + r.uniform(-0.2f, 0.2f), pixel.y() + r.uniform(-0.2f, 0.2f)};
+    }
+    // The ranger plane: the target's plane, tilted a little, with the rangers' covariance.
+    PlanePrior prior;
+    prior.plane.normal = -camera_T_target.rotation.col(2);
+    prior.plane.normal.x() += r.uniform(-0.01f, 0.01f);
+    const float n2 = prior.plane.normal.x() * prior.plane.normal.x() + prior.plane.normal.y() * prior.plane.normal.y() +
+                     prior.plane.normal.z() * prior.plane.normal.z();
+    prior.plane.normal = prior.plane.normal / std::sqrt(n2);
+    prior.plane.distance_m = prior.plane.normal.x() * camera_T_target.translation.x() +
+                             prior.plane.normal.y() * camera_T_target.translation.y() +
+                             prior.plane.normal.z() * camera_T_target.translation.z();
+    prior.plane.sensors_used = r.index(4) == 0 ? 0x7 : 0xF;
+    const PlaneStatus covariance_status =
+        range_plane_covariance(plane_model, prior.plane, r.uniform(0.0002f, 0.001f), prior.covariance);
+    covariance_digest.add_call(covariance_status, PlaneStatus::ok, prior.covariance);
+
+    PlanarPoseOptions options;
+    options.pixel_sigma_px = r.uniform(0.05f, 0.2f);
+    options.perspective_passes = static_cast<std::uint8_t>(r.index(2));
+    const bool with_prior = n == 3 || r.index(2) == 0;
+    PlanarPose pose;
+    const PlanarPoseStatus status = planar_pose(camera, std::span(points).first(static_cast<std::size_t>(n)),
+                                                with_prior ? &prior : nullptr, options, workspace, pose);
+    pose_digest.add_call(status, PlanarPoseStatus::ok, pose.camera_T_target, pose.covariance, pose.reprojection_rms_px,
+                         pose.prior_mahalanobis, pose.prior_innovation_chi2, static_cast<int>(pose.iterations),
+                         static_cast<int>(pose.prior_used), static_cast<int>(pose.prior_rejected));
+
+    Vector2<float> bias(0.0f, 0.0f);
+    const bool bias_ok =
+        fiducial_centroid_bias_px(camera, camera_T_target, points[0].target_m, points[0].fiducial_half_size_m, bias);
+    bias_digest.add_case(bias_ok);
+    bias_digest.add(bias);
+  }
+}
+
 }  // namespace
 
 int main() {
@@ -516,5 +711,7 @@ int main() {
   digest_pose();
   digest_stereo();
   digest_correction();
+  digest_joint_map();
+  digest_planar_pose();
   return 0;
 }
