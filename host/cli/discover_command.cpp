@@ -9,15 +9,57 @@
 #include "host/model/dataset.hpp"
 #include "host/model/model_file.hpp"
 #include "host/model/urdf.hpp"
+#include "host/report/report.hpp"
+#include "host/session/session_report.hpp"
 
 namespace kincal::cli {
 
 namespace {
 
 struct DiscoverArgs {
-  std::string data, out, urdf, name = "discovered";
+  std::string data, out, urdf, report, name = "discovered";
   double significance = 0.01, outlier_probability = 1e-3, still_tolerance = 0.0;
 };
+
+// The discovery as a report: each sweep's fit in 3-D and in its plane, the discovered link table
+// with standard deviations, and the discovery's notes.
+report::Report discovery_report(const DiscoverArgs& a, const model::Dataset& data,
+                                const identify::DiscoverResult& result) {
+  report::Run run;
+  run.title = "Discovered from single-joint sweeps: " + a.data;
+  run.robot = result.model.name;
+  run.method = "manipulator-independent discovery (no model): joint-type tests, axis fits, link table";
+  run.data = a.data;
+  run.measurements = static_cast<int>(data.rows.size());
+  for (const model::Joint& j : result.model.joints)
+    run.joints.push_back({j.name, j.type == core::JointType::prismatic});
+  run.notes = result.notes;
+  run.sweeps = session::report_sweeps(data, result.fits, a.still_tolerance);
+  report::Comparison table;
+  table.title = "Discovered link table";
+  table.columns = {"value", "1 sigma"};
+  table.note = "theta includes each joint's zero offset; the base frame is placed by convention (see the notes)";
+  const core::ChainModel<double> chain = model::to_chain(result.model);
+  for (std::size_t j = 0; j < result.stddev.size() && j < static_cast<std::size_t>(chain.joint_count); ++j) {
+    const core::LinkParameters<double>& p = chain.links[j].parameters;
+    const identify::LinkSpread& sd = result.stddev[j];
+    const std::string n = std::to_string(j + 1);
+    const auto row = [&table](const std::string& name, report::Quantity q, double value, double sigma) {
+      table.rows.push_back({name, q, {value, sigma}});
+    };
+    row("theta" + n, report::Quantity::angle_rad, p.theta_rad, sd.theta_rad);
+    row("d" + n, report::Quantity::length_m, p.d_m, sd.d_m);
+    row("a" + n, report::Quantity::length_m, p.a_m, sd.a_m);
+    row("alpha" + n, report::Quantity::angle_rad, p.alpha_rad, sd.alpha_rad);
+    if (p.beta_rad != 0.0 || sd.beta_rad != 0.0) row("beta" + n, report::Quantity::angle_rad, p.beta_rad, sd.beta_rad);
+  }
+  run.comparisons.push_back(table);
+  report::Report out;
+  out.title = "kincal discover";
+  out.date = report::utc_date_now();
+  out.runs.push_back(std::move(run));
+  return out;
+}
 
 int run_discover(const DiscoverArgs& a) {
   identify::DiscoverOptions options;
@@ -26,7 +68,7 @@ int run_discover(const DiscoverArgs& a) {
   options.cpa.outlier_probability = a.outlier_probability;
   options.cpa.still_tolerance = a.still_tolerance;
   try {
-    files::refuse_overwriting({{"--out", a.out}, {"--urdf", a.urdf}}, {{"--data", a.data}});
+    files::refuse_overwriting({{"--out", a.out}, {"--urdf", a.urdf}, {"--report", a.report}}, {{"--data", a.data}});
     const model::Dataset data = model::read_dataset(a.data);
     const identify::DiscoverResult result = identify::discover(data, options);
     std::cout << "kincal discover: " << a.data << " (" << data.rows.size() << " rows; joint types tested at "
@@ -37,6 +79,10 @@ int run_discover(const DiscoverArgs& a) {
     if (!a.urdf.empty()) {
       files::write_file_atomically(a.urdf, model::write_urdf(result.model));
       std::cout << "wrote " << a.urdf << '\n';
+    }
+    if (!a.report.empty()) {
+      report::write_html(discovery_report(a, data, result), a.report);
+      std::cout << "wrote " << a.report << '\n';
     }
     return 0;
   } catch (const std::exception& e) {
@@ -55,6 +101,8 @@ void add_discover_command(CLI::App& app, int& status) {
   cmd->add_option("--data", a->data, "measurements (CSV) with one sweep per joint")->required();
   cmd->add_option("-o,--out", a->out, "model file to write (YAML)")->required();
   cmd->add_option("--urdf", a->urdf, "also write the model as URDF");
+  cmd->add_option("--report", a->report,
+                  "also write an HTML report: each sweep's fit in 3-D and in its plane, the link table");
   cmd->add_option("--name", a->name, "the robot's name in the model file");
   cmd->add_option("--significance", a->significance, "level of the joint-type tests (default 0.01)")
       ->check(finite_in(1e-12, 0.5));

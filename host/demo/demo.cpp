@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <ctime>
 #include <filesystem>
 #include <map>
 #include <numbers>
@@ -112,21 +111,6 @@ identify::AccuracyStats correction_vs_truth(const model::RobotModel& truth, cons
   summary(angle_rad, s.mean_rad, s.rms_rad, s.max_rad);
   s.has_orientation = true;
   return s;
-}
-
-report::Accuracy report_accuracy(const std::string& label, const identify::AccuracyStats& s) {
-  report::Accuracy a;
-  a.label = label;
-  a.count = s.count;
-  a.mean_m = s.mean_m;
-  a.rms_m = s.rms_m;
-  a.max_m = s.max_m;
-  if (s.has_orientation) {
-    a.mean_rad = s.mean_rad;
-    a.rms_rad = s.rms_rad;
-    a.max_rad = s.max_rad;
-  }
-  return a;
 }
 
 void print_accuracy(std::ostream& out, const char* label, const identify::AccuracyStats& s) {
@@ -329,10 +313,7 @@ DemoResult run_demo(const DemoOptions& options, std::ostream& out) {
   out << "kincal demo: the calibration loop on two simulated rigs, seed " << options.seed << "\n";
   report::Report report;
   report.title = "kincal demo";
-  const std::time_t now = std::time(nullptr);
-  char date[32];
-  std::strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", std::gmtime(&now));
-  report.date = date;
+  report.date = report::utc_date_now();
   DemoResult result;
   for (const RigKind kind : {RigKind::platform, RigKind::stereo}) {
     RigRun run = run_rig(kind, options, out);

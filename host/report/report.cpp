@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <ctime>
 #include <fstream>
 #include <numbers>
 
@@ -253,6 +254,105 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> plane_basis(const Eigen::Vector3d& a
   return {u, axis.cross(u)};
 }
 
+// 1, 2 or 5 times a power of ten, the largest not above `limit` (>= 1).
+double round_factor(double limit) {
+  if (!(limit > 1.0)) return 1.0;
+  const double decade = std::pow(10.0, std::floor(std::log10(limit)));
+  for (const double step : {5.0, 2.0, 1.0})
+    if (step * decade <= limit) return step * decade;
+  return decade;
+}
+
+// The sweep in 3-D: an orthographic view from 25 deg above the fit's plane (circle: from 30 deg
+// beside the middle of the arc; line: across it), the axis upright on the page, equal scale in mm.
+// Drawn: the fitted circle or line, the axis, the device frame's x, y, z directions from the
+// circle's centre (the line's middle), and each measured point at its foot on the fit plus its
+// offset from the fit magnified k times (a 1-2-5 factor, stated with the offsets' RMS and max),
+// since offsets of micrometres vanish at the scale of the sweep.
+std::string sweep_view_3d(const std::string& name, const SweepPlot& s, const Eigen::Vector3d& centre,
+                          const Eigen::Vector3d& u, const Eigen::Vector3d& v, const Eigen::Vector3d& d) {
+  constexpr double kElevation = 25.0 / kDeg, kAzimuth = 30.0 / kDeg;
+  const Eigen::Vector3d towards_viewer =
+      std::cos(kElevation) * (std::cos(kAzimuth) * u + std::sin(kAzimuth) * v) + std::sin(kElevation) * d;
+  const Eigen::Vector3d right = d.cross(towards_viewer).normalized();
+  const Eigen::Vector3d up = towards_viewer.cross(right);
+  const auto add = [&](PlotSeries& series, const Eigen::Vector3d& p) {
+    series.x.push_back(right.dot(p - centre) * kMm);
+    series.y.push_back(up.dot(p - centre) * kMm);
+  };
+  // Each point's foot on the fit.
+  std::vector<Eigen::Vector3d> feet;
+  double lo = 0.0, hi = 0.0;
+  for (const Eigen::Vector3d& p : s.points_m) {
+    const Eigen::Vector3d r = p - centre;
+    if (s.circle) {
+      const Eigen::Vector3d in_plane = r - d * d.dot(r);
+      feet.push_back(centre + (in_plane.norm() > 0.0 ? in_plane.normalized() : u) * s.radius_m);
+    } else {
+      const double t = d.dot(r);
+      lo = std::min(lo, t);
+      hi = std::max(hi, t);
+      feet.push_back(centre + d * t);
+    }
+  }
+  double squares = 0.0, largest = 0.0;
+  for (std::size_t k = 0; k < feet.size(); ++k) {
+    const double e = (s.points_m[k] - feet[k]).norm();
+    squares += e * e;
+    largest = std::max(largest, e);
+  }
+  const double extent = std::max(s.circle ? 2.0 * s.radius_m : hi - lo, 1e-6);
+  const double magnify = largest > 0.0 ? round_factor(0.08 * extent / largest) : 1.0;
+
+  PlotSpec view;
+  view.title = name + ": 3-D view";
+  view.width_px = 420;
+  view.height_px = 360;
+  view.equal_aspect = true;
+  view.x = {"across the page (mm)", false, {}, {}, {}};
+  view.y = {"up the page, along the axis (mm)", false, {}, {}, {}};
+  PlotSeries fit{s.circle ? "circle" : "line", kAfter, {}, {}, true}, axis{"axis", "#444444", {}, {}, true},
+      points{"points", kBefore, {}, {}, false};
+  if (s.circle) {
+    for (int k = 0; k <= 120; ++k) {
+      const double angle = 2.0 * std::numbers::pi * k / 120.0;
+      add(fit, centre + s.radius_m * (std::cos(angle) * u + std::sin(angle) * v));
+    }
+    add(axis, centre - 0.6 * extent * d);
+    add(axis, centre + 0.6 * extent * d);
+  } else {
+    add(fit, centre + lo * d);
+    add(fit, centre + hi * d);
+    add(axis, centre + (lo - 0.15 * extent) * d);  // the joint's axis: the line's direction, drawn beyond it
+    add(axis, centre + (hi + 0.15 * extent) * d);
+  }
+  view.series = {fit, axis};
+  const char* device_names[] = {"device x", "device y", "device z"};
+  for (int k = 0; k < 3; ++k) {
+    PlotSeries direction{device_names[k], kPalette[3 + k], {}, {}, true};
+    add(direction, centre);
+    add(direction, centre + 0.3 * extent * Eigen::Vector3d::Unit(k));
+    view.series.push_back(direction);
+  }
+  for (std::size_t k = 0; k < feet.size(); ++k) {
+    const Eigen::Vector3d shown = feet[k] + magnify * (s.points_m[k] - feet[k]);
+    PlotSeries offset{"", kPalette[1], {}, {}, true};
+    add(offset, feet[k]);
+    add(offset, shown);
+    view.series.push_back(offset);
+    add(points, shown);
+  }
+  view.series.push_back(points);
+  const double rms = std::sqrt(squares / static_cast<double>(feet.size()));
+  view.notes = {
+      s.circle ? "orthographic, 25 deg above the circle's plane, 30 deg beside mid-arc"
+               : "orthographic, 25 deg above a plane through the line",
+      format("points: offsets from the fit drawn x%g (RMS %.1f um, max %.1f um)", magnify, rms * kUm, largest * kUm),
+      "device axes from the " + std::string(s.circle ? "circle's centre" : "line's middle") +
+          format(", %.0f mm long", 0.3 * extent * kMm)};
+  return svg_plot(view);
+}
+
 std::string sweep_plots(const RunContext& c, const SweepPlot& s) {
   const JointInfo& joint = c.run().joints[static_cast<std::size_t>(s.joint)];
   const std::string name = "Joint " + std::to_string(s.joint + 1) + (joint.name.empty() ? "" : " (" + joint.name + ")");
@@ -314,7 +414,7 @@ std::string sweep_plots(const RunContext& c, const SweepPlot& s) {
         format("RMS radial %.1f um, along the axis %.1f um", std::sqrt(radial_ss / n), std::sqrt(axial_ss / n))};
     fit.series = {circle, points};
     residual.series = {radial, axial};
-    return svg_plot(fit) + svg_plot(residual);
+    return sweep_view_3d(name, s, centre, u, v, d) + svg_plot(fit) + svg_plot(residual);
   }
   fit.title = name + ": line fit";
   fit.width_px = 420;
@@ -334,13 +434,14 @@ std::string sweep_plots(const RunContext& c, const SweepPlot& s) {
   line.x = {*lo, *hi};
   line.y = {0.0, 0.0};
   fit.series = {line, across_u, across_v};
-  return svg_plot(fit);
+  return sweep_view_3d(name, s, centre, u, v, d) + svg_plot(fit);
 }
 
 std::string sweeps(const RunContext& c) {
   std::string html = "<section class=\"sweeps\" id=\"" + c.id("sweeps") +
-                     "\"><h3>Single-joint sweeps</h3><p>Measured points projected into each fit's plane "
-                     "(circle: centred on the fitted centre; line: distance off the fitted line).</p>"
+                     "\"><h3>Single-joint sweeps</h3><p>Each sweep in 3-D (the measured points, the fitted circle or "
+                     "line and the joint's axis, in the device frame), then its points projected into the fit's "
+                     "plane (circle: centred on the fitted centre; line: distance off the fitted line).</p>"
                      "<div class=\"plots\">";
   for (const SweepPlot& s : c.run().sweeps) html += sweep_plots(c, s);
   return html + "</div></section>";
@@ -391,6 +492,15 @@ std::string run_section(const RunContext& c) {
 }
 
 }  // namespace
+
+std::string utc_date_now() {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char date[32];
+  std::strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", &utc);
+  return date;
+}
 
 std::string render_html(const Report& report) {
   std::vector<RunContext> runs;

@@ -14,7 +14,10 @@
 //                    validation poses (and orientation when given), as a table and a dot plot;
 //   residuals        position error per validation pose before/after, and after vs each joint's
 //                    reading, one small plot per joint;
-//   sweeps           each single-joint sweep's points projected into its fit plane with the
+//   sweeps           each single-joint sweep in 3-D (an orthographic view from above the fit's
+//                    plane, the axis upright: the points, the fitted circle or line, the axis,
+//                    the device frame's directions, the points' offsets from the fit magnified
+//                    by a stated factor), then its points projected into the fit plane with the
 //                    fitted circle (revolute) or line (prismatic), radius and RMS, and the
 //                    residual of every point;
 //   bus              CAN statistics (frames, bytes, errors, load);
@@ -142,6 +145,9 @@ struct Report {
   std::string date;  // shown as given (e.g. ISO 8601), so reports are reproducible
   std::vector<Run> runs;
 };
+
+// The current time as reports date themselves ("2026-11-24 04:20 UTC").
+std::string utc_date_now();
 
 // The whole HTML document. Throws ReportError (see above).
 std::string render_html(const Report& report);

@@ -87,47 +87,51 @@ report::Run report_run(const RunDescription& description, const model::RobotMode
   run.notes = r.notes;
   run.notes.push_back(identify::format_noise(r));
 
-  auto accuracy = [](const std::string& label, const identify::AccuracyStats& s) {
-    report::Accuracy a;
-    a.label = label;
-    a.count = s.count;
-    a.mean_m = s.mean_m;
-    a.rms_m = s.rms_m;
-    a.max_m = s.max_m;
-    if (s.has_orientation) {
-      a.mean_rad = s.mean_rad;
-      a.rms_rad = s.rms_rad;
-      a.max_rad = s.max_rad;
-    }
-    return a;
-  };
   if (!data.validation.rows.empty()) {
-    run.accuracy.push_back(accuracy("nominal model", calibration.before));
-    run.accuracy.push_back(accuracy("identified model", calibration.after));
+    run.accuracy.push_back(report_accuracy("nominal model", calibration.before));
+    run.accuracy.push_back(report_accuracy("identified model", calibration.after));
     for (const model::Measurement& m : data.validation.rows)
       run.validation.push_back({m.q, error_of(nominal, m.q, m.position), error_of(r.model, m.q, m.position)});
   }
 
-  if (cpa) {
-    const std::vector<identify::Sweep> sweeps = identify::find_sweeps(data.calibration);
-    for (const identify::SweepFit& fit : cpa->fits) {
-      const auto sweep =
-          std::find_if(sweeps.begin(), sweeps.end(), [&](const auto& s) { return s.joint == fit.joint; });
-      if (sweep == sweeps.end()) continue;
-      report::SweepPlot plot;
-      plot.joint = fit.joint;
-      plot.circle = fit.curved;
-      plot.axis_point_m = fit.axis.point;
-      plot.axis_direction = fit.axis.direction;
-      plot.radius_m = fit.radius_m;
-      plot.rms_m = fit.rms_m;
-      plot.rejected = static_cast<int>(fit.rejected_lines.size());
-      for (int row : sweep->rows)
-        plot.points_m.push_back(data.calibration.rows[static_cast<std::size_t>(row)].position);
-      run.sweeps.push_back(std::move(plot));
-    }
-  }
+  if (cpa) run.sweeps = report_sweeps(data.calibration, cpa->fits);
   return run;
+}
+
+report::Accuracy report_accuracy(const std::string& label, const identify::AccuracyStats& s) {
+  report::Accuracy a;
+  a.label = label;
+  a.count = s.count;
+  a.mean_m = s.mean_m;
+  a.rms_m = s.rms_m;
+  a.max_m = s.max_m;
+  if (s.has_orientation) {
+    a.mean_rad = s.mean_rad;
+    a.rms_rad = s.rms_rad;
+    a.max_rad = s.max_rad;
+  }
+  return a;
+}
+
+std::vector<report::SweepPlot> report_sweeps(const model::Dataset& data, const std::vector<identify::SweepFit>& fits,
+                                             double still_tolerance) {
+  std::vector<report::SweepPlot> plots;
+  const std::vector<identify::Sweep> sweeps = identify::find_sweeps(data, still_tolerance);
+  for (const identify::SweepFit& fit : fits) {
+    const auto sweep = std::find_if(sweeps.begin(), sweeps.end(), [&](const auto& s) { return s.joint == fit.joint; });
+    if (sweep == sweeps.end()) continue;
+    report::SweepPlot plot;
+    plot.joint = fit.joint;
+    plot.circle = fit.curved;
+    plot.axis_point_m = fit.axis.point;
+    plot.axis_direction = fit.axis.direction;
+    plot.radius_m = fit.radius_m;
+    plot.rms_m = fit.rms_m;
+    plot.rejected = static_cast<int>(fit.rejected_lines.size());
+    for (int row : sweep->rows) plot.points_m.push_back(data.rows[static_cast<std::size_t>(row)].position);
+    plots.push_back(std::move(plot));
+  }
+  return plots;
 }
 
 report::BusStatistics bus_statistics(const std::string& candump_log, const std::string& bus, double bit_rate) {

@@ -15,6 +15,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "host/identify/cpa.hpp"
 #include "host/report/report.hpp"
@@ -30,6 +31,15 @@ struct RunDescription {
 report::Run report_run(const RunDescription& description, const model::RobotModel& nominal, const SessionData& data,
                        const Calibration& calibration, const std::optional<model::RobotModel>& truth,
                        const identify::CpaResult* cpa);
+
+// identify's accuracy figures as a report row labelled `label` (orientation when it has them).
+report::Accuracy report_accuracy(const std::string& label, const identify::AccuracyStats& s);
+
+// Each fit's sweep for the report: the fit (device frame) with the sweep's measured points,
+// found in `data` as identify::find_sweeps finds them; fits of joints without a sweep are left
+// out. report_run uses it for cpa; `kincal discover --report` for the discovered fits.
+std::vector<report::SweepPlot> report_sweeps(const model::Dataset& data, const std::vector<identify::SweepFit>& fits,
+                                             double still_tolerance = 0.0);
 
 // The value of parameter `id` in `model`, as report_run shows it (see above); exported for the
 // demo's tables.

@@ -104,6 +104,44 @@ TEST_CASE("report: sections not given are left out") {
   CHECK(has(render_html(testing::sample_report()), "<th>true</th>"));
 }
 
+namespace {
+
+// The <svg> plot whose title is `title`, or "".
+std::string plot_titled(const std::string& html, const std::string& title) {
+  const std::size_t at = html.find(">" + escape_html(title) + "</text>");
+  if (at == std::string::npos) return "";
+  const std::size_t begin = html.rfind("<svg class=\"plot\"", at), end = html.find("</svg>", at);
+  return html.substr(begin, end - begin);
+}
+
+}  // namespace
+
+TEST_CASE("report: each sweep has a 3-D view of its points, its fit, its axis and the offsets' scale") {
+  Report report = testing::sample_report();
+  // One point of the waist's sweep 1 mm off its circle, radially: the largest offset, and the
+  // magnification of the offsets follows from it (8 % of the 640 mm circle over 1 mm: x50).
+  SweepPlot& waist = report.runs[1].sweeps[0];
+  const Eigen::Vector3d centre = waist.axis_point_m;
+  const Eigen::Vector3d radial = (waist.points_m[5] - centre).normalized();
+  waist.points_m[5] = centre + radial * (waist.radius_m + 1e-3);
+  const std::string html = render_html(report);
+  CHECK(count(html, ": 3-D view</text>") == 3);
+  const std::string circle = plot_titled(html, "Joint 1 (waist): 3-D view");
+  REQUIRE_FALSE(circle.empty());
+  // 24 points and their 24 offsets, the fitted circle, the axis, the device's x, y and z.
+  CHECK(count(circle, "class=\"mark\"") == 24 + 24 + 1 + 1 + 3);
+  CHECK(has(circle, ">circle</text>"));
+  CHECK(has(circle, ">axis</text>"));
+  CHECK(has(circle, "points: offsets from the fit drawn x50 ("));
+  const std::size_t max_at = circle.find(", max ");
+  REQUIRE(max_at != std::string::npos);
+  CHECK(std::stod(circle.substr(max_at + 6)) == doctest::Approx(1000.0).epsilon(0.002));  // um
+  const std::string line = plot_titled(html, "Joint 3 (slide): 3-D view");
+  REQUIRE_FALSE(line.empty());
+  CHECK(count(line, "class=\"mark\"") == 24 + 24 + 1 + 1 + 3);
+  CHECK(has(line, ">line</text>"));
+}
+
 TEST_CASE("report: all text is escaped") {
   const std::string evil = "<script>alert(\"x\")</script> & 'q'";
   const std::string escaped = "&lt;script&gt;alert(&quot;x&quot;)&lt;/script&gt; &amp; &#39;q&#39;";

@@ -13,7 +13,7 @@ Report sample_report();
 inline constexpr const char* kSampleNominalMean = "3.2100 mm";
 inline constexpr const char* kSampleIdentifiedRms = "0.0312 mm";
 // Plots the sample holds: accuracy (2 runs), per pose (1 run), per joint (6), sweeps (2 circles
-// with their residuals, 1 line).
-inline constexpr int kSamplePlots = 2 + 1 + 6 + 2 * 2 + 1;
+// with their residuals, 1 line, and a 3-D view of each of the 3).
+inline constexpr int kSamplePlots = 2 + 1 + 6 + 2 * 2 + 1 + 3;
 
 }  // namespace kincal::report::testing
