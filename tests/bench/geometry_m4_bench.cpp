@@ -8,6 +8,7 @@
 
 #include "firmware/core/camera_model.hpp"
 #include "firmware/core/correction.hpp"
+#include "firmware/core/planar_pose.hpp"
 #include "firmware/core/pose_from_points.hpp"
 #include "firmware/core/range_plane.hpp"
 #include "firmware/core/stereo.hpp"
@@ -70,6 +71,7 @@ Matrix3<float> rotation(float x, float y, float z) {
 // In static storage, as on the platform: model and workspace are kilobytes, not stack.
 CorrectionModel g_model;
 CorrectionWorkspace g_workspace;
+JointMapModel g_joint_map;
 
 }  // namespace
 
@@ -119,6 +121,46 @@ int main() {
     if (refused != 0) std::printf("correction: %d refused\n", refused);
     std::printf("FIGURE correction%s_m4_instructions %.0f instructions\n", refinement == 0 ? "_first_order_step" : "",
                 instructions - loop);
+  }
+
+  // --- The same correction through a joint map (issue #12): the controller reads the elbow
+  // relative to the shoulder (chain joint 3 = reading 2 + reading 3), every gear is off by up to
+  // 300 ppm, the identified shoulder and elbow sag under gravity (PUMA masses, 3 kg payload). ---
+  {
+    CorrectionOptions options;
+    options.max_joint_step = 0.5f;
+    if (prepare_correction(arm, set, errors, options, g_model) != CorrectionStatus::ok) return 1;
+    JointMap<float> nominal_map;
+    nominal_map.joint_count = 6;
+    nominal_map.coupling(2, 1) = 1.0f;
+    JointMap<float> identified_map = nominal_map;
+    for (int i = 0; i < 6; ++i) identified_map.scale(i) = 1.0f + 3.0e-4f * random.next();
+    identified_map.compliance(1) = 2.0e-5f;
+    identified_map.compliance(2) = 3.0e-5f;
+    MassModel<float> masses;
+    masses.link_mass_kg = {0.0f, 17.4f, 4.8f, 0.82f, 0.34f, 0.09f};
+    masses.link_centre_of_mass_m[1] = {-0.3638f, 0.006f, 0.2275f};
+    masses.link_centre_of_mass_m[2] = {-0.0203f, -0.0141f, 0.070f};
+    masses.payload_mass_kg = 3.0f;
+    masses.payload_centre_of_mass_m = {0.0f, 0.0f, 0.1f};
+    if (prepare_joint_map(g_model, nominal_map, identified_map, masses, g_workspace, g_joint_map) !=
+        CorrectionStatus::ok)
+      return 1;
+    std::array<JointVector<float>, kVariants> readings;
+    for (std::size_t k = 0; k < readings.size(); ++k) {
+      readings[k] = targets[k];
+      readings[k](2) = targets[k](2) - targets[k](1);  // the same chain postures as above
+    }
+    JointVector<float> corrected = JointVector<float>::Zero();
+    int refused = 0;
+    const double instructions = instructions_per_call(counter, [&](int k) {
+      refused += correct_joint_readings(g_model, g_joint_map, g_workspace, readings[static_cast<std::size_t>(k)],
+                                        correction, corrected) != CorrectionStatus::ok;
+      keep(corrected);
+    });
+    failures += refused;
+    if (refused != 0) std::printf("correction with the joint map: %d refused\n", refused);
+    std::printf("FIGURE correction_joint_map_m4_instructions %.0f instructions\n", instructions - loop);
   }
 
   // Forward kinematics alone (6 joints, prepared chain, frames kept).
@@ -244,6 +286,69 @@ int main() {
     failures += refused;
     if (refused != 0) std::printf("stereo: %d refused\n", refused);
     std::printf("FIGURE triangulate_pair_m4_instructions %.0f instructions\n", instructions - loop);
+  }
+  // --- Issue #13: the camera-first pose, six fiducials of a square, with the ranger plane as the
+  // prior, default options (one perspective pass) and without that pass. ---
+  {
+    CameraIntrinsics camera;
+    camera.fx_px = 600.0f;
+    camera.fy_px = 600.0f;
+    camera.cx_px = 319.5f;
+    camera.cy_px = 239.5f;
+    camera.distortion = {-0.05f, 0.01f, 0.0f, 0.0f, 0.0f};
+    const float s = 0.00635f, h = 0.5f * s;
+    const std::array<Vector2<float>, 6> centres = {Vector2<float>(-7 * s, 7 * s), Vector2<float>(0, 7 * s),
+                                                   Vector2<float>(-7 * s, 0),     Vector2<float>(0, 0),
+                                                   Vector2<float>(7 * s, 0),      Vector2<float>(0, -7 * s)};
+    RangePlaneModel plane_model;
+    if (prepare_range_plane(plus_pattern_layout(0.1f, RangeModel::along_beam), plane_model) != PlaneStatus::ok)
+      return 1;
+    std::array<std::array<PlanarCorrespondence, 6>, kVariants> views;
+    std::array<PlanePrior, kVariants> priors;
+    for (std::size_t v = 0; v < kVariants; ++v) {
+      RigidTransform<float> camera_T_square;
+      camera_T_square.rotation = rotation(0.4f * random.next(), 0.4f * random.next(), 0.3f * random.next());
+      camera_T_square.rotation.col(1) = -camera_T_square.rotation.col(1);  // the square faces the camera
+      camera_T_square.rotation.col(2) = -camera_T_square.rotation.col(2);
+      camera_T_square.translation =
+          Vector3<float>(0.02f * random.next(), 0.02f * random.next(), 0.3f + 0.1f * random.next());
+      for (std::size_t i = 0; i < 6; ++i) {
+        PlanarCorrespondence& c = views[v][i];
+        c.target_m = centres[i];
+        c.fiducial_half_size_m = Vector2<float>(h, i == 3 ? s : h);
+        Vector2<float> pixel;
+        if (project_point(camera, camera_T_square * Vector3<float>(centres[i].x(), centres[i].y(), 0.0f), pixel) !=
+            CameraStatus::ok)
+          return 1;
+        c.pixel_px = pixel + 0.07f * Vector2<float>(random.next(), random.next());
+      }
+      priors[v].plane.normal = -camera_T_square.rotation.col(2);
+      priors[v].plane.distance_m = priors[v].plane.normal.dot(camera_T_square.translation);
+      priors[v].plane.sensors_used = 0xF;
+      if (range_plane_covariance(plane_model, priors[v].plane, 0.0005f, priors[v].covariance) != PlaneStatus::ok)
+        return 1;
+    }
+    static PlanarPoseWorkspace workspace;
+    PlanarPose pose;
+    int refused = 0, iterations = 0;
+    for (const int passes : {1, 0}) {
+      PlanarPoseOptions options;
+      options.pixel_sigma_px = 0.07f;
+      options.perspective_passes = static_cast<std::uint8_t>(passes);
+      iterations = 0;
+      const double instructions = instructions_per_call(counter, [&](int k) {
+        const auto i = static_cast<std::size_t>(k);
+        refused += planar_pose(camera, views[i], &priors[i], options, workspace, pose) != PlanarPoseStatus::ok;
+        iterations += pose.iterations;
+        keep(pose);
+      });
+      std::printf("planar_pose, %d perspective pass(es): %.1f Gauss-Newton steps per call\n", passes,
+                  static_cast<double>(iterations) / kCalls);
+      std::printf("FIGURE planar_pose%s_m4_instructions %.0f instructions\n", passes == 0 ? "_no_bias_pass" : "",
+                  instructions - loop);
+    }
+    failures += refused;
+    if (refused != 0) std::printf("planar_pose: %d refused\n", refused);
   }
   if (failures != 0) std::printf("geometry_m4_bench: %d calls did not succeed\n", failures);
   return failures == 0 ? 0 : 1;
