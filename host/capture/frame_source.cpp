@@ -9,6 +9,8 @@
 #include <system_error>
 #include <utility>
 
+#include <glob.h>
+
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio/registry.hpp>
 
@@ -174,8 +176,29 @@ std::optional<Frame> MemorySource::next() {
   return std::move(frames_[next_++]);
 }
 
-std::unique_ptr<FrameSource> open_source(const std::vector<std::string>& arguments) {
-  if (arguments.empty()) throw CaptureError("no input given (a camera, a video, a directory or image files)");
+std::vector<std::string> expand_patterns(const std::vector<std::string>& arguments) {
+  std::vector<std::string> out;
+  for (const std::string& a : arguments) {
+    std::error_code ec;
+    if (a.find_first_of("*?[") == std::string::npos || fs::exists(a, ec)) {
+      out.push_back(a);
+      continue;
+    }
+    glob_t matches{};
+    const int status = ::glob(a.c_str(), 0, nullptr, &matches);
+    std::vector<std::string> files(matches.gl_pathv, matches.gl_pathv + matches.gl_pathc);
+    ::globfree(&matches);
+    if (status == GLOB_NOMATCH || files.empty()) throw CaptureError(a + ": no file matches the pattern");
+    if (status != 0) throw CaptureError(a + ": cannot expand the pattern");
+    std::sort(files.begin(), files.end(), natural_less);
+    out.insert(out.end(), files.begin(), files.end());
+  }
+  return out;
+}
+
+std::unique_ptr<FrameSource> open_source(const std::vector<std::string>& given) {
+  if (given.empty()) throw CaptureError("no input given (a camera, a video, a directory or image files)");
+  const std::vector<std::string> arguments = expand_patterns(given);
   if (arguments.size() == 1) {
     const std::string& a = arguments.front();
     std::error_code ec;

@@ -115,8 +115,14 @@ class MemorySource final : public FrameSource {
 
 // The source a command-line argument list means: one argument that is a number or a /dev/video*
 // path -> camera; one directory -> its images; one file that OpenCV opens as a video -> the
-// video; otherwise the files as an image list. Throws CaptureError as the sources do.
+// video; otherwise the files as an image list. Patterns are expanded first (expand_patterns).
+// Throws CaptureError as the sources do.
 std::unique_ptr<FrameSource> open_source(const std::vector<std::string>& arguments);
+
+// Each argument with a glob character (* ? [) that names no existing path replaced by the files
+// it matches (POSIX glob), in natural order: a quoted 'left/img*.png' as the shell would expand
+// it. A pattern that matches nothing throws CaptureError naming it.
+std::vector<std::string> expand_patterns(const std::vector<std::string>& arguments);
 
 // Natural order of file names: runs of digits compare by value ("img2" < "img10").
 bool natural_less(const std::string& a, const std::string& b);

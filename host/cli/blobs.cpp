@@ -1,13 +1,12 @@
 #include "host/cli/blobs.hpp"
 
-#include <fstream>
 #include <iostream>
-#include <iterator>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "host/cli/colour_table.hpp"
 #include "host/cli/threshold_option.hpp"
 #include "host/files/input_limits.hpp"
 #include "host/vision/blob_json.hpp"
@@ -27,29 +26,6 @@ struct BlobsOptions {
   std::uint32_t max_blobs = 100000;
   bool no_refine = false;
 };
-
-core::ColourClassTable read_colour_table(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path + ": cannot open the colour table");
-  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  core::ColourClassTable table;
-  switch (core::parse_colour_table(bytes, table)) {
-    case core::ColourTableStatus::kOk:
-      return table;
-    case core::ColourTableStatus::kWrongSize:
-      throw std::runtime_error(path + ": not a colour table (" + std::to_string(bytes.size()) + " bytes, expected " +
-                               std::to_string(core::kColourTableBlockBytes) + ")");
-    case core::ColourTableStatus::kBadMagic:
-      throw std::runtime_error(path + ": not a colour table (bad magic)");
-    case core::ColourTableStatus::kBadCrc:
-      throw std::runtime_error(path + ": colour table corrupted (CRC mismatch)");
-    case core::ColourTableStatus::kUnsupportedVersion:
-      throw std::runtime_error(path + ": colour table of an unsupported version");
-    case core::ColourTableStatus::kUnknownColourSpace:
-      throw std::runtime_error(path + ": colour table with an unknown colour space");
-  }
-  throw std::runtime_error(path + ": colour table not readable");
-}
 
 int run_blobs(const BlobsOptions& o) {
   vision::LabelOptions options;

@@ -1,6 +1,8 @@
 #include "host/cli/colour_table.hpp"
 
+#include <fstream>
 #include <iostream>
+#include <iterator>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -50,6 +52,29 @@ int run_colour_table(const ColourTableOptions& o) {
 }
 
 }  // namespace
+
+core::ColourClassTable read_colour_table(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path + ": cannot open the colour table");
+  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  core::ColourClassTable table;
+  switch (core::parse_colour_table(bytes, table)) {
+    case core::ColourTableStatus::kOk:
+      return table;
+    case core::ColourTableStatus::kWrongSize:
+      throw std::runtime_error(path + ": not a colour table (" + std::to_string(bytes.size()) + " bytes, expected " +
+                               std::to_string(core::kColourTableBlockBytes) + ")");
+    case core::ColourTableStatus::kBadMagic:
+      throw std::runtime_error(path + ": not a colour table (bad magic)");
+    case core::ColourTableStatus::kBadCrc:
+      throw std::runtime_error(path + ": colour table corrupted (CRC mismatch)");
+    case core::ColourTableStatus::kUnsupportedVersion:
+      throw std::runtime_error(path + ": colour table of an unsupported version");
+    case core::ColourTableStatus::kUnknownColourSpace:
+      throw std::runtime_error(path + ": colour table with an unknown colour space");
+  }
+  throw std::runtime_error(path + ": colour table not readable");
+}
 
 void add_colour_table_command(CLI::App& app, int& status) {
   auto options = std::make_shared<ColourTableOptions>();

@@ -4,10 +4,18 @@
 // count) and writes the platform's parameter block (firmware/core/colour_class.hpp).
 #pragma once
 
+#include <string>
+
 #include <CLI/App.hpp>
+
+#include "firmware/core/colour_class.hpp"
 
 namespace kincal::cli {
 
 void add_colour_table_command(CLI::App& app, int& status);
+
+// A table file as `kincal colour-table` writes it; std::runtime_error naming the file and what is
+// wrong with it (size, magic, version, colour space, CRC).
+core::ColourClassTable read_colour_table(const std::string& path);
 
 }  // namespace kincal::cli

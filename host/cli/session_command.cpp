@@ -3,13 +3,18 @@
 //   kincal session --model FILE [--rig platform|stereo] [--plan FILE | --sweeps N [--home Q] | --poses N]
 //                  [--validation N | --validation-plan FILE]
 //                  [--robot sim|manual | --robot-cmd 'CMD {q}'] [--can IF [--fd]] [--squares N]
+//                  [--left SRC... --right SRC... --stereo FILE [--colour-table FILE] [--pixel-sigma PX]]
 //                  [--journal FILE] [--resume] [--out FILE] [--report FILE] [--dataset FILE] [--seed S]
 //
 // The simulated robot (the default) comes with its simulated rig: the model file with hidden
 // errors, the platform's firmware in-process on a loopback bus or the stereo pair. A real robot
-// (--robot manual or --robot-cmd) is measured by the sensor platform on a SocketCAN interface
-// (--can, required) looking at a strip of --squares calibration squares; it visits only the
-// poses of plan files (--plan, --validation-plan), never random ones.
+// (--robot manual or --robot-cmd) visits only the poses of plan files (--plan, --validation-plan),
+// never random ones, and is measured by the sensor platform on a SocketCAN interface (--can,
+// required) looking at a strip of --squares calibration squares, or, with --rig stereo, by a
+// calibrated stereo pair watching the beacon (host/session/stereo_sensor.hpp): frames from
+// host/capture (--left, --right: cameras, videos or recorded images, one pair per pose), the
+// pair from `kincal camera stereo` (--stereo; the device frame is the left camera's), the beacon
+// by its colour class (--colour-table) or as the brightest blob.
 // Exit status 0, or 1 with a message naming what failed (and, for a stopped session, the pose and
 // how to resume).
 #include "host/cli/session_command.hpp"
@@ -22,8 +27,12 @@
 #include <random>
 #include <sstream>
 
+#include "host/camera/calibration_file.hpp"
 #include "host/can/socketcan.hpp"
+#include "host/capture/stereo_source.hpp"
+#include "host/cli/colour_table.hpp"
 #include "host/cli/model_option.hpp"
+#include "host/cli/number_options.hpp"
 #include "host/demo/simulated_rig.hpp"
 #include "host/files/output_file.hpp"
 #include "host/identify/plausibility.hpp"
@@ -32,6 +41,7 @@
 #include "host/session/online_correction.hpp"
 #include "host/session/session.hpp"
 #include "host/session/session_report.hpp"
+#include "host/session/stereo_sensor.hpp"
 #include "host/sim/robot.hpp"
 
 namespace kincal::cli {
@@ -42,6 +52,9 @@ struct SessionArgs {
   ModelOption model;
   std::string rig = "platform", plan, validation_plan, home, robot = "sim", robot_cmd, can, journal = "session.journal";
   std::string out, report, dataset;
+  std::vector<std::string> left, right;  // real stereo pair: frame sources
+  std::string stereo, colour_table;
+  double pixel_sigma_px = 0.1, pair_tolerance_s = 0.5;
   int sweeps = 0, poses = 40, validation = 20, squares = 8;
   bool fd = false, resume = false, accept_implausible = false;
   std::uint64_t seed = 1;
@@ -108,15 +121,123 @@ std::vector<std::vector<double>> read_plan_for(const model::RobotModel& file, co
   }
 }
 
+// The frames of a real stereo pair (host/capture), one pair per pose. Recorded sources (image
+// sequences, videos) hold one pair per pose of the plan, in plan order: pose i is pair i, so a
+// resumed session skips the pairs of the poses already measured, and a frame without a partner
+// in time is an error (it would shift every later pose). A live camera gives the pair taken
+// after kLiveStalePairs more pairs, so that frames queued during the move are not used.
+class CapturedStereo {
+ public:
+  static constexpr int kLiveStalePairs = 4;
+
+  CapturedStereo(const SessionArgs& a, int poses) {
+    std::unique_ptr<capture::FrameSource> left = capture::open_source(a.left);
+    std::unique_ptr<capture::FrameSource> right = capture::open_source(a.right);
+    live_ = dynamic_cast<capture::CameraSource*>(left.get()) || dynamic_cast<capture::CameraSource*>(right.get());
+    const auto* left_images = dynamic_cast<const capture::ImageSequenceSource*>(left.get());
+    const auto* right_images = dynamic_cast<const capture::ImageSequenceSource*>(right.get());
+    if (left_images && right_images) {
+      const std::size_t l = left_images->files().size(), r = right_images->files().size();
+      if (l != r || l != static_cast<std::size_t>(poses))
+        throw model::InputError("--left has " + std::to_string(l) + " images (" + left->name() + "), --right " +
+                                std::to_string(r) + " (" + right->name() + "), the plan " + std::to_string(poses) +
+                                " poses (calibration and validation): recorded frames are one pair per pose, in "
+                                "plan order");
+    }
+    source_.emplace(std::move(left), std::move(right), a.pair_tolerance_s);
+  }
+
+  session::StereoFrames grab(int pose) {
+    std::optional<capture::StereoFrame> pair;
+    try {
+      if (live_) {
+        for (int i = 0; i <= kLiveStalePairs; ++i) pair = next(pose);
+      } else {
+        if (taken_ > pose)
+          throw session::SessionError("pose " + std::to_string(pose) + ": its frames were read already");
+        while (taken_ <= pose) pair = next(pose);
+      }
+    } catch (const capture::CaptureError& e) {
+      throw session::SessionError("pose " + std::to_string(pose) + ": " + e.what());
+    }
+    return {pair->left.image, pair->right.image, pair->left.timestamp_s, pair->left.origin, pair->right.origin};
+  }
+
+ private:
+  capture::StereoFrame next(int pose) {
+    std::optional<capture::StereoFrame> pair = source_->next();
+    if (!live_ && !source_->unpaired().empty()) {
+      const capture::UnpairedFrame& u = source_->unpaired().front();
+      throw session::SessionError("pose " + std::to_string(pose) + ": the " +
+                                  (u.side == capture::Side::kLeft ? "left" : "right") + " frame " + u.origin +
+                                  " has no partner in time in the other camera's frames: recorded frames are one "
+                                  "pair per pose");
+    }
+    if (!pair)
+      throw session::SessionError("pose " + std::to_string(pose) + ": the stereo frames ended after " +
+                                  std::to_string(taken_) + " pairs");
+    ++taken_;
+    return std::move(*pair);
+  }
+
+  std::optional<capture::StereoSource> source_;
+  bool live_ = false;
+  int taken_ = 0;
+};
+
+// The calibrated pair of `kincal camera stereo` as the sensor takes it; the device frame is the
+// left camera's.
+session::StereoSetup stereo_setup(const SessionArgs& a) {
+  const camera::StereoCalibration c = camera::load_stereo(a.stereo);
+  auto intrinsics = [](const camera::CameraModel& m) {
+    const shared::CameraIntrinsics p = camera::to_platform(m);
+    core::CameraIntrinsics k;
+    k.fx_px = p.fx_px;
+    k.fy_px = p.fy_px;
+    k.cx_px = p.cx_px;
+    k.cy_px = p.cy_px;
+    k.distortion = {p.k1, p.k2, p.p1, p.p2, p.k3};
+    return k;
+  };
+  session::StereoSetup setup;
+  setup.pair.left = intrinsics(c.left);
+  setup.pair.right = intrinsics(c.right);
+  // x_right = R x_left + t: the right camera's pose in the left frame is the inverse.
+  core::RigidTransform<float> right_T_left;
+  for (int i = 0; i < 3; ++i) {
+    right_T_left.translation(i) = static_cast<float>(c.right_t_left_m[i]);
+    for (int j = 0; j < 3; ++j) right_T_left.rotation(i, j) = static_cast<float>(c.right_R_left(i, j));
+  }
+  setup.pair.left_T_right = right_T_left.inverse();
+  setup.left_size_px = c.left.image_size;
+  setup.right_size_px = c.right.image_size;
+  setup.pixel_sigma_px = a.pixel_sigma_px;
+  if (!a.colour_table.empty()) setup.colour = read_colour_table(a.colour_table);
+  return setup;
+}
+
 int run(const SessionArgs& a) {
   files::refuse_overwriting({{"--out", a.out}, {"--report", a.report}, {"--dataset", a.dataset}},
                             {{"--journal", a.journal},
                              {"--model", a.model.path},
                              {"--plan", a.plan},
-                             {"--validation-plan", a.validation_plan}});
+                             {"--validation-plan", a.validation_plan},
+                             {"--stereo", a.stereo},
+                             {"--colour-table", a.colour_table}});
   const model::RobotModel file = a.model.load();
   const bool simulated = a.robot == "sim" && a.robot_cmd.empty();
   const bool platform = a.rig == "platform";
+  const bool real_stereo = !a.left.empty() || !a.right.empty() || !a.stereo.empty();
+  if (real_stereo) {
+    if (platform) throw model::InputError("--left/--right/--stereo: cameras of a stereo rig: add --rig stereo");
+    if (simulated)
+      throw model::InputError(
+          "--left/--right/--stereo: real cameras watch a real robot: give --robot manual or --robot-cmd CMD (the "
+          "simulated robot brings its own rendered cameras)");
+    if (a.left.empty() || a.right.empty() || a.stereo.empty())
+      throw model::InputError("a real stereo pair needs all of --left SRC, --right SRC and --stereo FILE");
+    if (!a.can.empty()) throw model::InputError("--can: the stereo rig has no platform on a CAN bus");
+  }
 
   std::unique_ptr<session::SimulatedRig> rig;
   std::unique_ptr<can::Transport> transport;
@@ -133,15 +254,18 @@ int run(const SessionArgs& a) {
     o.fd = a.fd;
     rig = session::make_simulated_rig(platform ? session::RigKind::platform : session::RigKind::stereo, file, o);
   } else {
-    if (!platform)
+    if (!platform && !real_stereo)
       throw model::InputError(
-          "--rig stereo: a real stereo pair is calibrated with `kincal camera`; "
-          "sessions with real cameras run the platform rig");
-    if (a.can.empty()) throw model::InputError("a real robot is measured by the platform: --can IF is required");
+          "--rig stereo with a real robot: give its cameras (--left SRC --right SRC --stereo FILE from `kincal "
+          "camera stereo`, and --colour-table FILE for a coloured beacon)");
+    if (platform && a.can.empty())
+      throw model::InputError("a real robot is measured by the platform: --can IF is required");
     if (a.plan.empty()) throw model::InputError("a real robot visits only planned poses: --plan FILE is required");
-    transport = std::make_unique<can::SocketCanTransport>(a.can, can::SocketCanOptions{a.fd, true, {}});
-    client = std::make_unique<can::PlatformClient>(*transport);
-    sensor = std::make_unique<session::PlatformPoseSensor>(*client, session::strip_square_poses(a.squares));
+    if (platform) {
+      transport = std::make_unique<can::SocketCanTransport>(a.can, can::SocketCanOptions{a.fd, true, {}});
+      client = std::make_unique<can::PlatformClient>(*transport);
+      sensor = std::make_unique<session::PlatformPoseSensor>(*client, session::strip_square_poses(a.squares));
+    }
     if (!a.robot_cmd.empty())
       driver = std::make_unique<session::CommandRobotDriver>(a.robot_cmd);
     else
@@ -149,7 +273,6 @@ int run(const SessionArgs& a) {
   }
   const model::RobotModel& nominal = rig ? rig->nominal() : file;
   session::RobotDriver& robot = rig ? rig->driver() : *driver;
-  session::Sensor& measure = rig ? rig->sensor() : *sensor;
 
   session::SessionPlan plan;
   std::mt19937_64 rng(a.seed);
@@ -167,6 +290,15 @@ int run(const SessionArgs& a) {
     plan.validation = random_observable(nominal, *rig, a.validation, rng, "--validation");
   }
 
+  std::unique_ptr<CapturedStereo> captured;
+  if (real_stereo) {
+    session::StereoSetup setup = stereo_setup(a);
+    captured = std::make_unique<CapturedStereo>(a, plan.total());
+    sensor = std::make_unique<session::StereoBeaconSensor>(
+        [&frames = *captured](int pose) { return frames.grab(pose); }, std::move(setup));
+  }
+  session::Sensor& measure = rig ? rig->sensor() : *sensor;
+
   session::SessionOptions options;
   options.journal_path = a.journal;
   options.resume = a.resume;
@@ -176,6 +308,7 @@ int run(const SessionArgs& a) {
            << " seed=" << a.seed << " plan=" << (a.plan.empty() ? "generated" : a.plan) << " sweeps=" << a.sweeps
            << " home=" << a.home
            << " validation=" << (a.validation_plan.empty() ? std::to_string(a.validation) : a.validation_plan);
+  if (real_stereo) identity << " stereo=" << a.stereo << " colour-table=" << a.colour_table;
   options.identity = identity.str();
   const session::SessionData data = session::run_session(nominal, plan, robot, measure, options, std::cerr);
   if (!a.dataset.empty()) {
@@ -243,6 +376,30 @@ void add_session_command(CLI::App& app, int& status) {
   cmd->add_option("--validation-plan", a->validation_plan, "validation poses (joints CSV)")->check(CLI::ExistingFile);
   cmd->add_option("--robot", a->robot, "sim or manual")->check(CLI::IsMember({"sim", "manual"}))->capture_default_str();
   cmd->add_option("--robot-cmd", a->robot_cmd, "command that moves the robot; {q} = the joint values");
+  cmd->add_option("--left", a->left,
+                  "real stereo rig: the left camera's frames: a V4L2 device (0, /dev/video0), a video, a "
+                  "directory of images or image files (a quoted pattern like 'left/*.png' is expanded); recorded "
+                  "frames are one per pose of --plan then --validation-plan, in order")
+      ->expected(1, -1);
+  cmd->add_option("--right", a->right, "real stereo rig: the right camera's frames, as --left")->expected(1, -1);
+  cmd->add_option("--stereo", a->stereo,
+                  "real stereo rig: the calibrated pair (`kincal camera stereo`); positions are measured in the "
+                  "left camera's frame (x right, y down, z forward): the model's base is placed in it")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--colour-table", a->colour_table,
+                  "real stereo rig: the beacon's colour class (`kincal colour-table`); without it the beacon is the "
+                  "brightest blob")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--pixel-sigma", a->pixel_sigma_px,
+                  "real stereo rig: centroid noise (px) the measurements' covariance assumes; the identification "
+                  "estimates any excess as model error")
+      ->check(finite_positive())
+      ->capture_default_str();
+  cmd->add_option("--pair-tolerance", a->pair_tolerance_s,
+                  "real stereo rig: largest time difference of a left and right frame (s); image sequences are "
+                  "stamped 1 s apart")
+      ->check(finite_non_negative())
+      ->capture_default_str();
   cmd->add_option("--can", a->can, "SocketCAN interface of a real platform (e.g. can0, vcan0)");
   cmd->add_flag("--fd", a->fd, "CAN FD");
   cmd->add_option("--squares", a->squares, "calibration squares on the strip (real platform)")

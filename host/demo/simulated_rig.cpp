@@ -9,6 +9,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "host/can/loopback.hpp"
+#include "host/session/stereo_sensor.hpp"
 #include "host/sim/beacon.hpp"
 #include "host/sim/parameter_blocks.hpp"
 #include "host/sim/rangers.hpp"
@@ -190,17 +191,25 @@ class StereoRig : public SimulatedRig {
   StereoRig(const model::RobotModel& file, const RigOptions& options)
       : options_(options), robot_(file, options.seed, {}, sim::typical_imperfections(sim::reach_m(file))) {
     beacon_.radius_m = 0.015;
-    core::ParallelStereoRig rig;
-    rig.focal_x_px = static_cast<float>(spec_.camera.fx_px);
-    rig.focal_y_px = static_cast<float>(spec_.camera.fy_px);
-    rig.baseline_m = static_cast<float>(spec_.baseline_m);
-    rig.principal_left_px = {static_cast<float>(spec_.camera.cx_px), static_cast<float>(spec_.camera.cy_px)};
-    rig.principal_right_px = rig.principal_left_px;
+    // The rendered pair as a calibrated one: identical pinholes without distortion, the right
+    // camera one baseline along the left camera's x.
+    StereoSetup setup;
+    core::CameraIntrinsics camera;
+    camera.fx_px = static_cast<float>(spec_.camera.fx_px);
+    camera.fy_px = static_cast<float>(spec_.camera.fy_px);
+    camera.cx_px = static_cast<float>(spec_.camera.cx_px);
+    camera.cy_px = static_cast<float>(spec_.camera.cy_px);
+    setup.pair.left = setup.pair.right = camera;
+    setup.pair.left_T_right.translation = core::Vector3<float>(static_cast<float>(spec_.baseline_m), 0, 0);
+    setup.left_size_px = setup.right_size_px = cv::Size(spec_.camera.width_px, spec_.camera.height_px);
     // Their camera frame has y up: the right camera's OpenCV frame turned half a turn about z.
     model::Transform device_T_right;
     device_T_right.rotation = Eigen::AngleAxisd(std::numbers::pi, model::Vector3::UnitZ()).toRotationMatrix();
-    sensor_ = std::make_unique<StereoBeaconSensor>([this] { return frames_; }, rig, device_T_right,
-                                                   kBeaconCentroidSigmaPx * options.measurement_scale);
+    model::Transform right_T_left;
+    right_T_left.translation = model::Vector3(-spec_.baseline_m, 0, 0);
+    setup.device_T_left = device_T_right * right_T_left;
+    setup.pixel_sigma_px = kBeaconCentroidSigmaPx * options.measurement_scale;
+    sensor_ = std::make_unique<StereoBeaconSensor>([this](int) { return frames_; }, std::move(setup));
     driver_ = std::make_unique<SimulatedDriver>([this](int index, const std::vector<double>& q) { show(index, q); });
   }
 
@@ -241,7 +250,7 @@ class StereoRig : public SimulatedRig {
                          robot_.nominal().name + " there (give --home or a --plan with poses in front of it)");
     }
     const sim::StereoFrame f = sim::render_beacon(spec_, beacon_, beacon, conditions);
-    frames_ = {f.left, f.right, 0.0};
+    frames_ = {f.left, f.right, 0.0, "rendered left", "rendered right"};
   }
 
   RigOptions options_;

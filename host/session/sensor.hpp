@@ -10,29 +10,18 @@
 //                        one that puts the camera nearest the nominal prediction (squares are 4
 //                        inches apart, far more than any kinematic error), so the platform may
 //                        pick any square in view. The observation is a full pose.
-//   StereoBeaconSensor   Kapucu & Baysec's rig: a fixed parallel stereo pair sees a bright beacon
-//                        on the tool; the firmware core's labeler finds it in each image (the
-//                        largest bright blob) and triangulate_parallel() gives the point (in the
-//                        left camera's OpenCV frame, the right camera one baseline along its x),
-//                        placed in the device frame by device_T_right (the right camera's
-//                        OpenCV frame in the device frame; for host/model/robots/stanford_rrp.yaml
-//                        a half turn about z: their camera frame has y up), with its first-order
-//                        covariance from the pixel noise (depth about 18 cm per pixel of
-//                        disparity on their rig).
+//   StereoBeaconSensor   Kapucu & Baysec's rig: stereo_sensor.hpp.
 //
-// Thread safety: one session thread. Cost: one CAN round trip, or two labelings of a frame.
+// Thread safety: one session thread. Cost: one CAN round trip.
 #pragma once
 
 #include <cstdint>
-#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
-#include <opencv2/core.hpp>
 
-#include "firmware/core/stereo.hpp"
 #include "host/can/platform_client.hpp"
 #include "host/model/robot_model.hpp"
 #include "host/session/session_error.hpp"
@@ -75,29 +64,6 @@ class PlatformPoseSensor : public Sensor {
  private:
   can::PlatformClient& client_;
   std::vector<model::Transform> strip_T_square_;
-};
-
-struct StereoFrames {
-  cv::Mat left, right;  // 8-bit grey
-  double timestamp_s = 0;
-};
-
-class StereoBeaconSensor : public Sensor {
- public:
-  // `grab` returns the next pair (from host/capture, or the simulator); pixel_sigma_px is the
-  // centroid noise the covariance assumes.
-  StereoBeaconSensor(std::function<StereoFrames()> grab, const core::ParallelStereoRig& rig,
-                     const model::Transform& device_T_right, double pixel_sigma_px);
-  Observation measure(int index, const model::Transform& predicted) override;
-  std::string name() const override { return "stereo pair and beacon"; }
-  bool gives_orientation() const override { return false; }
-  bool gives_covariance() const override { return true; }
-
- private:
-  std::function<StereoFrames()> grab_;
-  core::ParallelStereoRig rig_;
-  model::Transform device_T_right_;
-  double pixel_sigma_px_;
 };
 
 }  // namespace kincal::session
