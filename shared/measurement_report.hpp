@@ -17,8 +17,11 @@
 //   pose       square_T_camera: translation 3 x i20 LSB 2^-18 m (3.8 um, +-2 m), rotation vector
 //              (axis * angle) 3 x i18 LSB 2^-15 rad (30.5 urad, +-4 rad >= pi). A pose from four
 //              fiducials is good to ~10 um / ~0.1 mrad, so neither LSB limits it.
-//              Then its covariance (protocol 2.0): the 6 x 6 covariance of exactly these six
-//              reported numbers (t_x t_y t_z in m, r_x r_y r_z in rad), as
+//              Then its covariance (protocol 2.0): the 6 x 6 covariance of (t, delta): t the
+//              reported translation (m, square frame), delta the rotation's error as a small
+//              rotation in the square frame (rad): true square_R_camera = exp([delta]x) *
+//              reported square_R_camera (not the rotation vector's own components, whose
+//              covariance would need the SO(3) Jacobian of the angle), as
 //              6 standard deviations, u10 each, sigma = 2^((raw - 896) / 32) m or rad: 1/32
 //                octave steps (rounding within +-1.1 % of sigma, +-2.2 % of the variance), range
 //                2^-28 (3.7 nm / 3.7 nrad; raw 0 stands for this and anything smaller) to
@@ -71,7 +74,7 @@ inline constexpr std::size_t kRangers = 4;
 inline constexpr std::size_t kMaxFiducials = 8;
 inline constexpr std::size_t kMaxBlobs = 64;
 inline constexpr std::uint16_t kNoEcho = 0xFFFF;
-inline constexpr std::size_t kPoseDof = 6;                                       // t_x t_y t_z r_x r_y r_z
+inline constexpr std::size_t kPoseDof = 6;                                       // t_x t_y t_z, then the rotation error
 inline constexpr std::size_t kPoseCorrelations = kPoseDof * (kPoseDof - 1) / 2;  // upper triangle
 
 struct Fiducial {
@@ -156,7 +159,7 @@ double pose_sigma(std::uint16_t raw);
 // Nearest raw of a correlation coefficient, clamped to [-1, 1]; NaN -> 0.
 std::int8_t quantize_pose_correlation(float rho);
 // Sets the report's sigma and correlation fields from a 6 x 6 covariance (row-major, order
-// t_x t_y t_z r_x r_y r_z, of the reported square_T_camera numbers; only the upper triangle and
+// t_x t_y t_z delta_x delta_y delta_z as in the layout above; only the upper triangle and
 // diagonal are read). A zero variance gives correlations 0 in its row and column.
 void set_pose_covariance(std::span<const float, kPoseDof * kPoseDof> covariance, MeasurementReport& report);
 // The 6 x 6 covariance the report's fields stand for (row-major, symmetric), as set_pose_covariance

@@ -11,6 +11,8 @@ namespace {
 
 constexpr float kBeamAxisTolerance = 1.0e-3f;  // beam direction components off the optical axis
 constexpr float kBeamOriginZToleranceM = 1.0e-4f;
+constexpr float kSquarePlanarToleranceM = 1.0e-4f;  // fiducial z in the square frame
+constexpr std::uint8_t kCentreFiducialId = 4;
 constexpr std::uint32_t kMinBlobAreaPx = 4;  // single pixels and pairs are noise, not fiducials or a beacon
 
 // The report's one status: the most fundamental failure wins (hardware, then configuration,
@@ -49,7 +51,67 @@ std::uint16_t pixel_q6(core::q16_16 v) {
   return static_cast<std::uint16_t>(q6 > 0xFFFFu ? 0xFFFFu : q6);
 }
 
+// The fiducials' side s in the geometry block: the perimeter fiducials p2, p3, p5, p6 are
+// FidModel::perimeter_distance_sides s from the centre p4 (fiducial_id.hpp); their mean distance.
+// 0 when the block has not the centre and at least one of them.
+float fiducial_side_m(const shared::PlatformGeometry& g) {
+  if (g.fiducial_count < kCentreFiducialId) return 0.0f;
+  const auto& centre = g.fiducial_square_m[kCentreFiducialId - 1u];
+  float sum_m = 0.0f;
+  int count = 0;
+  for (const std::uint8_t id : {std::uint8_t{2}, std::uint8_t{3}, std::uint8_t{5}, std::uint8_t{6}}) {
+    if (id > g.fiducial_count) continue;
+    const auto& p = g.fiducial_square_m[id - 1u];
+    const float dx = p[0] - centre[0], dy = p[1] - centre[1];
+    sum_m += std::sqrt(dx * dx + dy * dy);
+    ++count;
+  }
+  if (count == 0) return 0.0f;
+  const float side_m = sum_m / static_cast<float>(count * core::FidModel{}.perimeter_distance_sides);
+  return side_m > 0.0f && side_m < 1.0f ? side_m : 0.0f;
+}
+
 }  // namespace
+
+void report_covariance(const core::PlanarPose& pose, std::array<float, 36>& covariance) noexcept {
+  // planar_pose's covariance is of the twist [dt; dphi] of camera_T_square in the camera frame
+  // (R = exp([dphi]x) R_est, t = t_est + dt). With R, t camera_T_square and A = -R^T:
+  //   square_t_camera = -R^T t      moves by  A dt + A [t]x dphi
+  //   square_R_camera = R^T         moves by  exp([A dphi]x) on the left
+  // so J = [A, A [t]x; 0, A] and the report's covariance is J C J^T. Plain loops: fixed
+  // summation order, the same bits on both targets.
+  const core::Matrix3<float>& r = pose.camera_T_target.rotation;
+  const core::Vector3<float>& t = pose.camera_T_target.translation;
+  std::array<std::array<float, 3>, 3> a{}, t_cross{};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) a[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)] = -r(j, i);
+  t_cross[0] = {0.0f, -t(2), t(1)};
+  t_cross[1] = {t(2), 0.0f, -t(0)};
+  t_cross[2] = {-t(1), t(0), 0.0f};
+  std::array<std::array<float, 6>, 6> jacobian{};
+  for (std::size_t i = 0; i < 3; ++i)
+    for (std::size_t j = 0; j < 3; ++j) {
+      float at = 0.0f;
+      for (std::size_t k = 0; k < 3; ++k) at += a[i][k] * t_cross[k][j];
+      jacobian[i][j] = a[i][j];
+      jacobian[i][j + 3] = at;
+      jacobian[i + 3][j + 3] = a[i][j];
+    }
+  std::array<std::array<float, 6>, 6> jc{};
+  for (std::size_t i = 0; i < 6; ++i)
+    for (std::size_t j = 0; j < 6; ++j) {
+      float sum = 0.0f;
+      for (std::size_t k = 0; k < 6; ++k)
+        sum += jacobian[i][k] * pose.covariance(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(j));
+      jc[i][j] = sum;
+    }
+  for (std::size_t i = 0; i < 6; ++i)
+    for (std::size_t j = 0; j < 6; ++j) {
+      float sum = 0.0f;
+      for (std::size_t k = 0; k < 6; ++k) sum += jc[i][k] * jacobian[j][k];
+      covariance[i * 6 + j] = sum;
+    }
+}
 
 void MeasurementPipeline::note(shared::MeasureStatus status) noexcept {
   if (rank(status) > rank(status_)) status_ = status;
@@ -74,6 +136,16 @@ void MeasurementPipeline::begin(const MeasureRequest& request, const ParameterSe
   histogram_.clear();
   width_px_ = height_px_ = 0;
   have_plane_ = false;
+  fiducial_side_m_ = has_geometry_ ? fiducial_side_m(geometry_) : 0.0f;
+  camera_ = core::CameraIntrinsics{};
+  camera_.fx_px = intrinsics_.fx_px;
+  camera_.fy_px = intrinsics_.fy_px;
+  camera_.cx_px = intrinsics_.cx_px;
+  camera_.cy_px = intrinsics_.cy_px;
+  camera_.distortion = {intrinsics_.k1, intrinsics_.k2, intrinsics_.p1, intrinsics_.p2, intrinsics_.k3};
+  square_is_planar_ = true;
+  for (std::size_t k = 0; k < geometry_.fiducial_count && k < geometry_.fiducial_square_m.size(); ++k)
+    if (!(std::fabs(geometry_.fiducial_square_m[k][2]) <= kSquarePlanarToleranceM)) square_is_planar_ = false;
 }
 
 bool MeasurementPipeline::accept_frame_size(std::uint16_t width_px, std::uint16_t height_px) noexcept {
@@ -153,46 +225,58 @@ void MeasurementPipeline::compute_fiducials_and_pose(shared::MeasurementReport& 
     report.fiducial_count = fid_.count;
     report.sections |= shared::section::kFiducials;
   }
-  if ((request_.sections & shared::section::kPose) == 0 || !have_plane_ || !has_intrinsics_ ||
+  if ((request_.sections & shared::section::kPose) == 0 || !has_intrinsics_ || !square_is_planar_ ||
       intrinsics_.width_px != width_px_ || intrinsics_.height_px != height_px_)
     return;  // why not was noted by finish()
-  core::CameraIntrinsics camera;
-  camera.fx_px = intrinsics_.fx_px;
-  camera.fy_px = intrinsics_.fy_px;
-  camera.cx_px = intrinsics_.cx_px;
-  camera.cy_px = intrinsics_.cy_px;
-  camera.distortion = {intrinsics_.k1, intrinsics_.k2, intrinsics_.p1, intrinsics_.p2, intrinsics_.k3};
+  if (!solve_pose(collect_correspondences()) || !encode_pose(report)) note(shared::MeasureStatus::kNoTarget);
+}
+
+std::size_t MeasurementPipeline::collect_correspondences() noexcept {
   std::size_t n = 0;
+  const float half_m = 0.5f * fiducial_side_m_;
   for (std::size_t i = 0; i < fid_.count; ++i) {
     const core::IdentifiedFiducial& f = fid_.fiducials[i];
     if (f.id < 1 || f.id > geometry_.fiducial_count) continue;
-    const core::Vector2<float> pixel(f.x_px.to_float(), f.y_px.to_float());
-    if (core::pixel_to_plane_point(camera, plane_, pixel, camera_points_m_[n]) != core::CameraStatus::ok) continue;
     const auto& s = geometry_.fiducial_square_m[f.id - 1u];
-    square_points_m_[n] = core::Vector3<float>(s[0], s[1], s[2]);
-    ++n;
+    core::PlanarCorrespondence& c = correspondences_[n++];
+    c.pixel_px = core::Vector2<float>(f.x_px.to_float(), f.y_px.to_float());
+    c.target_m = core::Vector2<float>(s[0], s[1]);
+    // Doty's rectangles: s x s, the centre p4 s x 2s with its long side along y.
+    c.fiducial_half_size_m = core::Vector2<float>(half_m, f.id == kCentreFiducialId ? 2.0f * half_m : half_m);
   }
-  if (n < static_cast<std::size_t>(core::kMinPosePoints) ||
-      core::pose_from_points(std::span<const core::Vector3<float>>(square_points_m_.data(), n),
-                             std::span<const core::Vector3<float>>(camera_points_m_.data(), n), core::PoseOptions{},
-                             fit_) != core::PoseStatus::ok) {
-    note(shared::MeasureStatus::kNoTarget);
-    return;
+  return n;
+}
+
+bool MeasurementPipeline::solve_pose(std::size_t point_count) noexcept {
+  const core::PlanePrior* prior = nullptr;
+  if (have_plane_ &&
+      core::range_plane_covariance(plane_model_, plane_, kRangeSigmaM, prior_.covariance) == core::PlaneStatus::ok) {
+    prior_.plane = plane_;
+    prior = &prior_;
   }
-  square_T_camera_ = fit_.camera_T_square.inverse();
+  core::PlanarPoseOptions options;
+  options.pixel_sigma_px = kPixelSigmaPx;
+  options.perspective_passes = fiducial_side_m_ > 0.0f ? 1 : 0;
+  return core::planar_pose(camera_, std::span<const core::PlanarCorrespondence>(correspondences_.data(), point_count),
+                           prior, options, pose_workspace_, pose_) == core::PlanarPoseStatus::ok;
+}
+
+bool MeasurementPipeline::encode_pose(shared::MeasurementReport& report) noexcept {
+  square_T_camera_ = pose_.camera_T_target.inverse();
   const core::Vector3<float> rotation = rotation_vector(square_T_camera_.rotation);
   std::array<std::int32_t, 3> translation_raw{}, rotation_raw{};
   for (int k = 0; k < 3; ++k) {
     const auto i = static_cast<std::size_t>(k);
     if (!to_raw(square_T_camera_.translation(k), 262144.0f, (1 << 19) - 1, translation_raw[i]) ||
-        !to_raw(rotation(k), 32768.0f, (1 << 17) - 1, rotation_raw[i])) {
-      note(shared::MeasureStatus::kNoTarget);
-      return;
-    }
+        !to_raw(rotation(k), 32768.0f, (1 << 17) - 1, rotation_raw[i]))
+      return false;
   }
   report.translation_raw = translation_raw;
   report.rotation_raw = rotation_raw;
+  report_covariance(pose_, report_covariance_);
+  shared::set_pose_covariance(report_covariance_, report);
   report.sections |= shared::section::kPose;
+  return true;
 }
 
 void MeasurementPipeline::finish(CaptureStatus camera, bool labelled, RangerStatus rangers,
@@ -237,7 +321,8 @@ void MeasurementPipeline::finish(CaptureStatus camera, bool labelled, RangerStat
   // Intrinsics calibrated for another frame size do not describe this camera's pixels.
   const bool intrinsics_fit =
       has_intrinsics_ && intrinsics_.width_px == width_px_ && intrinsics_.height_px == height_px_;
-  if ((s & shared::section::kPose) != 0 && !intrinsics_fit) note(shared::MeasureStatus::kNoParameters);
+  if ((s & shared::section::kPose) != 0 && (!intrinsics_fit || !square_is_planar_))
+    note(shared::MeasureStatus::kNoParameters);
 
   if (needs_camera_) {
     core::FrameSummary summary;

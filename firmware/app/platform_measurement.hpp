@@ -23,14 +23,23 @@
 //              centre fiducial p4 as the geometry block places it, z out of the printed side).
 //              Translation = the camera centre in square coordinates (LSB 2^-18 m); rotation =
 //              the rotation vector of square_R_camera (axis * angle, LSB 2^-15 rad), so that
-//              p_square = exp(rotation) p_camera + translation. How: each identified fiducial's
-//              pixel -> ray (CameraIntrinsics block, with distortion) -> point on the measured
-//              plane (core::pixel_to_plane_point), paired with its position in the square,
-//              PlatformGeometry::fiducial_square_m[k - 1] for fiducial p_k (k = 1..6; p_k with
-//              k > fiducial_count is not used), then core::pose_from_points' least-squares
-//              rigid fit, inverted. Needs the plane (so the rangers), both blocks, and three
-//              fiducials whose rays meet the plane; else kNoParameters / kNoTarget, no section.
-//              A pose beyond the report's range (+-2 m) is kNoTarget too.
+//              p_square = exp(rotation) p_camera + translation. How (camera first, issue #13):
+//              core::planar_pose (planar_pose.hpp) on the identified fiducials p_k (k = 1..6,
+//              k <= fiducial_count), each pixel paired with PlatformGeometry::fiducial_square_m
+//              [k - 1] (its z must be 0 within 0.1 mm: the square is planar; else the block
+//              counts as missing): homography start, Gauss-Newton through the full lens model
+//              (CameraIntrinsics, with distortion; each coordinate kPixelSigmaPx), and the ranger
+//              plane (when the rangers gave one) as a prior with its covariance from
+//              kRangeSigmaM per reading (core::range_plane_covariance). Fiducial centres, not
+//              blob centroids: one pass corrects each fiducial's perspective bias with the pose
+//              of the first (the rectangles s x s, p4 s x 2s, with s the perimeter fiducials'
+//              mean distance from p4 / 7 in the geometry block; no correction if the block has
+//              no p4 or no perimeter fiducial). Needs three fiducials with the plane prior, or
+//              four without it (then the rangers' failure is still the report's status); else
+//              kNoTarget and no section, as for a pose beyond the report's range (+-2 m).
+//              Its covariance (report_covariance below): planar_pose's, of its camera-frame
+//              twist, carried to the reported (t, delta) of measurement_report.hpp; it trusts
+//              kPixelSigmaPx and kRangeSigmaM as given.
 //   blobs      the labeler's blobs (at most 64, in completion order): centroid uq10.6 px, area
 //              (saturating at 65535 px), colour class 0 (grey rows: no colour classes) and
 //              peak_dn 0 (not measured: the streaming labeler keeps no per-blob extreme).
@@ -52,13 +61,13 @@
 // another frame size than the camera's count as missing), kNoTarget, kNotAvailable. Sections
 // that could be produced are present whatever the status; nothing is ever invented.
 //
-// Memory: everything inside the object, 22,400 bytes on the M4 (the VGA labeler workspace of
-// 16 KiB, 64 blobs, the histogram, the range-plane matrices, copies of the two parameter blocks):
+// Memory: everything inside the object (the VGA labeler workspace of 16 KiB, 64 blobs, the
+// histogram, the range-plane matrices, the planar pose's workspace and correspondences, copies of
+// the two parameter blocks; sizeof(MeasurementPipeline) is printed by the M4 measurement bench):
 // construct it statically, never on the stack. Cost: poll() handles at most kRowsPerPoll rows per
 // call, a bounded slice (16 VGA rows are ~35k instructions on the M4 at the labeler's 3.4 per
 // pixel), so the correction stream keeps running between slices; the final call runs FID, the
-// plane fit and the pose (their figures: pose_from_points 4.5k instructions, pixel_to_plane_point
-// 0.5k per fiducial, fit_range_plane 0.2k plus the layout's preparation). Not measured as a whole.
+// plane fit and the pose. The whole step on a VGA frame: tests/bench/measurement_m4_bench.cpp.
 // Thread/ISR safety: main loop only. One measurement at a time (start() while one runs: kBusy).
 #pragma once
 
@@ -72,7 +81,7 @@
 #include "firmware/core/blob_labeler.hpp"
 #include "firmware/core/camera_model.hpp"
 #include "firmware/core/fiducial_id.hpp"
-#include "firmware/core/pose_from_points.hpp"
+#include "firmware/core/planar_pose.hpp"
 #include "firmware/core/range_plane.hpp"
 #include "shared/measurement_report.hpp"
 
@@ -85,6 +94,12 @@ constexpr std::uint16_t range_raw_from_um(std::uint32_t range_um) {
   return raw >= shared::kNoEcho ? shared::kNoEcho : static_cast<std::uint16_t>(raw);
 }
 
+// The covariance of the reported pose (measurement_report.hpp: square_T_camera's translation and
+// its rotation error delta, row-major 6 x 6) from planar_pose's covariance of its camera-frame
+// twist: first order, exact for the twist's definition. Plain float loops (the same bits on both
+// targets).
+void report_covariance(const core::PlanarPose& pose, std::array<float, 36>& covariance) noexcept;
+
 // The port-independent half of the step: the pixel path and the geometry, compiled once in
 // platform_measurement.cpp (where the stack and heap checks see it). PlatformMeasurement below
 // drives it from the ports.
@@ -93,6 +108,10 @@ class MeasurementPipeline {
   static constexpr std::uint16_t kMaxWidthPx = 640;
   static constexpr std::size_t kMaxBlobsOut = shared::kMaxBlobs;
   static constexpr std::uint32_t kHistogramStep = 4;
+  // The noise the pose's weights and covariance assume: each fiducial centre coordinate, and each
+  // range reading (the ARID platform's rangers; host/sim/rangers.hpp simulates the same).
+  static constexpr float kPixelSigmaPx = 0.1f;
+  static constexpr float kRangeSigmaM = 0.5e-3f;
 
   MeasurementPipeline() noexcept : labeler_(buffers_.memory()) {}
 
@@ -120,8 +139,13 @@ class MeasurementPipeline {
 
  private:
   void note(shared::MeasureStatus status) noexcept;
-  bool compute_plane(const std::array<std::uint32_t, shared::kRangers>& ranges_um) noexcept;
+  [[gnu::noinline]] bool compute_plane(const std::array<std::uint32_t, shared::kRangers>& ranges_um) noexcept;
   void compute_fiducials_and_pose(shared::MeasurementReport& report) noexcept;
+  // The pose in three steps, kept out of line so that their locals do not stack up under
+  // planar_pose (the app's stack budget, m4.kincal_app.stack).
+  [[gnu::noinline]] std::size_t collect_correspondences() noexcept;
+  [[gnu::noinline]] bool solve_pose(std::size_t point_count) noexcept;
+  [[gnu::noinline]] bool encode_pose(shared::MeasurementReport& report) noexcept;
   void report_blobs(shared::MeasurementReport& report, std::uint32_t blob_count) const noexcept;
 
   MeasureRequest request_{};
@@ -142,9 +166,14 @@ class MeasurementPipeline {
   core::RangePlaneModel plane_model_{};
   core::CalibrationPlane plane_{};
   bool have_plane_ = false;
-  std::array<core::Vector3<float>, 6> square_points_m_{};
-  std::array<core::Vector3<float>, 6> camera_points_m_{};
-  core::PoseFit fit_{};
+  core::CameraIntrinsics camera_{};
+  float fiducial_side_m_ = 0.0f;
+  bool square_is_planar_ = true;
+  std::array<core::PlanarCorrespondence, core::kPlanarPoseMaxPoints> correspondences_{};
+  core::PlanePrior prior_{};
+  core::PlanarPoseWorkspace pose_workspace_{};
+  core::PlanarPose pose_{};
+  std::array<float, 36> report_covariance_{};
   core::RigidTransform<float> square_T_camera_{};
 };
 
