@@ -39,16 +39,21 @@ struct DemoOptions {
   bool quick = false;  // about half the poses (for tests)
 };
 
+// The online correction against the simulator's truth: the true tool pose at the validation
+// targets as given (uncorrected) and at the platform's corrected targets, each vs the targets'
+// goals (position and orientation); no measurement noise in either.
+struct CorrectionTruth {
+  identify::AccuracyStats uncorrected, corrected;
+};
+
 struct DemoRigResult {
   std::string name;
   identify::AccuracyStats before, after;  // nominal and identified model vs the measurements
   double identified_vs_truth_rms_m = 0;   // identified model vs the true tool positions
   double nominal_vs_truth_rms_m = 0;
-  double noise_rms_m = 0;                     // measured vs true tool positions, on the same poses
-  std::optional<CorrectionCheck> correction;  // measured by the platform (its noise included)
-  // The same check against the simulator's truth: the true tool pose at the corrected targets
-  // vs each target's goal (position and orientation), no measurement noise in it.
-  std::optional<identify::AccuracyStats> correction_vs_truth;
+  double noise_rms_m = 0;                              // measured vs true tool positions, on the same poses
+  std::optional<CorrectionCheck> correction;           // measured by the platform (its noise included)
+  std::optional<CorrectionTruth> correction_vs_truth;  // the same check against the truth
   double seconds = 0;
 };
 
