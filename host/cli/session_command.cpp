@@ -4,6 +4,8 @@
 //                  [--validation N | --validation-plan FILE]
 //                  [--robot sim|manual | --robot-cmd 'CMD {q}'] [--can IF [--fd]] [--squares N]
 //                  [--left SRC... --right SRC... --stereo FILE [--colour-table FILE] [--pixel-sigma PX]]
+//                  [--discover --joints N --home Q [--prismatic J,...] [--sweep-deg D] [--sweep-m M]
+//                   [--discovered FILE]]
 //                  [--journal FILE] [--resume] [--out FILE] [--report FILE] [--dataset FILE] [--seed S]
 //
 // The simulated robot (the default) comes with its simulated rig: the model file with hidden
@@ -15,6 +17,11 @@
 // host/capture (--left, --right: cameras, videos or recorded images, one pair per pose), the
 // pair from `kincal camera stereo` (--stereo; the device frame is the left camera's), the beacon
 // by its colour class (--colour-table) or as the brightest blob.
+// A discovery session (--discover, stereo rig) needs no model: it sweeps each of the --joints
+// joints in turn from --home over --sweep-deg (or --sweep-m for the --prismatic joints, those the
+// controller reads in metres) with --sweeps readings, discovers the arm from the sweeps
+// (host/identify/discover.hpp, as `kincal discover`; --discovered writes it) and identifies it
+// fully starting there (--out). With the simulated robot, --model is the arm the simulator hides.
 // Exit status 0, or 1 with a message naming what failed (and, for a stopped session, the pose and
 // how to resume).
 #include "host/cli/session_command.hpp"
@@ -23,7 +30,9 @@
 
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <memory>
+#include <numbers>
 #include <random>
 #include <sstream>
 
@@ -35,6 +44,7 @@
 #include "host/cli/number_options.hpp"
 #include "host/demo/simulated_rig.hpp"
 #include "host/files/output_file.hpp"
+#include "host/identify/discover.hpp"
 #include "host/identify/plausibility.hpp"
 #include "host/model/model_file.hpp"
 #include "host/report/report.hpp"
@@ -55,16 +65,50 @@ struct SessionArgs {
   std::vector<std::string> left, right;  // real stereo pair: frame sources
   std::string stereo, colour_table;
   double pixel_sigma_px = 0.1, pair_tolerance_s = 0.5;
+  // Discovery of an unknown arm: its joint count, the joints read in metres, the sweeps' spans.
+  bool discover = false;
+  int joints = 0;
+  std::vector<int> prismatic;
+  double sweep_deg = 60, sweep_m = 0.2;
+  std::string discovered;
   int sweeps = 0, poses = 40, validation = 20, squares = 8;
   bool fd = false, resume = false, accept_implausible = false;
   std::uint64_t seed = 1;
 };
+
+constexpr double kDegree = std::numbers::pi / 180;
 
 std::vector<double> parse_home(const std::string& text, const model::RobotModel& m) {
   const std::vector<double> q = session::parse_readings(text, static_cast<std::size_t>(m.joint_count()));
   if (q.empty())
     throw model::InputError("--home '" + text + "': not " + std::to_string(m.joint_count()) + " joint readings");
   return q;
+}
+
+// The arm a discovery session plans its sweeps for: --joints joints, revolute but for --prismatic,
+// each limited to its sweep (--sweep-deg or --sweep-m, centred on --home). Nothing else of it is
+// known, nor used: the session measures with it, the discovery finds the arm from the data.
+model::RobotModel unknown_arm(const SessionArgs& a) {
+  model::RobotModel m;
+  m.name = "unknown arm";
+  for (int j = 1; j <= a.joints; ++j) {
+    model::Joint joint;
+    joint.name = "joint" + std::to_string(j);
+    for (const int p : a.prismatic) {
+      if (p < 1 || p > a.joints)
+        throw model::InputError("--prismatic " + std::to_string(p) + ": the arm has joints 1 to " +
+                                std::to_string(a.joints));
+      if (p == j) joint.type = core::JointType::prismatic;
+    }
+    m.joints.push_back(joint);
+  }
+  const std::vector<double> home = parse_home(a.home, m);
+  for (std::size_t j = 0; j < m.joints.size(); ++j) {
+    const double half = m.joints[j].type == core::JointType::prismatic ? a.sweep_m / 2 : a.sweep_deg * kDegree / 2;
+    m.joints[j].lower = home[j] - half;
+    m.joints[j].upper = home[j] + half;
+  }
+  return m;
 }
 
 // The middle of each joint's limits (0 without limits): the sweeps' default home.
@@ -217,16 +261,33 @@ session::StereoSetup stereo_setup(const SessionArgs& a) {
 }
 
 int run(const SessionArgs& a) {
-  files::refuse_overwriting({{"--out", a.out}, {"--report", a.report}, {"--dataset", a.dataset}},
-                            {{"--journal", a.journal},
-                             {"--model", a.model.path},
-                             {"--plan", a.plan},
-                             {"--validation-plan", a.validation_plan},
-                             {"--stereo", a.stereo},
-                             {"--colour-table", a.colour_table}});
-  const model::RobotModel file = a.model.load();
+  files::refuse_overwriting(
+      {{"--out", a.out}, {"--report", a.report}, {"--dataset", a.dataset}, {"--discovered", a.discovered}},
+      {{"--journal", a.journal},
+       {"--model", a.model.path},
+       {"--plan", a.plan},
+       {"--validation-plan", a.validation_plan},
+       {"--stereo", a.stereo},
+       {"--colour-table", a.colour_table}});
   const bool simulated = a.robot == "sim" && a.robot_cmd.empty();
   const bool platform = a.rig == "platform";
+  if (a.discover) {
+    if (platform)
+      throw model::InputError(
+          "--discover: a discovery session watches a beacon: add --rig stereo (the platform "
+          "needs the arm's model to know which square it sees)");
+    if (a.joints < 1 || a.home.empty()) throw model::InputError("--discover needs --joints N and --home Q");
+    if (!a.plan.empty()) throw model::InputError("--discover plans its own single-joint sweeps: leave --plan out");
+    if (simulated && a.model.path.empty())
+      throw model::InputError("--discover with the simulated robot: --model gives the arm the simulator hides");
+  } else if (a.model.path.empty()) {
+    throw model::InputError("--model is required (or --discover --joints N --home Q for an unknown arm)");
+  }
+  const std::optional<model::RobotModel> unknown = a.discover ? std::optional(unknown_arm(a)) : std::nullopt;
+  const model::RobotModel file = a.model.path.empty() ? *unknown : a.model.load();
+  if (unknown && unknown->joint_count() != file.joint_count())
+    throw model::InputError("--joints " + std::to_string(a.joints) + ": the simulated robot (" + a.model.path +
+                            ") has " + std::to_string(file.joint_count()));
   const bool real_stereo = !a.left.empty() || !a.right.empty() || !a.stereo.empty();
   if (real_stereo) {
     if (platform) throw model::InputError("--left/--right/--stereo: cameras of a stereo rig: add --rig stereo");
@@ -276,7 +337,10 @@ int run(const SessionArgs& a) {
 
   session::SessionPlan plan;
   std::mt19937_64 rng(a.seed);
-  if (!a.plan.empty()) {
+  if (unknown) {
+    plan.calibration =
+        session::single_joint_sweeps(*unknown, parse_home(a.home, *unknown), a.sweeps > 0 ? a.sweeps : 10, 1.0);
+  } else if (!a.plan.empty()) {
     plan.calibration = read_plan_for(file, nominal, a.plan);
   } else if (a.sweeps > 0 || !platform) {
     const std::vector<double> home = a.home.empty() ? mid_range(nominal) : parse_home(a.home, nominal);
@@ -284,7 +348,12 @@ int run(const SessionArgs& a) {
   } else {
     plan.calibration = random_observable(nominal, *rig, a.poses, rng, "--poses");
   }
-  if (!a.validation_plan.empty()) {
+  if (!a.validation_plan.empty() && unknown && a.model.path.empty()) {
+    // An unknown arm's limits are only its sweeps: its validation poses lie anywhere.
+    model::RobotModel unlimited = *unknown;
+    for (model::Joint& j : unlimited.joints) j.lower = -(j.upper = std::numeric_limits<double>::infinity());
+    plan.validation = session::read_plan(unlimited, a.validation_plan);
+  } else if (!a.validation_plan.empty()) {
     plan.validation = read_plan_for(file, nominal, a.validation_plan);
   } else if (rig) {
     plan.validation = random_observable(nominal, *rig, a.validation, rng, "--validation");
@@ -309,8 +378,14 @@ int run(const SessionArgs& a) {
            << " home=" << a.home
            << " validation=" << (a.validation_plan.empty() ? std::to_string(a.validation) : a.validation_plan);
   if (real_stereo) identity << " stereo=" << a.stereo << " colour-table=" << a.colour_table;
+  if (unknown) {
+    identity << " discover joints=" << a.joints << " sweep-deg=" << a.sweep_deg << " sweep-m=" << a.sweep_m
+             << " prismatic=";
+    for (const int p : a.prismatic) identity << p << ' ';
+  }
   options.identity = identity.str();
-  const session::SessionData data = session::run_session(nominal, plan, robot, measure, options, std::cerr);
+  const session::SessionData data =
+      session::run_session(unknown ? *unknown : nominal, plan, robot, measure, options, std::cerr);
   if (!a.dataset.empty()) {
     std::ostringstream csv;
     model::Dataset all = data.calibration;
@@ -319,14 +394,30 @@ int run(const SessionArgs& a) {
     files::write_file_atomically(a.dataset, csv.str());
   }
 
-  if (!a.accept_implausible) identify::require_plausible(nominal, data.calibration, "--accept-implausible");
+  // A discovery session starts the identification from the discovered model; a session with a
+  // model from that model (the stereo rig: from circle-point analysis of its sweeps).
   identify::IdentifyOptions io;
-  if (!platform) io.start = identify::Start::cpa;
-  const session::Calibration calibration = session::calibrate(nominal, data, io);
+  model::RobotModel start = nominal;
+  if (unknown) {
+    identify::DiscoverOptions discover;
+    discover.name = "discovered";
+    const identify::DiscoverResult found = identify::discover(data.calibration, discover);
+    std::cout << "discovered from the sweeps:\n" << identify::format_discovery(found);
+    if (!a.discovered.empty()) {
+      model::save_model(found.model, a.discovered);
+      std::cout << "discovered model: " << a.discovered << "\n";
+    }
+    start = found.model;
+  } else {
+    if (!a.accept_implausible) identify::require_plausible(nominal, data.calibration, "--accept-implausible");
+    if (!platform) io.start = identify::Start::cpa;
+  }
+  const session::Calibration calibration = session::calibrate(start, data, io);
   std::cout << identify::format_report(calibration.result);
   if (!data.validation.rows.empty())
-    std::cout << "validation (" << data.validation.rows.size() << " poses): nominal RMS "
-              << calibration.before.rms_m * 1e3 << " mm, identified RMS " << calibration.after.rms_m * 1e3 << " mm\n";
+    std::cout << "validation (" << data.validation.rows.size() << " poses): " << (unknown ? "discovered" : "nominal")
+              << " RMS " << calibration.before.rms_m * 1e3 << " mm, identified RMS " << calibration.after.rms_m * 1e3
+              << " mm\n";
   if (!a.out.empty()) model::save_model(calibration.result.model, a.out);
 
   std::optional<session::CorrectionCheck> check;
@@ -340,12 +431,14 @@ int run(const SessionArgs& a) {
     session::RunDescription d;
     d.title = "Calibration session: " + file.name;
     d.robot = file.name;
-    d.method = platform ? "full nonlinear least squares" : "circle-point analysis, then full least squares";
+    d.method = platform  ? "full nonlinear least squares"
+               : unknown ? "discovery from single-joint sweeps (no model), then full least squares"
+                         : "circle-point analysis, then full least squares";
     d.data = a.journal;
     d.simulated = simulated;
     report::Report r;
     r.title = "kincal session";
-    r.runs.push_back(session::report_run(d, nominal, data, calibration,
+    r.runs.push_back(session::report_run(d, start, data, calibration,
                                          rig ? std::optional<model::RobotModel>(rig->truth()) : std::nullopt, nullptr));
     report::write_html(r, a.report);
     std::cout << "report: " << a.report << "\n";
@@ -358,13 +451,15 @@ int run(const SessionArgs& a) {
 void add_session_command(CLI::App& app, int& status) {
   auto a = std::make_shared<SessionArgs>();
   auto* cmd = app.add_subcommand("session", "Run a calibration session: move, measure, journal, identify, upload");
-  add_model_option(*cmd, a->model, "robot model");
+  add_model_option(*cmd, a->model, "robot model (with --discover: the arm the simulated robot hides)", false);
   cmd->add_option("--rig", a->rig, "platform (camera + rangers over CAN) or stereo (beacon and stereo pair)")
       ->check(CLI::IsMember({"platform", "stereo"}))
       ->capture_default_str();
   cmd->add_option("--plan", a->plan, "calibration poses (joints CSV, e.g. from `kincal plan`)")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--sweeps", a->sweeps, "single-joint sweeps with this many readings per joint")
+  cmd->add_option("--sweeps", a->sweeps,
+                  "single-joint sweeps with this many readings per joint (default 10 on the stereo rig and with "
+                  "--discover)")
       ->check(CLI::Range(4, 1000));
   cmd->add_option("--poses", a->poses, "random calibration poses in view (simulated robot, platform rig)")
       ->check(CLI::Range(1, 10000))
@@ -400,6 +495,19 @@ void add_session_command(CLI::App& app, int& status) {
                   "stamped 1 s apart")
       ->check(finite_non_negative())
       ->capture_default_str();
+  cmd->add_flag("--discover", a->discover,
+                "discovery session (stereo rig): sweep each joint of an unknown arm from --home, discover its model "
+                "(`kincal discover`), then identify it fully from there");
+  cmd->add_option("--joints", a->joints, "discovery: the arm's joint count")->check(CLI::Range(1, 16));
+  cmd->add_option("--prismatic", a->prismatic, "discovery: joints (1-based) the controller moves in metres")
+      ->delimiter(',');
+  cmd->add_option("--sweep-deg", a->sweep_deg, "discovery: span of each revolute joint's sweep (deg)")
+      ->check(finite_in(1, 720))
+      ->capture_default_str();
+  cmd->add_option("--sweep-m", a->sweep_m, "discovery: span of each prismatic joint's sweep (m)")
+      ->check(finite_in(1e-3, 10))
+      ->capture_default_str();
+  cmd->add_option("--discovered", a->discovered, "discovery: write the discovered model here (YAML)");
   cmd->add_option("--can", a->can, "SocketCAN interface of a real platform (e.g. can0, vcan0)");
   cmd->add_flag("--fd", a->fd, "CAN FD");
   cmd->add_option("--squares", a->squares, "calibration squares on the strip (real platform)")
