@@ -48,6 +48,7 @@ class In {
     return std::bit_cast<float>(bits);
   }
   bool finite() const { return finite_; }
+  std::size_t position() const { return pos_; }
 
  private:
   std::span<const std::uint8_t> bytes_;
@@ -174,35 +175,57 @@ std::size_t encode_block(const CorrectionParameters& b, std::span<std::uint8_t> 
   return o.position();
 }
 
+namespace {
+
+// The correction block judged without decoding it (no copy of the ~700-byte struct on the
+// stack, which the platform's call paths cannot afford): the layout of the header, walked.
+bool correction_image_valid(std::span<const std::uint8_t> image) {
+  In in(image);
+  bool ok = in.u8() <= kJoints;
+  for (std::size_t j = 0; j < kJoints; ++j) {
+    const std::uint8_t type = in.u8(), convention = in.u8();
+    ok = ok && type <= 1 && convention <= 2;
+    for (int k = 0; k < 10; ++k) (void)in.f32();
+  }
+  for (int k = 0; k < 12; ++k) (void)in.f32();
+  for (std::size_t j = 0; j < kJoints; ++j) {
+    ok = ok && in.u8() <= 1;
+    for (std::size_t k = 0; k < kJoints + 8; ++k) (void)in.f32();
+  }
+  for (int k = 0; k < 7; ++k) (void)in.f32();
+  return ok && in.finite() && in.position() == kCorrectionBytes;
+}
+
+}  // namespace
+
+DecodeStatus check_correction_block(std::span<const std::uint8_t> image) {
+  if (image.size() != kCorrectionBytes) return DecodeStatus::kWrongLength;
+  return correction_image_valid(image) ? DecodeStatus::kOk : DecodeStatus::kBadValue;
+}
+
+// Judged first, then read straight into `b`: written only on kOk.
 DecodeStatus decode_block(std::span<const std::uint8_t> image, CorrectionParameters& b) {
   if (image.size() != kCorrectionBytes) return DecodeStatus::kWrongLength;
+  if (!correction_image_valid(image)) return DecodeStatus::kBadValue;
   In in(image);
-  CorrectionParameters v;
-  v.joint_count = in.u8();
-  bool kinds_known = true;
-  for (JointModel& j : v.joints) {
-    const std::uint8_t type = in.u8(), convention = in.u8();
-    kinds_known = kinds_known && type <= 1 && convention <= 2;
-    j.type = static_cast<JointKind>(type & 1u);
-    j.convention = static_cast<LinkKind>(convention <= 2 ? convention : 0);
+  b.joint_count = in.u8();
+  for (JointModel& j : b.joints) {
+    j.type = static_cast<JointKind>(in.u8());
+    j.convention = static_cast<LinkKind>(in.u8());
     get_dh(in, j.nominal);
     get_dh(in, j.error);
   }
-  for (float& f : v.tool_offset) f = in.f32();
-  for (float& f : v.tool_error) f = in.f32();
-  for (JointMapValues& m : v.joint_maps) {
-    const std::uint8_t coupled = in.u8();
-    kinds_known = kinds_known && coupled <= 1;
-    m.coupled = coupled == 1;
+  for (float& f : b.tool_offset) f = in.f32();
+  for (float& f : b.tool_error) f = in.f32();
+  for (JointMapValues& m : b.joint_maps) {
+    m.coupled = in.u8() == 1;
     for (float& f : m.coupling) f = in.f32();
     for (float* f : {&m.scale, &m.scale_error, &m.compliance, &m.compliance_error, &m.mass_kg}) *f = in.f32();
     for (float& f : m.centre_of_mass_m) f = in.f32();
   }
-  v.payload_mass_kg = in.f32();
-  for (float& f : v.payload_centre_of_mass_m) f = in.f32();
-  for (float& f : v.gravity_mps2) f = in.f32();
-  if (!in.finite() || !kinds_known || v.joint_count > kJoints) return DecodeStatus::kBadValue;
-  b = v;
+  b.payload_mass_kg = in.f32();
+  for (float& f : b.payload_centre_of_mass_m) f = in.f32();
+  for (float& f : b.gravity_mps2) f = in.f32();
   return DecodeStatus::kOk;
 }
 

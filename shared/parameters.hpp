@@ -142,6 +142,8 @@ DecodeStatus decode_block(std::span<const std::uint8_t> image, CameraIntrinsics&
 DecodeStatus decode_block(std::span<const std::uint8_t> image, ColourLut& block);
 DecodeStatus decode_block(std::span<const std::uint8_t> image, PlatformGeometry& block);
 DecodeStatus decode_block(std::span<const std::uint8_t> image, CorrectionParameters& block);
+// decode_block's judgement of a correction block without decoding it (no struct on the stack).
+DecodeStatus check_correction_block(std::span<const std::uint8_t> image);
 
 struct ParameterHeader {
   MessageType type = MessageType::kParameterWrite;  // kParameterWrite or kParameterData

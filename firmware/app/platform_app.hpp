@@ -380,10 +380,8 @@ class PlatformApp {
         shared::PlatformGeometry v;
         return shared::decode_block(payload, v) == shared::DecodeStatus::kOk;
       }
-      case shared::ParameterBlock::kCorrection: {
-        shared::CorrectionParameters v;
-        return shared::decode_block(payload, v) == shared::DecodeStatus::kOk;
-      }
+      case shared::ParameterBlock::kCorrection:  // judged in place: the block is ~700 bytes
+        return shared::check_correction_block(payload) == shared::DecodeStatus::kOk;
     }
     return false;
   }

@@ -317,11 +317,17 @@ CorrectionStatus correct_joint_readings(const CorrectionModel& model, const Join
     ws.chain_target = ws.coupled;
   const CorrectionStatus status = correct_joint_target(model, ws, ws.chain_target, correction);
   if (status != CorrectionStatus::ok) return status;
-  if (map.identified_deflects)
+  if (map.identified_deflects) {
+    // The first pass from the chain target, whose calibrated frames the correction left in the
+    // workspace: one forward kinematics pass fewer than starting from v*.
+    gravity_forces(model.calibrated, ws.calibrated_frames, map.masses, ws.deflection.forces);
+    for (int i = 0; i < n; ++i)
+      ws.coupled(i) = correction.corrected_joint_target(i) - map.identified.compliance(i) * ws.deflection.forces(i);
     undeflect(model.calibrated, map.masses, map.identified.compliance, correction.corrected_joint_target,
-              kUndeflectPasses, ws.deflection, ws.coupled);
-  else
+              kUndeflectPasses - 1, ws.deflection, ws.coupled);
+  } else {
     ws.coupled = correction.corrected_joint_target;
+  }
   readings_from_coupled(map.identified, map.inverse_coupling, ws.coupled, corrected_readings);
   return CorrectionStatus::ok;
 }

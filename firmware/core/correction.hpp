@@ -119,7 +119,8 @@ CorrectionStatus correct_joint_target(const CorrectionModel& model, CorrectionWo
 // The correction of controller readings r when the chains' variables are not the readings:
 //   w_nom = C S_nom r,  v_nom = w_nom + c_nom G_nom(w_nom)      the nominal map: what the controller means
 //   v*    = correct_joint_target(v_nom)                         the calibrated chain's variables
-//   w*    = undeflect_identified(v*)   (kUndeflectPasses passes; skipped without compliance)
+//   w*    = undeflect_identified(v*)   (kUndeflectPasses passes from w = v_nom, the first on the
+//                                       frames the correction computed there; skipped without compliance)
 //   r*    = S_id^-1 C^-1 w*                                     the readings that make the real arm reach it
 // The coupling C is one input of both models (never identified); the scales and compliances are
 // the nominal model's and the identified one's; the masses and gravity are shared. A map with no

@@ -98,7 +98,8 @@ template <class S>
 void deflect(const PreparedChain<S>& chain, const MassModel<S>& masses, const JointVector<S>& compliance,
              const JointVector<S>& coupled, DeflectionWorkspace<S>& workspace, JointVector<S>& deflected) noexcept;
 
-// w with w + compliance .* G(w) = v, by `passes` fixed-point passes from w = v.
+// w with w + compliance .* G(w) = v, by `passes` fixed-point passes from the guess that
+// `coupled` holds on entry (v itself, or any nearby values).
 template <class S>
 void undeflect(const PreparedChain<S>& chain, const MassModel<S>& masses, const JointVector<S>& compliance,
                const JointVector<S>& deflected, int passes, DeflectionWorkspace<S>& workspace,
@@ -229,7 +230,6 @@ void undeflect(const PreparedChain<S>& chain, const MassModel<S>& masses, const 
                const JointVector<S>& deflected, int passes, DeflectionWorkspace<S>& ws,
                JointVector<S>& coupled) noexcept {
   const int n = std::clamp(chain.joint_count, 0, kMaxJoints);
-  coupled = deflected;
   for (int pass = 0; pass < passes; ++pass) {
     joint_trig(chain, coupled, ws.trig);
     forward_kinematics(chain, coupled, ws.trig, ws.frames);

@@ -112,6 +112,7 @@ std::array<double, shared::kJoints> reference_correction(const shared::Correctio
     target.head(n) += factor.solve(rhs);
   }
   // The identified joint map's inverse: chain variables -> readings.
+  coupled = q;  // the first pass from the chain target, as the platform does
   core::undeflect(calibrated_chain, masses, identified_map.compliance, target, core::kUndeflectPasses, deflection,
                   coupled);
   core::JointVector<double> corrected;

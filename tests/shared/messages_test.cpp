@@ -213,6 +213,62 @@ TEST_CASE("parameter blocks round-trip and reject bad values") {
   CHECK(lut.colour_class(1, 2, 2) == 0);
 }
 
+TEST_CASE("correction block format 3: the joint map round-trips, its flag is judged, version 2 is refused") {
+  CorrectionParameters c;
+  c.joint_count = 6;
+  c.joint_maps[2].coupled = true;
+  c.joint_maps[2].coupling = {0.0f, 1.0f, 1.0f, 0.0f, 0.0f, 0.0f};
+  c.joint_maps[1].scale = 1.0f;
+  c.joint_maps[1].scale_error = -3e-4f;
+  c.joint_maps[1].compliance = 1e-5f;
+  c.joint_maps[1].compliance_error = 2e-5f;
+  c.joint_maps[1].mass_kg = 17.4f;
+  c.joint_maps[1].centre_of_mass_m = {0.068f, 0.006f, -0.016f};
+  c.payload_mass_kg = 2.5f;
+  c.payload_centre_of_mass_m = {0.0f, 0.01f, 0.1f};
+  c.gravity_mps2 = {0.0f, -9.80665f, 0.0f};
+  std::array<std::uint8_t, kCorrectionBytes> image{};
+  REQUIRE(encode_block(c, image) == 671);
+  CHECK(check_correction_block(image) == DecodeStatus::kOk);
+  CorrectionParameters back;
+  REQUIRE(decode_block(image, back) == DecodeStatus::kOk);
+  CHECK(back.joint_maps[2].coupled);
+  CHECK(back.joint_maps[2].coupling == c.joint_maps[2].coupling);
+  CHECK_FALSE(back.joint_maps[1].coupled);
+  CHECK(back.joint_maps[1].scale_error == -3e-4f);
+  CHECK(back.joint_maps[1].compliance == 1e-5f);
+  CHECK(back.joint_maps[1].compliance_error == 2e-5f);
+  CHECK(back.joint_maps[1].mass_kg == 17.4f);
+  CHECK(back.joint_maps[1].centre_of_mass_m == c.joint_maps[1].centre_of_mass_m);
+  CHECK(back.joint_maps[0].scale == 1.0f);  // the default: the joint's own reading, scale 1
+  CHECK(back.payload_mass_kg == 2.5f);
+  CHECK(back.payload_centre_of_mass_m == c.payload_centre_of_mass_m);
+  CHECK(back.gravity_mps2 == c.gravity_mps2);
+  // The joint map starts after the v2 part (301 bytes): joint 1's flag, then joint 2's at +57.
+  const std::size_t flag = 1 + kJoints * 42 + 48;
+  CHECK(image[flag + 2 * kJointMapBytes] == 1);
+  auto bad = image;
+  bad[flag] = 2;  // neither "own reading" nor "row follows"
+  CHECK(check_correction_block(bad) == DecodeStatus::kBadValue);
+  CHECK(decode_block(bad, back) == DecodeStatus::kBadValue);
+  bad = image;
+  for (std::size_t k = 0; k < 4; ++k) bad[kCorrectionBytes - 4 + k] = 0xFF;  // gravity z: NaN
+  CHECK(check_correction_block(bad) == DecodeStatus::kBadValue);
+  CHECK(check_correction_block(std::span<const std::uint8_t>(image).first(301)) == DecodeStatus::kWrongLength);
+  // A version 2 block (301 bytes, version 2 in the header) is refused as a version.
+  std::array<std::uint8_t, kMaxParameterMessageBytes> message{};
+  const std::size_t length = encode_parameter_message(MessageType::kParameterWrite, ParameterBlock::kCorrection,
+                                                      std::span<const std::uint8_t>(image).first(301), message);
+  REQUIRE(length == kParameterHeaderBytes + 301);
+  message[2] = 2;
+  ParameterHeader h;
+  std::span<const std::uint8_t> payload;
+  REQUIRE(decode_parameter_message(std::span<const std::uint8_t>(message).first(length), h, payload) ==
+          DecodeStatus::kOk);
+  CHECK(h.version == 2);
+  CHECK(check_parameter_payload(h, payload) == AckStatus::kBadVersion);
+}
+
 TEST_CASE("parameter messages: framing, CRC, version, block") {
   CameraIntrinsics k{800.0f, 800.0f, 320.0f, 240.0f, 0, 0, 0, 0, 0, 640, 480};
   std::array<std::uint8_t, kIntrinsicsBytes> image{};

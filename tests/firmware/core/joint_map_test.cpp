@@ -162,13 +162,14 @@ TEST_CASE("joint map: undeflect inverts deflect to about (c dG/dq)^passes of the
     for (int i = 0; i < 6; ++i) w(i) = random.uniform(-2.5, 2.5);
     deflect(chain, masses, compliance, w, ws, v);
     worst_deflection = std::fmax(worst_deflection, (v - w).cwiseAbs().maxCoeff());
+    back = v;
     undeflect(chain, masses, compliance, v, kUndeflectPasses, ws, back);
     worst_error = std::fmax(worst_error, (back - w).cwiseAbs().maxCoeff());
     // Float: the same passes.
     PreparedChain<float> chain_f;
     prepare_chain(kincal::test::to_float(arm), chain_f);
     DeflectionWorkspace<float> ws_f;
-    JointVector<float> back_f;
+    JointVector<float> back_f = v.cast<float>();
     undeflect(chain_f, to_float(masses), JointVector<float>(compliance.cast<float>()),
               JointVector<float>(v.cast<float>()), kUndeflectPasses, ws_f, back_f);
     CHECK((back_f.cast<double>() - w).cwiseAbs().maxCoeff() < 1e-6);
