@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "firmware/app/correction_chain.hpp"
+#include "firmware/app/kinematic_correction.hpp"
 #include "host/model/model_file.hpp"
 #include "host/session/online_correction.hpp"
 #include "host/session/pose_plan.hpp"
@@ -146,6 +147,77 @@ TEST_CASE("correction block: the firmware reads back the chains the host identif
   got = core::forward_kinematics(calibrated, model::joint_vector(q));
   CHECK((got.translation - want.translation).norm() < 1e-6);
   CHECK((got.rotation - want.rotation).norm() < 1e-6);
+}
+
+TEST_CASE("correction block with the joint map: the platform's correction puts the identified arm on the goal") {
+  // The controller reports the elbow relative to the shoulder (Fanuc-style coupling, in both
+  // models); the identified model adds geometry errors, gear scales and gravity compliance.
+  model::RobotModel start = robot("puma560.yaml");
+  start.joints[2].coupling = {0, 1, 1, 0, 0, 0};
+  const double mass_kg[6] = {0, 17.4, 4.8, 0.82, 0.34, 0.09};
+  for (std::size_t j = 0; j < 6; ++j) start.joints[j].mass_kg = mass_kg[j];
+  start.joints[1].centre_of_mass_m = {-0.3638, 0.006, 0.2275};
+  start.joints[2].centre_of_mass_m = {-0.0203, -0.0141, 0.070};
+  start.payload.mass_kg = 3.0;
+  start.payload.centre_of_mass_m = {0, 0, 0.1};
+  start.joints[1].compliance = 0.0;  // declared, so identified; the controller's value is 0
+  start.joints[2].compliance = 0.0;
+  model::RobotModel identified = start;
+  identified.joints[1].parameters.a_m += 1e-3;
+  identified.joints[2].offset += 2e-3;
+  identified.joints[0].scale = 1.0 + 4e-4;
+  identified.joints[1].scale = 1.0 - 3e-4;
+  identified.joints[2].scale = 1.0 + 5e-4;
+  identified.joints[1].compliance = 2e-5;
+  identified.joints[2].compliance = 3e-5;
+  const shared::CorrectionParameters block = session::correction_block(start, identified);
+  CHECK(block.joint_maps[2].coupled);
+  CHECK(block.joint_maps[1].compliance_error == doctest::Approx(2e-5));
+  shared::CorrectionParameters geometry_only = block;
+  for (shared::JointMapValues& m : geometry_only.joint_maps) m.scale_error = m.compliance_error = 0.0f;
+
+  static app::KinematicCorrection platform;
+  std::mt19937_64 rng(11);
+  double worst_before_m = 0, worst_after_m = 0, worst_without_map_m = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<double> q = {0.1, -0.4, 0.3, 0.2, -0.5, 0.7};
+    for (double& v : q) v += std::uniform_real_distribution<double>(-0.3, 0.3)(rng);
+    q[2] -= q[1];  // the reading of the coupled elbow
+    app::JointRaw raw{}, corrected_raw{}, without_raw{};
+    for (std::size_t j = 0; j < 6; ++j) raw[j] = shared::quantize_joint_angle(q[j]);
+    REQUIRE(platform.correct(block, raw, corrected_raw) == app::CorrectStatus::kOk);
+    REQUIRE(platform.correct(geometry_only, raw, without_raw) == app::CorrectStatus::kOk);
+    std::vector<double> readings(6), corrected(6), without(6);
+    for (std::size_t j = 0; j < 6; ++j) {
+      readings[j] = shared::joint_angle_rad<double>(raw[j]);
+      corrected[j] = shared::joint_angle_rad<double>(corrected_raw[j]);
+      without[j] = shared::joint_angle_rad<double>(without_raw[j]);
+    }
+    // host/model's forward kinematics with the full joint map is the arm's truth here.
+    const model::Vector3 goal = model::forward_kinematics(start, readings).translation;
+    worst_before_m =
+        std::max(worst_before_m, (model::forward_kinematics(identified, readings).translation - goal).norm());
+    worst_after_m =
+        std::max(worst_after_m, (model::forward_kinematics(identified, corrected).translation - goal).norm());
+    worst_without_map_m =
+        std::max(worst_without_map_m, (model::forward_kinematics(identified, without).translation - goal).norm());
+  }
+  MESSAGE("tool position error: " << worst_before_m * 1e3 << " mm uncorrected, " << worst_after_m * 1e6
+                                  << " um corrected, " << worst_without_map_m * 1e6
+                                  << " um when the identified joint map is left out");
+  CHECK(worst_before_m > 5e-4);
+  CHECK(worst_after_m < 30e-6);  // quantization (2^-16 rad) and the correction's third-order rest
+  CHECK(worst_without_map_m > 10 * worst_after_m);
+
+  // Coupling and masses are inputs: models that disagree on them are refused.
+  model::RobotModel other = identified;
+  other.joints[2].coupling.clear();
+  CHECK_THROWS_WITH_AS(session::correction_block(start, other), doctest::Contains("coupling or mass"),
+                       model::InputError);
+  other = identified;
+  other.payload.mass_kg = 1.0;
+  CHECK_THROWS_WITH_AS(session::correction_block(start, other), doctest::Contains("payload or gravity"),
+                       model::InputError);
 }
 
 TEST_CASE("session: measures every pose once, resumes after a failure, identifies the truth") {
