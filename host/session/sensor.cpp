@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <limits>
 
+#include <Eigen/Eigenvalues>
+
 #include "shared/measurement_report.hpp"
 
 namespace kincal::session {
@@ -13,6 +15,20 @@ namespace kincal::session {
 namespace {
 
 std::string at_pose(int index) { return "pose " + std::to_string(index) + ": "; }
+
+// The report's pose covariance, translation block (square frame, m^2), made positive definite:
+// the correlations' rounding (measurement_report.hpp) can leave a nearly singular block slightly
+// indefinite, so eigenvalues below 1e-6 of the largest are raised to it.
+model::Matrix3 square_translation_covariance(const shared::MeasurementReport& report) {
+  const std::array<double, 36> c = shared::pose_covariance(report);
+  model::Matrix3 block;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) block(i, j) = c[static_cast<std::size_t>(i * 6 + j)];
+  const Eigen::SelfAdjointEigenSolver<model::Matrix3> eigen(block);
+  const double floor = std::max(eigen.eigenvalues().maxCoeff(), 1e-18) * 1e-6;
+  const model::Vector3 values = eigen.eigenvalues().cwiseMax(floor);
+  return eigen.eigenvectors() * values.asDiagonal() * eigen.eigenvectors().transpose();
+}
 
 // Rotation vector (rad) to a rotation matrix.
 model::Matrix3 rotation_from_vector(const model::Vector3& phi) {
@@ -78,6 +94,9 @@ Observation PlatformPoseSensor::measure(int index, const model::Transform& predi
   Observation o;
   o.position = strip_T_camera.translation;
   o.orientation = Eigen::Quaterniond(strip_T_camera.rotation);
+  const model::Matrix3& strip_R_square = strip_T_square_[static_cast<std::size_t>(square)].rotation;
+  const model::Matrix3 covariance = strip_R_square * square_translation_covariance(report) * strip_R_square.transpose();
+  o.covariance = 0.5 * (covariance + covariance.transpose());  // exactly symmetric, as the journal checks
   o.sequence = report.sequence;
   o.timestamp_s = report.timestamp_us * 1e-6;
   o.note = "square " + std::to_string(square + 1) + ", " + std::to_string(report.fiducial_count) + " fiducials";

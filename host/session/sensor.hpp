@@ -9,7 +9,11 @@
 //                        square_T_camera. Which square k the platform measured against is the
 //                        one that puts the camera nearest the nominal prediction (squares are 4
 //                        inches apart, far more than any kinematic error), so the platform may
-//                        pick any square in view. The observation is a full pose.
+//                        pick any square in view. The observation is a full pose, with the
+//                        position's covariance from the report's (protocol 2.0: the platform's
+//                        fused pose covariance; its translation block turned into the strip
+//                        frame), so identification weights each row by it. The orientation's
+//                        covariance is in the report too, but the dataset has no columns for it.
 //   StereoBeaconSensor   Kapucu & Baysec's rig: stereo_sensor.hpp.
 //
 // Thread safety: one session thread. Cost: one CAN round trip.
@@ -56,7 +60,7 @@ class PlatformPoseSensor : public Sensor {
   Observation measure(int index, const model::Transform& predicted) override;
   std::string name() const override { return "sensor platform over CAN"; }
   bool gives_orientation() const override { return true; }
-  bool gives_covariance() const override { return false; }
+  bool gives_covariance() const override { return true; }
 
   // The square k for which strip_T_square[k] * square_T_camera is nearest `predicted`.
   int measured_square(const model::Transform& square_T_camera, const model::Transform& predicted) const;
