@@ -16,11 +16,19 @@
 //   correction_residual_fraction_first_order_step    the first-order step alone
 //   correction_residual_*_mm / *_mrad at scales 0.25..2, and the slope of log(residual) against
 //   log(scale): 2 for the first-order step (second-order remainder), 3 with the refinement.
+//   correction_joint_map_residual_fraction  the same robots at scale 1 read through a joint map
+//                                            (core::correct_joint_readings): the controller
+//                                            reports the elbow relative to the shoulder (chain
+//                                            joint 3 = reading 2 + reading 3), every gear is off
+//                                            by +-500 ppm, shoulder and elbow sag under gravity
+//                                            (PUMA masses, 3 kg payload; 2e-5 and 3e-5 rad/(N m));
+//                                            the truth through the same map in double.
 #include <cmath>
 #include <cstdio>
 #include <vector>
 
 #include "firmware/core/correction.hpp"
+#include "firmware/core/joint_map.hpp"
 #include "tests/firmware/core/chain_fixtures.hpp"
 
 using namespace kincal::core;
@@ -83,6 +91,93 @@ Rms measure(double scale, int refinement_steps, double min_conditioning_m) {
   return rms;
 }
 
+// The joint-map case of the top comment: robots and targets drawn as in measure(1, default), each
+// robot's gear signs drawn after its errors.
+Rms measure_joint_map() {
+  const ChainModel<float> nominal = to_float(puma_like_arm());
+  const ChainModel<double> nominal_d = reference_chain(nominal);
+  const ParameterSet set = full_parameter_set(nominal_d, true, true);
+  RandomSource random(0xBE4C);
+  Rms rms;
+  CorrectionOptions options;
+  options.max_joint_step = 0.5f;
+  MassModel<double> masses;
+  masses.link_mass_kg = {0.0, 17.4, 4.8, 0.82, 0.34, 0.09};
+  masses.link_centre_of_mass_m[1] = {-0.3638, 0.006, 0.2275};
+  masses.link_centre_of_mass_m[2] = {-0.0203, -0.0141, 0.070};
+  masses.payload_mass_kg = 3.0;
+  masses.payload_centre_of_mass_m = {0.0, 0.0, 0.1};
+  MassModel<float> masses_f;
+  masses_f.link_mass_kg = {0.0f, 17.4f, 4.8f, 0.82f, 0.34f, 0.09f};
+  masses_f.link_centre_of_mass_m[1] = {-0.3638f, 0.006f, 0.2275f};
+  masses_f.link_centre_of_mass_m[2] = {-0.0203f, -0.0141f, 0.070f};
+  masses_f.payload_mass_kg = 3.0f;
+  masses_f.payload_centre_of_mass_m = {0.0f, 0.0f, 0.1f};
+  for (int robot = 0; robot < kRobots; ++robot) {
+    const ErrorVector<double> errors = random_sign_errors(random, set, 0.5 * kDegree, 0.001);
+    ChainModel<double> truth;
+    if (apply_parameter_errors(nominal_d, set, errors, truth) != ErrorModelStatus::ok) return rms;
+    JointMap<double> nominal_map;
+    nominal_map.joint_count = 6;
+    nominal_map.coupling(2, 1) = 1.0;
+    JointMap<double> true_map = nominal_map;
+    for (int i = 0; i < 6; ++i) true_map.scale(i) = 1.0 + 5e-4 * random.sign();
+    true_map.compliance(1) = 2e-5;
+    true_map.compliance(2) = 3e-5;
+    static CorrectionModel model;
+    static CorrectionWorkspace workspace;
+    static JointMapModel map_model;
+    JointMap<float> nominal_map_f, true_map_f;
+    nominal_map_f.joint_count = true_map_f.joint_count = 6;
+    nominal_map_f.coupling = nominal_map.coupling.cast<float>();
+    true_map_f.coupling = true_map.coupling.cast<float>();
+    true_map_f.scale = true_map.scale.cast<float>();
+    true_map_f.compliance = true_map.compliance.cast<float>();
+    if (prepare_correction(nominal, set, errors.cast<float>(), options, model) != CorrectionStatus::ok ||
+        prepare_joint_map(model, nominal_map_f, true_map_f, masses_f, workspace, map_model) != CorrectionStatus::ok)
+      return rms;
+    PreparedChain<double> nominal_chain, true_chain;
+    prepare_chain(nominal_d, nominal_chain);
+    prepare_chain(truth, true_chain);
+    // Readings -> the chain's variables through a map -> the tool, in double.
+    const auto pose = [&masses](const PreparedChain<double>& chain, const JointMap<double>& map,
+                                const JointVector<double>& readings) {
+      DeflectionWorkspace<double> ws;
+      JointVector<double> coupled, deflected;
+      coupled_values(map, readings, coupled);
+      deflect(chain, masses, map.compliance, coupled, ws, deflected);
+      joint_trig(chain, deflected, ws.trig);
+      RigidTransform<double> base_T_tool;
+      tool_pose(chain, deflected, ws.trig, base_T_tool);
+      return base_T_tool;
+    };
+    for (int t = 0; t < kTargetsPerRobot;) {
+      JointVector<double> q = JointVector<double>::Zero();
+      for (int i = 0; i < 6; ++i) q(i) = random.uniform(-2.8, 2.8);
+      if (conditioning_m(nominal_d, q, static_cast<double>(options.rotation_weight_m)) < 0.1) continue;
+      ++t;
+      JointVector<double> readings = q;
+      readings(2) = q(2) - q(1);
+      Correction correction;
+      JointVector<float> corrected;
+      if (correct_joint_readings(model, map_model, workspace, readings.cast<float>(), correction, corrected) !=
+          CorrectionStatus::ok) {
+        ++rms.refused;
+        continue;
+      }
+      const RigidTransform<double> target = pose(nominal_chain, nominal_map, readings);
+      const Twist<double> before = small_pose_difference(target, pose(true_chain, true_map, readings));
+      const Twist<double> after = small_pose_difference(target, pose(true_chain, true_map, corrected.cast<double>()));
+      rms.before_m2 += before.head<3>().squaredNorm();
+      rms.before_rad2 += before.tail<3>().squaredNorm();
+      rms.after_m2 += after.head<3>().squaredNorm();
+      rms.after_rad2 += after.tail<3>().squaredNorm();
+      ++rms.count;
+    }
+  }
+  return rms;
+}
+
 // Least-squares slope of log(y) against log(x).
 double slope(const std::vector<double>& x, const std::vector<double>& y) {
   double sx = 0, sy = 0, sxx = 0, sxy = 0;
@@ -131,5 +226,12 @@ int main() {
     }
     std::printf("FIGURE correction_residual_scaling_exponent%s %.3f power\n", name, slope(scales, residuals));
   }
+  const Rms mapped = measure_joint_map();
+  if (mapped.count == 0) return 1;
+  std::printf("FIGURE correction_joint_map_error_before_mm %.3f mm\n", mapped.before_mm());
+  std::printf("FIGURE correction_joint_map_residual_mm %.5f mm\n", mapped.after_mm());
+  std::printf("FIGURE correction_joint_map_residual_mrad %.5f mrad\n", mapped.after_mrad());
+  std::printf("FIGURE correction_joint_map_residual_fraction %.5f ratio\n", mapped.fraction());
+  if (mapped.refused > 0) std::printf("FIGURE correction_joint_map_refused %d targets\n", mapped.refused);
   return 0;
 }
