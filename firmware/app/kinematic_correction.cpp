@@ -38,9 +38,10 @@ void KinematicCorrection::load(const shared::CorrectionParameters& parameters) n
   usable_ = correction_chain(parameters, nominal_, parameter_ids_, errors_) == ChainStatus::kOk &&
             core::prepare_correction(nominal_, parameter_ids_, errors_, core::CorrectionOptions{}, model_) ==
                 core::CorrectionStatus::ok &&
-            correction_joint_maps(parameters, nominal_map_, identified_map_, masses_) == ChainStatus::kOk &&
-            core::prepare_joint_map(model_, nominal_map_, identified_map_, masses_, workspace_, joint_map_) ==
-                core::CorrectionStatus::ok;
+            correction_joint_maps(parameters, joint_map_.nominal, joint_map_.identified, joint_map_.masses) ==
+                ChainStatus::kOk &&
+            core::prepare_joint_map(model_, joint_map_.nominal, joint_map_.identified, joint_map_.masses, workspace_,
+                                    joint_map_) == core::CorrectionStatus::ok;
 }
 
 CorrectStatus KinematicCorrection::correct(const shared::CorrectionParameters& parameters, const JointRaw& in,

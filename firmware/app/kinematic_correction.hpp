@@ -19,10 +19,11 @@
 // (correction_chain.hpp: a beta on a DH link, or prepare_correction refuses it); kNotCorrectable when a
 // joint value is beyond core::kSinCosMaxArgumentRad or the correction would move a joint by more
 // than 0.05 rad (a singular configuration or parameters far off): `out` is then not written.
-// Cost (M4F, 6 joints): about 4.8k instructions per target (correction_m4_instructions), plus
-// preparing the model when the block changed (two chains' trigonometry). Memory: the model,
-// workspace and a copy of the block inside the object (3,552 bytes on the M4): construct it statically,
-// not on a small stack. Thread/ISR safety: main loop only (one workspace).
+// Cost (M4F, 6 joints): about 4.8k instructions per target (correction_m4_instructions), 8.3k
+// with coupling, scale and compliance (correction_joint_map_m4_instructions), plus preparing the
+// model when the block changed (two chains' trigonometry, the coupling's inverse). Memory: the
+// model, joint map, workspace and a copy of the block inside the object (5,728 bytes on the M4): construct it
+// statically, not on a small stack. Thread/ISR safety: main loop only (one workspace).
 #pragma once
 
 #include "firmware/app/ports.hpp"
@@ -46,9 +47,7 @@ class KinematicCorrection {
   core::CorrectionModel model_{};
   core::CorrectionWorkspace workspace_{};
   core::Correction correction_{};
-  core::JointMap<float> nominal_map_{}, identified_map_{};
-  core::MassModel<float> masses_{};
-  core::JointMapModel joint_map_{};
+  core::JointMapModel joint_map_{};  // read from the block in place, then prepared
   core::JointVector<float> corrected_ = core::JointVector<float>::Zero();
 };
 

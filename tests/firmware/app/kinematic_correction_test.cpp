@@ -53,7 +53,7 @@ core::JointVector<double> joints_rad(const app::JointRaw& raw) {
 TEST_CASE("kinematic correction: the calibrated arm at the corrected target reaches the nominal pose") {
   const shared::CorrectionParameters block = puma_parameters();
   const DoubleArm arm(block);
-  static app::KinematicCorrection step;  // ~3 KiB: off the stack
+  static app::KinematicCorrection step;  // ~6 KiB: off the stack
   std::uint64_t state = 0x9E3779B97F4A7C15ull;
   auto uniform = [&state](double lo, double hi) {
     state = state * 6364136223846793005ull + 1442695040888963407ull;
