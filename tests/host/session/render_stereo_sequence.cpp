@@ -3,15 +3,14 @@
 // to read back through host/capture exactly as camera frames.
 //
 //   render_stereo_sequence --model FILE --out DIR [--seed S] [--sweeps N] [--validation N]
-//                          [--scale F] [--radius M] [--missing-right POSE] [--doubled-left POSE]
+//                          [--scale F] [--radius M] [--k1 K] [--missing-right POSE] [--doubled-left POSE]
 //                          [--occluded-right POSE] [--drop-right POSE] [--only POSE]
 //
 // The robot: the model with hidden errors (sim::SimulatedRobot, as host/demo's stereo rig draws
 // them from the seed). The rig: Kapucu & Baysec's parallel pair (sim::StereoRigSpec) with its
 // images scaled by --scale (the same cameras at a coarser pixel: focal lengths and principal
-// points scaled with the image), watching a crimson beacon of --radius: each colour frame is two
-// renders, the red channel with the beacon bright, green and blue with it dark, on a grey
-// background.
+// points scaled with the image; both with radial distortion --k1), watching a crimson beacon of --radius: each colour
+// frame is two renders, the red channel with the beacon bright, green and blue with it dark, on a grey background.
 // Writes to DIR:
 //   plan.csv, validation.csv   the single-joint sweeps (--sweeps readings per joint, about the
 //                              middle of the limits) and --validation random poses in view
@@ -55,7 +54,7 @@ struct Options {
   std::string model, out;
   std::uint64_t seed = 1;
   int sweeps = 8, validation = 6;
-  double scale = 1, radius_m = 0.03;
+  double scale = 1, radius_m = 0.03, k1 = 0;
   int missing_right = -1, doubled_left = -1, occluded_right = -1, drop_right = -1;
   int only = -1;  // render this pose's frames only (a hostile copy of a recording)
 };
@@ -129,6 +128,7 @@ camera::StereoCalibration calibration_of(const sim::StereoRigSpec& spec) {
   cam.image_size = cv::Size(spec.camera.width_px, spec.camera.height_px);
   cam.camera_matrix =
       cv::Matx33d(spec.camera.fx_px, 0, spec.camera.cx_px, 0, spec.camera.fy_px, spec.camera.cy_px, 0, 0, 1);
+  cam.distortion = spec.camera.distortion;
   c.left = c.right = cam;
   c.right_R_left = cv::Matx33d::eye();
   c.right_t_left_m = cv::Vec3d(-spec.baseline_m, 0, 0);  // x_right = x_left - (b, 0, 0)
@@ -164,6 +164,7 @@ int run(const Options& o) {
   spec.camera.fy_px *= o.scale;
   spec.camera.cx_px = (spec.camera.cx_px + 0.5) * o.scale - 0.5;
   spec.camera.cy_px = (spec.camera.cy_px + 0.5) * o.scale - 0.5;
+  spec.camera.distortion[0] = o.k1;
 
   std::vector<double> home;
   for (const model::Joint& j : file.joints) home.push_back((j.lower + j.upper) / 2);
@@ -265,6 +266,7 @@ int main(int argc, char** argv) {
   app.add_option("--validation", o.validation);
   app.add_option("--scale", o.scale);
   app.add_option("--radius", o.radius_m);
+  app.add_option("--k1", o.k1);
   app.add_option("--missing-right", o.missing_right);
   app.add_option("--doubled-left", o.doubled_left);
   app.add_option("--occluded-right", o.occluded_right);
