@@ -43,6 +43,13 @@ constexpr int kTargetsPerRobot = 50;
 struct Rms {
   double before_m2 = 0, after_m2 = 0, before_rad2 = 0, after_rad2 = 0;
   int count = 0, refused = 0, candidates = 0;
+  void add(const Twist<double>& before, const Twist<double>& after) {
+    before_m2 += before.head<3>().squaredNorm();
+    before_rad2 += before.tail<3>().squaredNorm();
+    after_m2 += after.head<3>().squaredNorm();
+    after_rad2 += after.tail<3>().squaredNorm();
+    ++count;
+  }
   double fraction() const { return std::fmax(std::sqrt(after_m2 / before_m2), std::sqrt(after_rad2 / before_rad2)); }
   double after_mm() const { return 1e3 * std::sqrt(after_m2 / count); }
   double after_mrad() const { return 1e3 * std::sqrt(after_rad2 / count); }
@@ -81,11 +88,7 @@ Rms measure(double scale, int refinement_steps, double min_conditioning_m) {
       const Twist<double> before = small_pose_difference(target, forward_kinematics(truth, q));
       const JointVector<double> q_corrected = correction.corrected_joint_target.cast<double>();
       const Twist<double> after = small_pose_difference(target, forward_kinematics(truth, q_corrected));
-      rms.before_m2 += before.head<3>().squaredNorm();
-      rms.before_rad2 += before.tail<3>().squaredNorm();
-      rms.after_m2 += after.head<3>().squaredNorm();
-      rms.after_rad2 += after.tail<3>().squaredNorm();
-      ++rms.count;
+      rms.add(before, after);
     }
   }
   return rms;
@@ -101,18 +104,8 @@ Rms measure_joint_map() {
   Rms rms;
   CorrectionOptions options;
   options.max_joint_step = 0.5f;
-  MassModel<double> masses;
-  masses.link_mass_kg = {0.0, 17.4, 4.8, 0.82, 0.34, 0.09};
-  masses.link_centre_of_mass_m[1] = {-0.3638, 0.006, 0.2275};
-  masses.link_centre_of_mass_m[2] = {-0.0203, -0.0141, 0.070};
-  masses.payload_mass_kg = 3.0;
-  masses.payload_centre_of_mass_m = {0.0, 0.0, 0.1};
-  MassModel<float> masses_f;
-  masses_f.link_mass_kg = {0.0f, 17.4f, 4.8f, 0.82f, 0.34f, 0.09f};
-  masses_f.link_centre_of_mass_m[1] = {-0.3638f, 0.006f, 0.2275f};
-  masses_f.link_centre_of_mass_m[2] = {-0.0203f, -0.0141f, 0.070f};
-  masses_f.payload_mass_kg = 3.0f;
-  masses_f.payload_centre_of_mass_m = {0.0f, 0.0f, 0.1f};
+  const MassModel<double> masses = puma_like_masses<double>();
+  const MassModel<float> masses_f = puma_like_masses<float>();
   for (int robot = 0; robot < kRobots; ++robot) {
     const ErrorVector<double> errors = random_sign_errors(random, set, 0.5 * kDegree, 0.001);
     ChainModel<double> truth;
@@ -168,11 +161,7 @@ Rms measure_joint_map() {
       const RigidTransform<double> target = pose(nominal_chain, nominal_map, readings);
       const Twist<double> before = small_pose_difference(target, pose(true_chain, true_map, readings));
       const Twist<double> after = small_pose_difference(target, pose(true_chain, true_map, corrected.cast<double>()));
-      rms.before_m2 += before.head<3>().squaredNorm();
-      rms.before_rad2 += before.tail<3>().squaredNorm();
-      rms.after_m2 += after.head<3>().squaredNorm();
-      rms.after_rad2 += after.tail<3>().squaredNorm();
-      ++rms.count;
+      rms.add(before, after);
     }
   }
   return rms;

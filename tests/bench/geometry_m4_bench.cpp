@@ -13,6 +13,7 @@
 #include "firmware/core/range_plane.hpp"
 #include "firmware/core/stereo.hpp"
 #include "tests/bench/m4_instruction_counter.hpp"
+#include "tests/firmware/core/chain_fixtures.hpp"
 
 using namespace kincal::core;
 
@@ -137,12 +138,7 @@ int main() {
     for (int i = 0; i < 6; ++i) identified_map.scale(i) = 1.0f + 3.0e-4f * random.next();
     identified_map.compliance(1) = 2.0e-5f;
     identified_map.compliance(2) = 3.0e-5f;
-    MassModel<float> masses;
-    masses.link_mass_kg = {0.0f, 17.4f, 4.8f, 0.82f, 0.34f, 0.09f};
-    masses.link_centre_of_mass_m[1] = {-0.3638f, 0.006f, 0.2275f};
-    masses.link_centre_of_mass_m[2] = {-0.0203f, -0.0141f, 0.070f};
-    masses.payload_mass_kg = 3.0f;
-    masses.payload_centre_of_mass_m = {0.0f, 0.0f, 0.1f};
+    const MassModel<float> masses = kincal::test::puma_like_masses<float>();
     if (prepare_joint_map(g_model, nominal_map, identified_map, masses, g_workspace, g_joint_map) !=
         CorrectionStatus::ok)
       return 1;

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "firmware/core/error_model.hpp"
+#include "firmware/core/joint_map.hpp"
 #include "firmware/core/link_model.hpp"
 #include "tests/firmware/core/random_source.hpp"
 
@@ -115,6 +116,20 @@ inline ChainModel<double> puma_like_arm() {
   }
   m.base_T_frame0.translation = Eigen::Vector3d(0, 0, 0.6604);
   m.flange_T_tool.translation = Eigen::Vector3d(0.0, 0.0, 0.1);
+  return m;
+}
+
+// Gravity inputs for puma_like_arm (the joint map's tests and benchmarks): the PUMA 560's
+// shoulder and elbow link masses and centres of mass after Armstrong et al. (the wrist's masses,
+// centred on their frames), a 3 kg payload 0.1 m out along the flange's z, gravity along -z.
+template <class S>
+core::MassModel<S> puma_like_masses() {
+  core::MassModel<S> m;
+  m.link_mass_kg = {S(0), S(17.4), S(4.8), S(0.82), S(0.34), S(0.09)};
+  m.link_centre_of_mass_m[1] = {S(-0.3638), S(0.006), S(0.2275)};
+  m.link_centre_of_mass_m[2] = {S(-0.0203), S(-0.0141), S(0.070)};
+  m.payload_mass_kg = S(3);
+  m.payload_centre_of_mass_m = {S(0), S(0), S(0.1)};
   return m;
 }
 

@@ -145,12 +145,7 @@ TEST_CASE("joint map: undeflect inverts deflect to about (c dG/dq)^passes of the
   const ChainModel<double> arm = puma_like_arm();
   PreparedChain<double> chain;
   prepare_chain(arm, chain);
-  MassModel<double> masses;
-  masses.link_mass_kg = {0.0, 17.4, 4.8, 0.82, 0.34, 0.09};
-  masses.link_centre_of_mass_m[1] = {-0.3638, 0.006, 0.2275};
-  masses.link_centre_of_mass_m[2] = {-0.0203, -0.0141, 0.070};
-  masses.payload_mass_kg = 3.0;
-  masses.payload_centre_of_mass_m = {0.0, 0.0, 0.1};
+  const MassModel<double> masses = puma_like_masses<double>();
   JointVector<double> compliance = JointVector<double>::Zero();
   compliance(1) = 3e-5;
   compliance(2) = 4e-5;
