@@ -172,7 +172,7 @@ std::vector<std::vector<double>> read_plan_for(const model::RobotModel& file, co
 // after kLiveStalePairs more pairs, so that frames queued during the move are not used.
 class CapturedStereo {
  public:
-  static constexpr int kLiveStalePairs = 4;
+  static constexpr int kLiveStalePairs = 4;  // --help says so
 
   CapturedStereo(const SessionArgs& a, int poses) {
     std::unique_ptr<capture::FrameSource> left = capture::open_source(a.left);
@@ -474,7 +474,8 @@ void add_session_command(CLI::App& app, int& status) {
   cmd->add_option("--left", a->left,
                   "real stereo rig: the left camera's frames: a V4L2 device (0, /dev/video0), a video, a "
                   "directory of images or image files (a quoted pattern like 'left/*.png' is expanded); recorded "
-                  "frames are one per pose of --plan then --validation-plan, in order")
+                  "frames are one per pose of --plan then --validation-plan, in order; a live camera's pair is taken "
+                  "after 4 more, so that frames queued during the move are not used")
       ->expected(1, -1);
   cmd->add_option("--right", a->right, "real stereo rig: the right camera's frames, as --left")->expected(1, -1);
   cmd->add_option("--stereo", a->stereo,
