@@ -58,5 +58,8 @@ function(kincal_firmware target)
   target_compile_options(${target} PRIVATE $<$<COMPILE_LANGUAGE:CXX>:-fno-exceptions -fno-rtti>)
   if(CMAKE_CROSSCOMPILING)
     target_compile_options(${target} PRIVATE -fcallgraph-info=su)
+    # ccache 4.7 does not know -fcallgraph-info: a cache hit gives the object without its .ci
+    # file, and the stack check then misses it. These objects are always compiled.
+    set_target_properties(${target} PROPERTIES C_COMPILER_LAUNCHER "" CXX_COMPILER_LAUNCHER "")
   endif()
 endfunction()
