@@ -247,13 +247,16 @@ std::size_t MeasurementPipeline::collect_correspondences() noexcept {
   return n;
 }
 
+bool MeasurementPipeline::prepare_prior() noexcept {
+  if (!have_plane_ ||
+      core::range_plane_covariance(plane_model_, plane_, kRangeSigmaM, prior_.covariance) != core::PlaneStatus::ok)
+    return false;
+  prior_.plane = plane_;
+  return true;
+}
+
 bool MeasurementPipeline::solve_pose(std::size_t point_count) noexcept {
-  const core::PlanePrior* prior = nullptr;
-  if (have_plane_ &&
-      core::range_plane_covariance(plane_model_, plane_, kRangeSigmaM, prior_.covariance) == core::PlaneStatus::ok) {
-    prior_.plane = plane_;
-    prior = &prior_;
-  }
+  const core::PlanePrior* prior = prepare_prior() ? &prior_ : nullptr;
   core::PlanarPoseOptions options;
   options.pixel_sigma_px = kPixelSigmaPx;
   options.perspective_passes = fiducial_side_m_ > 0.0f ? 1 : 0;
@@ -325,7 +328,7 @@ void MeasurementPipeline::finish(CaptureStatus camera, bool labelled, RangerStat
     note(shared::MeasureStatus::kNoParameters);
 
   if (needs_camera_) {
-    core::FrameSummary summary;
+    core::FrameSummary& summary = summary_;
     if (camera != CaptureStatus::kOk) {
       note(shared::MeasureStatus::kCameraFailure);
     } else if (!labelled) {

@@ -61,13 +61,15 @@
 // another frame size than the camera's count as missing), kNoTarget, kNotAvailable. Sections
 // that could be produced are present whatever the status; nothing is ever invented.
 //
-// Memory: everything inside the object (the VGA labeler workspace of 16 KiB, 64 blobs, the
-// histogram, the range-plane matrices, the planar pose's workspace and correspondences, copies of
-// the two parameter blocks; sizeof(MeasurementPipeline) is printed by the M4 measurement bench):
-// construct it statically, never on the stack. Cost: poll() handles at most kRowsPerPoll rows per
-// call, a bounded slice (16 VGA rows are ~35k instructions on the M4 at the labeler's 3.4 per
-// pixel), so the correction stream keeps running between slices; the final call runs FID, the
-// plane fit and the pose. The whole step on a VGA frame: tests/bench/measurement_m4_bench.cpp.
+// Memory: everything inside the object, 24,704 bytes on the M4 (the VGA labeler workspace of
+// 16 KiB, 64 blobs, the histogram, the range-plane matrices, the planar pose's workspace and
+// correspondences, copies of the two parameter blocks): construct it statically, never on the
+// stack; the deepest call (finish) needs 1016 bytes of stack (m4.kincal_app.stack). Cost: poll()
+// handles at most kRowsPerPoll rows per call, a bounded slice (16 VGA rows are ~35k instructions
+// on the M4), so the correction stream keeps running between slices; the final call runs FID,
+// the plane fit and the pose (about 60k instructions). Measured on a VGA calibration-square frame
+// (tests/bench/measurement_m4_bench.cpp): 0.66M instructions for the metering frame, 1.0M for the
+// measurement frame including FID, plane and pose.
 // Thread/ISR safety: main loop only. One measurement at a time (start() while one runs: kBusy).
 #pragma once
 
@@ -144,6 +146,7 @@ class MeasurementPipeline {
   // The pose in three steps, kept out of line so that their locals do not stack up under
   // planar_pose (the app's stack budget, m4.kincal_app.stack).
   [[gnu::noinline]] std::size_t collect_correspondences() noexcept;
+  [[gnu::noinline]] bool prepare_prior() noexcept;  // the plane prior, if there is a plane
   [[gnu::noinline]] bool solve_pose(std::size_t point_count) noexcept;
   [[gnu::noinline]] bool encode_pose(shared::MeasurementReport& report) noexcept;
   void report_blobs(shared::MeasurementReport& report, std::uint32_t blob_count) const noexcept;
@@ -160,6 +163,7 @@ class MeasurementPipeline {
   core::BlobLabeler labeler_;
   core::LabelerConfig labeler_config_{};
   core::GreyHistogram histogram_{};
+  core::FrameSummary summary_{};
   std::array<core::Blob, kMaxBlobsOut> blobs_{};
   std::array<core::FidVerdict, kMaxBlobsOut> verdicts_{};
   core::FidResult fid_{};

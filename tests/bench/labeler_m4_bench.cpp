@@ -12,44 +12,16 @@
 
 #include "firmware/core/blob_labeler.hpp"
 #include "tests/bench/m4_instruction_counter.hpp"
+#include "tests/bench/vga_square_frame.hpp"
 
 using namespace kincal::core;
 
 namespace {
 
-constexpr int kWidth = 640, kHeight = 480;
+constexpr int kWidth = kincal::bench::kVgaWidth, kHeight = kincal::bench::kVgaHeight;
 VgaLabelerBuffers g_buffers;
 Blob g_blobs[64];
 std::uint8_t g_row[kWidth];
-
-struct Square {
-  int x0, y0, x1, y1;  // inclusive
-};
-
-// One row of a calibration square centred at (cx, cy): fiducials p1..p6 of Doty's square.
-void render_row(int y, int cx, int cy, std::uint8_t* row) {
-  const int s = 30, d = 210;  // fiducial side and centre-to-perimeter distance, px
-  const Square fiducials[6] = {
-      {cx - d - s / 2, cy - d - s / 2, cx - d + s / 2 - 1, cy - d + s / 2 - 1},  // corner marker
-      {cx - s / 2, cy - d - s / 2, cx + s / 2 - 1, cy - d + s / 2 - 1},          // top
-      {cx - d - s / 2, cy - s / 2, cx - d + s / 2 - 1, cy + s / 2 - 1},          // left
-      {cx - s / 2, cy - s, cx + s / 2 - 1, cy + s - 1},                          // centre, 30 x 60
-      {cx + d - s / 2, cy - s / 2, cx + d + s / 2 - 1, cy + s / 2 - 1},          // right
-      {cx - s / 2, cy + d - s / 2, cx + s / 2 - 1, cy + d + s / 2 - 1},          // bottom
-  };
-  std::uint32_t hash = static_cast<std::uint32_t>(y) * 2654435761u;
-  for (int x = 0; x < kWidth; ++x) {
-    hash = hash * 1664525u + 1013904223u;
-    int v = 200 + static_cast<int>(hash >> 29) - 4;
-    for (const Square& f : fiducials) {
-      if (x >= f.x0 && x <= f.x1 && y >= f.y0 && y <= f.y1)
-        v = 40;
-      else if (x >= f.x0 - 1 && x <= f.x1 + 1 && y >= f.y0 - 1 && y <= f.y1 + 1)
-        v = 120;  // blurred rim
-    }
-    row[x] = static_cast<std::uint8_t>(v);
-  }
-}
 
 struct Result {
   double instructions_per_pixel;
@@ -69,11 +41,11 @@ Result run(kincal::bench::M4InstructionCounter& counter, bool copy, int frames) 
     for (int y = 0; y < kHeight; ++y) {
       LabelStatus status;
       if (copy) {
-        render_row(y, cx, cy, g_row);
+        kincal::bench::render_vga_square_row(y, cx, cy, g_row);
         counter.start();
         status = labeler.push_row(g_row);
       } else {
-        render_row(y, cx, cy, labeler.row_buffer().data());
+        kincal::bench::render_vga_square_row(y, cx, cy, labeler.row_buffer().data());
         counter.start();
         status = labeler.commit_row(kWidth);
       }
