@@ -120,9 +120,11 @@ enum class [[nodiscard]] PlanarPoseStatus : std::uint8_t{
 // sides along the target's x and y (the square's p4 is s/2 x s, the others s/2 x s/2); zero for a
 // point feature (no perspective-bias correction for it).
 struct PlanarCorrespondence {
-  Vector2<float> pixel_px{};
-  Vector2<float> target_m{};
-  Vector2<float> fiducial_half_size_m{};
+  // Zero by default (Eigen's own default leaves a vector uninitialized; a zero half size means
+  // "no perspective correction" for that point).
+  Vector2<float> pixel_px = Vector2<float>::Zero();
+  Vector2<float> target_m = Vector2<float>::Zero();
+  Vector2<float> fiducial_half_size_m = Vector2<float>::Zero();
 };
 
 // The ranger plane with its covariance, of (c0_m, slope_x, slope_y) in that order (see above).
