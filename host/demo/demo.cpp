@@ -83,23 +83,7 @@ identify::AccuracyStats pose_errors(const std::vector<model::Transform>& goals,
     position_m.push_back((actual[i].translation - goals[i].translation).norm());
     angle_rad.push_back(identify::so3_log(goals[i].rotation.transpose() * actual[i].rotation).norm());
   }
-  identify::AccuracyStats s;
-  const auto summary = [](const std::vector<double>& e, double& mean, double& rms, double& max) {
-    double sum = 0, squares = 0;
-    for (const double v : e) {
-      sum += v;
-      squares += v * v;
-      max = std::max(max, v);
-    }
-    mean = sum / static_cast<double>(e.size());
-    rms = std::sqrt(squares / static_cast<double>(e.size()));
-  };
-  s.count = static_cast<int>(position_m.size());
-  if (s.count == 0) return s;
-  summary(position_m, s.mean_m, s.rms_m, s.max_m);
-  summary(angle_rad, s.mean_rad, s.rms_rad, s.max_rad);
-  s.has_orientation = true;
-  return s;
+  return identify::error_stats(position_m, angle_rad);
 }
 
 // The online correction judged by the truth: for each validation target q_nom, the true tool pose

@@ -335,30 +335,38 @@ void register_base(RobotModel& start, const model::Dataset& data, std::vector<st
 
 AccuracyStats accuracy(const RobotModel& m, const model::Dataset& data, const std::vector<int>& rows_in) {
   const std::vector<int> rows = rows_in.empty() ? all_rows(data) : rows_in;
-  AccuracyStats s;
-  s.has_orientation = data.has_orientation && m.tool == model::ToolKind::frame;
-  double sum = 0, sum2 = 0, osum = 0, osum2 = 0;
+  const bool orientation = data.has_orientation && m.tool == model::ToolKind::frame;
+  std::vector<double> positions_m, angles_rad;
   for (int r : rows) {
     const model::Measurement& row = data.rows[static_cast<std::size_t>(r)];
     const Transform pose = model::forward_kinematics(m, row.q);
-    const double e = (pose.translation - row.position).norm();
-    sum += e;
-    sum2 += e * e;
-    s.max_m = std::max(s.max_m, e);
-    if (s.has_orientation && row.orientation) {
-      const double a = so3_log(row.orientation->toRotationMatrix() * pose.rotation.transpose()).norm();
-      osum += a;
-      osum2 += a * a;
-      s.max_rad = std::max(s.max_rad, a);
+    positions_m.push_back((pose.translation - row.position).norm());
+    if (orientation)
+      angles_rad.push_back(
+          row.orientation ? so3_log(row.orientation->toRotationMatrix() * pose.rotation.transpose()).norm() : 0.0);
+  }
+  AccuracyStats s = error_stats(positions_m, angles_rad);
+  s.has_orientation = orientation;
+  return s;
+}
+
+AccuracyStats error_stats(std::span<const double> positions_m, std::span<const double> angles_rad) {
+  AccuracyStats s;
+  s.count = static_cast<int>(positions_m.size());
+  if (s.count == 0) return s;
+  const auto summarize = [count = s.count](std::span<const double> e, double& mean, double& rms, double& max) {
+    double sum = 0, sum2 = 0;
+    for (const double v : e) {
+      sum += v;
+      sum2 += v * v;
+      max = std::max(max, v);
     }
-    ++s.count;
-  }
-  if (s.count > 0) {
-    s.mean_m = sum / s.count;
-    s.rms_m = std::sqrt(sum2 / s.count);
-    s.mean_rad = osum / s.count;
-    s.rms_rad = std::sqrt(osum2 / s.count);
-  }
+    mean = sum / count;
+    rms = std::sqrt(sum2 / count);
+  };
+  summarize(positions_m, s.mean_m, s.rms_m, s.max_m);
+  s.has_orientation = !angles_rad.empty();
+  if (s.has_orientation) summarize(angles_rad, s.mean_rad, s.rms_rad, s.max_rad);
   return s;
 }
 

@@ -100,6 +100,11 @@ struct AccuracyStats {
 
 AccuracyStats accuracy(const RobotModel& model, const model::Dataset& data, const std::vector<int>& rows = {});
 
+// The statistics of given error lengths: positions (m) and, when angles_rad is not empty, the
+// orientations' angles (rad, has_orientation set). The one summary behind accuracy() and the
+// session's correction checks.
+AccuracyStats error_stats(std::span<const double> positions_m, std::span<const double> angles_rad = {});
+
 struct SweepReport;  // cpa.hpp
 
 // One rejected measurement and what rejecting it changes.

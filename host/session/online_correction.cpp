@@ -1,6 +1,5 @@
 #include "host/session/online_correction.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <ostream>
@@ -20,18 +19,6 @@ float to_float(double v, const std::string& what) {
 shared::DhValues values(const core::LinkParameters<double>& p, const std::string& link) {
   return {to_float(p.a_m, link + " a"), to_float(p.alpha_rad, link + " alpha"), to_float(p.d_m, link + " d"),
           to_float(p.theta_rad, link + " theta"), to_float(p.beta_rad, link + " beta")};
-}
-
-identify::AccuracyStats position_stats(const std::vector<double>& errors_m) {
-  identify::AccuracyStats s;
-  s.count = static_cast<int>(errors_m.size());
-  for (const double e : errors_m) {
-    s.mean_m += e / s.count;
-    s.rms_m += e * e / s.count;
-    s.max_m = std::max(s.max_m, e);
-  }
-  s.rms_m = std::sqrt(s.rms_m);
-  return s;
 }
 
 }  // namespace
@@ -165,8 +152,8 @@ CorrectionCheck verify_online_correction(can::PlatformClient& client, bool fd, c
     before.push_back((m.position - goal).norm());
     after.push_back((o.position - goal).norm());
   }
-  check.before = position_stats(before);
-  check.after = position_stats(after);
+  check.before = identify::error_stats(before);
+  check.after = identify::error_stats(after);
   return check;
 }
 
