@@ -132,6 +132,7 @@ std::size_t encode_block(const PlatformGeometry& b, std::span<std::uint8_t> out)
   o.u8(b.fiducial_count);
   for (const auto& p : b.fiducial_square_m)
     for (const float v : p) o.f32(v);
+  o.f32(b.square_pitch_m);
   return o.position();
 }
 
@@ -146,7 +147,10 @@ DecodeStatus decode_block(std::span<const std::uint8_t> image, PlatformGeometry&
   v.fiducial_count = in.u8();
   for (auto& p : v.fiducial_square_m)
     for (float& f : p) f = in.f32();
-  if (!in.finite() || v.fiducial_count > kMaxFiducials) return DecodeStatus::kBadValue;
+  v.square_pitch_m = in.f32();
+  const bool pitch_ok =
+      v.square_pitch_m == 0.0f || (v.square_pitch_m >= kMinSquarePitchM && v.square_pitch_m <= kMaxSquarePitchM);
+  if (!in.finite() || v.fiducial_count > kMaxFiducials || !pitch_ok) return DecodeStatus::kBadValue;
   b = v;
   return DecodeStatus::kOk;
 }

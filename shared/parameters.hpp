@@ -8,8 +8,12 @@
 //                    width height (u16 px). Pixel (0, 0) is the centre of the top-left pixel.
 //   kColourLut   v1  2048 bytes: one 4-bit colour class per RGB444 cell (r4 << 8 | g4 << 4 | b4),
 //                    two cells per byte, even cell in the low nibble; class 0 is background.
-//   kGeometry    v1  193 bytes: four ranger beams in the camera frame, each origin (m) and unit
-//                    direction; fiducial count (u8, <= 8) and their positions in the square frame (m).
+//   kGeometry    v4  197 bytes: four ranger beams in the camera frame, each origin (m) and unit
+//                    direction; fiducial count (u8, <= 8) and their positions in the square frame (m);
+//                    then the strip's square pitch (m): the centre-to-centre distance of neighbouring
+//                    calibration squares along the square frame's x axis (Doty's strip: squares in a
+//                    row, axes parallel), 0 when the platform uses one square per frame; refused
+//                    unless 0 or within [0.01, 2] m (a smaller pitch would overlap the squares).
 //   kCorrection  v3  671 bytes: joint count (u8, <= 6); per joint its type (u8: 0 revolute, 1
 //                    prismatic), its link convention (u8: 0 standard DH, 1 modified DH, 2 Doty's
 //                    (d, theta, beta, a, alpha); link_model.hpp), the nominal values and their
@@ -32,6 +36,9 @@
 //   joint revolute, modified DH), which cannot describe a prismatic axis or Doty's links.
 //   Format version 3 (all blocks): the correction block's joint map; a platform refuses a
 //   version 2 block (AckStatus kBadVersion) and ignores a stored one at start.
+//   Format version 4 (all blocks): the geometry block's square pitch (193 -> 197 bytes), so that
+//   the platform's pose can use every square of the strip in view; a platform refuses a version 3
+//   block and ignores a stored one at start, as above.
 //
 // Messages (ISO-TP payloads, little-endian):
 //   ParameterWrite  host -> platform: type 0x01 | block u8 | version u16 | length u16 | crc32 u32 | payload
@@ -41,7 +48,8 @@
 //   frame and a read with ParameterData (or a ParameterAck saying why not).
 //
 // Cost: O(bytes), no heap. Thread/ISR safety: pure. Failure modes: every decoder returns a
-// DecodeStatus or AckStatus; decode of a block rejects non-finite floats and counts too large.
+// DecodeStatus or AckStatus; decode of a block rejects non-finite floats, counts too large and
+// a square pitch out of range (kBadValue).
 #pragma once
 
 #include <array>
@@ -54,7 +62,7 @@
 
 namespace kincal::shared {
 
-inline constexpr std::uint16_t kBlockFormatVersion = 3;
+inline constexpr std::uint16_t kBlockFormatVersion = 4;
 
 struct CameraIntrinsics {
   float fx_px = 0, fy_px = 0, cx_px = 0, cy_px = 0;
@@ -83,8 +91,16 @@ struct PlatformGeometry {
   std::array<RangerBeam, kRangers> rangers{};
   std::uint8_t fiducial_count = 0;
   std::array<std::array<float, 3>, kMaxFiducials> fiducial_square_m{};
+  // Centre-to-centre distance of neighbouring squares of the strip along the square frame's x
+  // axis (format 4); 0: the platform uses one square per frame.
+  float square_pitch_m = 0.0f;
 };
-inline constexpr std::size_t kGeometryBytes = kRangers * 6 * 4 + 1 + kMaxFiducials * 3 * 4;
+inline constexpr std::size_t kGeometryBytes = kRangers * 6 * 4 + 1 + kMaxFiducials * 3 * 4 + 4;
+static_assert(kGeometryBytes == 197);
+// The square pitch a geometry block may carry besides 0: below the minimum the squares' fiducial
+// patterns would overlap, above the maximum no two squares are in one camera's view.
+inline constexpr float kMinSquarePitchM = 0.01f;
+inline constexpr float kMaxSquarePitchM = 2.0f;
 
 struct DhValues {
   float a_m = 0, alpha_rad = 0, d_m = 0, theta_rad = 0, beta_rad = 0;

@@ -65,8 +65,9 @@ const char* to_string(shared::AckStatus status) {
     case shared::AckStatus::kBadLength:
       return "bad length";
     case shared::AckStatus::kBadVersion:
-      // Every block carries shared::kBlockFormatVersion; format 3 added the correction block's
-      // joint map, so firmware from before it refuses this kincal's blocks (and the reverse).
+      // Every block carries shared::kBlockFormatVersion; format 4 added the geometry block's
+      // square pitch (format 3 the correction block's joint map), so firmware from before it
+      // refuses this kincal's blocks (and the reverse).
       return "bad version: the platform's firmware reads another parameter block format than this kincal writes; "
              "update the firmware or kincal so that both agree";
     case shared::AckStatus::kBadValue:

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <stdexcept>
+#include <string>
 
 namespace kincal::sim {
 
@@ -40,6 +41,11 @@ shared::PlatformGeometry platform_geometry(const StripSpec& strip, const RangerS
     block.fiducial_square_m[i] = {static_cast<float>(fiducials[i].centre_m.x()),
                                   static_cast<float>(fiducials[i].centre_m.y()), 0.0f};
   }
+  // Square k's centre is at (k square_m, 0, 0) in the strip frame, axes parallel (strip.hpp).
+  block.square_pitch_m = static_cast<float>(strip.square_m);
+  if (!(block.square_pitch_m >= shared::kMinSquarePitchM && block.square_pitch_m <= shared::kMaxSquarePitchM))
+    throw std::invalid_argument("square_m " + std::to_string(strip.square_m) +
+                                " m: the geometry block's square pitch must be within [0.01, 2] m");
   return block;
 }
 

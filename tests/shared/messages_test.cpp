@@ -3,6 +3,7 @@
 #include <doctest.h>
 
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -266,6 +267,59 @@ TEST_CASE("correction block format 3: the joint map round-trips, its flag is jud
   REQUIRE(decode_parameter_message(std::span<const std::uint8_t>(message).first(length), h, payload) ==
           DecodeStatus::kOk);
   CHECK(h.version == 2);
+  CHECK(check_parameter_payload(h, payload) == AckStatus::kBadVersion);
+}
+
+TEST_CASE(
+    "geometry block format 4: the square pitch round-trips, a pitch out of range or a version 3 block is refused") {
+  PlatformGeometry g;
+  g.fiducial_count = 6;
+  g.fiducial_square_m[4] = {0.04445f, 0.0f, 0.0f};
+  g.square_pitch_m = 0.1016f;  // Doty's 4-inch squares
+  std::array<std::uint8_t, kGeometryBytes> image{};
+  REQUIRE(encode_block(g, image) == 197);
+  PlatformGeometry back;
+  REQUIRE(decode_block(image, back) == DecodeStatus::kOk);
+  CHECK(back.square_pitch_m == 0.1016f);
+  CHECK(back.fiducial_square_m[4] == g.fiducial_square_m[4]);
+  // The pitch is the last float32, after the v1 part (193 bytes).
+  const auto pitch_bits = std::bit_cast<std::uint32_t>(0.1016f);
+  for (std::size_t k = 0; k < 4; ++k) CHECK(image[193 + k] == static_cast<std::uint8_t>(pitch_bits >> (8 * k)));
+
+  const auto decoded_with_pitch = [&](float pitch) {
+    PlatformGeometry p = g;
+    p.square_pitch_m = pitch;
+    std::array<std::uint8_t, kGeometryBytes> bytes{};
+    REQUIRE(encode_block(p, bytes) == kGeometryBytes);
+    PlatformGeometry out;
+    out.square_pitch_m = -1.0f;  // written only on kOk
+    const DecodeStatus status = decode_block(bytes, out);
+    if (status != DecodeStatus::kOk) CHECK(out.square_pitch_m == -1.0f);
+    return status;
+  };
+  for (const float pitch : {0.0f, 0.01f, 0.1016f, 2.0f}) {
+    INFO("pitch " << pitch);
+    CHECK(decoded_with_pitch(pitch) == DecodeStatus::kOk);
+  }
+  for (const float pitch :
+       {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+        -std::numeric_limits<float>::infinity(), -0.1016f, -1e-30f, 1e-30f, 0.005f, 0.0099f, 2.0001f, 3.0f}) {
+    INFO("pitch " << pitch);
+    CHECK(decoded_with_pitch(pitch) == DecodeStatus::kBadValue);
+  }
+  CHECK(decode_block(std::span<const std::uint8_t>(image).first(193), back) == DecodeStatus::kWrongLength);
+
+  // A version 3 geometry block (193 bytes, version 3 in the header) is refused as a version.
+  std::array<std::uint8_t, kMaxParameterMessageBytes> message{};
+  const std::size_t length = encode_parameter_message(MessageType::kParameterWrite, ParameterBlock::kGeometry,
+                                                      std::span<const std::uint8_t>(image).first(193), message);
+  REQUIRE(length == kParameterHeaderBytes + 193);
+  message[2] = 3;
+  ParameterHeader h;
+  std::span<const std::uint8_t> payload;
+  REQUIRE(decode_parameter_message(std::span<const std::uint8_t>(message).first(length), h, payload) ==
+          DecodeStatus::kOk);
+  CHECK(h.version == 3);
   CHECK(check_parameter_payload(h, payload) == AckStatus::kBadVersion);
 }
 

@@ -56,7 +56,7 @@ chmod +x "$root/init"
 python3 - "$root/vm" <<'PY'
 import struct, sys, zlib
 payload = struct.pack("<9f2H", 810.5, 811.25, 319.5, 239.5, -0.12, 0.03, 1e-4, -2e-4, 0.0, 640, 480)
-version = 3  # shared/parameters.hpp kBlockFormatVersion
+version = 4  # shared/parameters.hpp kBlockFormatVersion
 header = lambda t: struct.pack("<BBHHI", t, 1, version, len(payload), zlib.crc32(payload))
 hexline = lambda b: " ".join("%02X" % x for x in b)
 open(sys.argv[1] + "/intrinsics_write.hex", "w").write(hexline(header(0x01) + payload) + "\n")

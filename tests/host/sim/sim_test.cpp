@@ -157,7 +157,7 @@ TEST_CASE("rangers against a hand-computed plane") {
                        std::invalid_argument);
 }
 
-TEST_CASE("parameter blocks: intrinsics in float, the geometry block's beams and fiducials") {
+TEST_CASE("parameter blocks: intrinsics in float, the geometry block's beams, fiducials and square pitch") {
   CameraSpec camera;
   camera.fx_px = 612.25;
   camera.distortion = {-0.1, 0.02, 0.001, -0.002, 0.003};
@@ -182,8 +182,12 @@ TEST_CASE("parameter blocks: intrinsics in float, the geometry block's beams and
   CHECK(g.rangers[3].origin_m[1] == -0.06f);
   for (const shared::RangerBeam& b : g.rangers) CHECK(b.direction[2] == 1.0f);
   CHECK(g.fiducial_square_m[0][0] == static_cast<float>(-7 * 0.0254 / 4));  // p1
+  CHECK(g.square_pitch_m == static_cast<float>(4 * 0.0254));                // square k at (k square_m, 0, 0)
   CHECK(g.fiducial_square_m[0][1] == static_cast<float>(7 * 0.0254 / 4));
   CHECK(g.fiducial_square_m[4][0] == static_cast<float>(7 * 0.0254 / 4));  // p5
+  StripSpec wide;
+  wide.square_m = 2.5;  // beyond the block's square pitch
+  CHECK_THROWS_WITH_AS(platform_geometry(wide, rangers), doctest::Contains("square_m"), std::invalid_argument);
 }
 
 TEST_CASE("the beacon: bright spots whose centroids are the centre's projections in both cameras") {
