@@ -170,6 +170,32 @@ TEST_CASE("start: idle, every parameter block missing, heartbeat every 100 ms") 
   CHECK(hb.version_major == shared::kProtocolVersionMajor);
 }
 
+TEST_CASE("start: a stored block of format 3 is ignored, one of format 4 is loaded with its square pitch") {
+  test::FakeStorage storage;
+  app::ParameterStore<test::FakeStorage> store(storage);
+  shared::PlatformGeometry g;
+  g.fiducial_count = 6;
+  g.square_pitch_m = 0.1016f;
+  std::array<std::uint8_t, shared::kGeometryBytes> image{};
+  REQUIRE(shared::encode_block(g, image) == image.size());
+  std::uint32_t sequence = 0;
+  // What a format 3 platform stored (193 bytes, no pitch); then a format 4 image under version
+  // 3, which only the version tells apart.
+  for (const std::size_t length : {std::size_t{193}, shared::kGeometryBytes}) {
+    REQUIRE(store.save(shared::ParameterBlock::kGeometry, 3, std::span<const std::uint8_t>(image).first(length),
+                       sequence) == app::StoreStatus::kOk);
+    Harness h(storage);
+    CHECK_FALSE(h.app.parameters().has_geometry);
+    CHECK((h.heartbeat().error_flags & shared::error_flag::kNoGeometry) != 0);
+  }
+  REQUIRE(store.save(shared::ParameterBlock::kGeometry, shared::kBlockFormatVersion, image, sequence) ==
+          app::StoreStatus::kOk);
+  Harness h(storage);
+  CHECK(h.app.parameters().has_geometry);
+  CHECK(h.app.parameters().geometry.square_pitch_m == 0.1016f);
+  CHECK((h.heartbeat().error_flags & shared::error_flag::kNoGeometry) == 0);
+}
+
 TEST_CASE("measurement: trigger -> ISO-TP report with the trigger's sequence and the ranges") {
   test::FakeStorage storage;
   Harness h(storage);
