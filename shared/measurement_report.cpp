@@ -29,6 +29,10 @@ std::size_t correlation_index(std::size_t i, std::size_t j) {  // i < j
 std::uint8_t fiducial_count(const MeasurementReport& r) {
   return r.fiducial_count > kMaxFiducials ? static_cast<std::uint8_t>(kMaxFiducials) : r.fiducial_count;
 }
+std::uint8_t pose_squares(const MeasurementReport& r) {
+  if (r.pose_squares < 1) return 1;
+  return r.pose_squares > kMaxPoseSquares ? kMaxPoseSquares : r.pose_squares;
+}
 std::uint8_t blob_count(const MeasurementReport& r) {
   return r.blob_count > kMaxBlobs ? static_cast<std::uint8_t>(kMaxBlobs) : r.blob_count;
 }
@@ -136,6 +140,7 @@ std::size_t encode(const MeasurementReport& r, std::span<std::uint8_t> out) {
     }
   }
   if (r.sections & section::kPose) {
+    w.put(report_bits::kPoseSquares, pose_squares(r));
     for (const std::int32_t t : r.translation_raw) w.put_signed(20, t);
     for (const std::int32_t a : r.rotation_raw) w.put_signed(18, a);
     for (const std::uint16_t sigma : r.pose_sigma_raw) w.put(report_bits::kPoseSigma, sigma);
@@ -189,6 +194,9 @@ DecodeStatus decode(std::span<const std::uint8_t> message, MeasurementReport& r)
     }
   }
   if (r.sections & section::kPose) {
+    const auto squares = in.get(report_bits::kPoseSquares);
+    if (squares == 0) return DecodeStatus::kBadValue;
+    r.pose_squares = static_cast<std::uint8_t>(squares);
     for (std::int32_t& t : r.translation_raw) t = static_cast<std::int32_t>(in.get_signed(20));
     for (std::int32_t& a : r.rotation_raw) a = static_cast<std::int32_t>(in.get_signed(18));
     for (std::uint16_t& sigma : r.pose_sigma_raw) sigma = static_cast<std::uint16_t>(in.get(report_bits::kPoseSigma));

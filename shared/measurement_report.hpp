@@ -14,9 +14,14 @@
 //              (LSB 1/64 px, range [0, 1024) px): the camera rows of the STM32F407 are at most
 //              1024 px (VGA in practice), and 1/64 px rounding (RMS 0.0045 px) is below the
 //              centroid's noise floor (about 0.01 px for a bright spot, DESIGN.md).
-//   pose       square_T_camera: translation 3 x i20 LSB 2^-18 m (3.8 um, +-2 m), rotation vector
-//              (axis * angle) 3 x i18 LSB 2^-15 rad (30.5 urad, +-4 rad >= pi). A pose from four
-//              fiducials is good to ~10 um / ~0.1 mrad, so neither LSB limits it.
+//   pose       squares 4 (protocol 3.0): how many calibration squares of the strip the pose used,
+//              1..15 (0 is refused, kBadValue); the reference square, whose frame the pose is in
+//              and whose fiducials the fiducials section lists, is one of them. The others are its
+//              neighbours along the strip (the geometry block's square pitch).
+//              Then square_T_camera (the reference square's frame): translation 3 x i20 LSB
+//              2^-18 m (3.8 um, +-2 m), rotation vector (axis * angle) 3 x i18 LSB 2^-15 rad
+//              (30.5 urad, +-4 rad >= pi). A pose from four fiducials is good to ~10 um /
+//              ~0.1 mrad, so neither LSB limits it.
 //              Then its covariance (protocol 2.0): the 6 x 6 covariance of (t, delta): t the
 //              reported translation (m, square frame), delta the rotation's error as a small
 //              rotation in the square frame (rad): true square_R_camera = exp([delta]x) *
@@ -38,6 +43,10 @@
 //   timestamp_us: platform clock at mid-exposure, 1 us (at 1 rad/s one us is 1 urad, below the
 //   joint LSB); wraps after 71.6 min, which the host unwraps with the reports' arrival times.
 //   A section asked for but not produced is absent, and status says why.
+//
+// Sizes: the ARID report (ranges, plane, fiducials, pose) is 77 bytes with 4 fiducials and 86
+// with 6 (Doty's square); the largest report (every section, 8 fiducials, 64 blobs) is
+// kMaxReportBytes = 584.
 //
 // Cost: O(bytes) bit copies, no heap. Thread/ISR safety: pure. Failure modes: decode returns a
 // DecodeStatus (wrong type, wrong length, count or enumeration out of range); encode fails only
@@ -74,6 +83,7 @@ inline constexpr std::size_t kRangers = 4;
 inline constexpr std::size_t kMaxFiducials = 8;
 inline constexpr std::size_t kMaxBlobs = 64;
 inline constexpr std::uint16_t kNoEcho = 0xFFFF;
+inline constexpr std::uint8_t kMaxPoseSquares = 15;
 inline constexpr std::size_t kPoseDof = 6;                                       // t_x t_y t_z, then the rotation error
 inline constexpr std::size_t kPoseCorrelations = kPoseDof * (kPoseDof - 1) / 2;  // upper triangle
 
@@ -107,6 +117,7 @@ struct MeasurementReport {
   std::array<std::int32_t, 3> rotation_raw{};                         // i18, LSB 2^-15 rad
   std::array<std::uint16_t, kPoseDof> pose_sigma_raw{};               // u10, sigma = 2^((raw - 896) / 32)
   std::array<std::int8_t, kPoseCorrelations> pose_correlation_raw{};  // i8 in [-127, 127], rho = raw / 127
+  std::uint8_t pose_squares = 1;  // squares of the strip the pose used, 1..kMaxPoseSquares (pose section only)
   std::uint8_t blob_count = 0;
   std::array<Blob, kMaxBlobs> blobs{};
   std::array<std::int32_t, 3> point_raw{};  // i20, LSB 2^-16 m
@@ -121,7 +132,9 @@ inline constexpr std::size_t kFiducial = 4 + 16 + 16;
 inline constexpr std::size_t kFiducialsHeader = 4;
 inline constexpr std::size_t kPoseSigma = 10;
 inline constexpr std::size_t kPoseCorrelation = 8;
-inline constexpr std::size_t kPose = 3 * 20 + 3 * 18 + kPoseDof * kPoseSigma + kPoseCorrelations * kPoseCorrelation;
+inline constexpr std::size_t kPoseSquares = 4;
+inline constexpr std::size_t kPose =
+    kPoseSquares + 3 * 20 + 3 * 18 + kPoseDof * kPoseSigma + kPoseCorrelations * kPoseCorrelation;
 inline constexpr std::size_t kBlob = 16 + 16 + 16 + 4 + 8;
 inline constexpr std::size_t kBlobsHeader = 7;
 inline constexpr std::size_t kPoint = 3 * 20;
@@ -131,10 +144,13 @@ inline constexpr std::size_t kMax = kHeader + kRanges + kPlane + kFiducialsHeade
 inline constexpr std::size_t kMaxReportBytes = (report_bits::kMax + 7) / 8;
 static_assert(kMaxFiducials < (1u << report_bits::kFiducialsHeader), "fiducial count field too narrow");
 static_assert(kMaxBlobs < (1u << report_bits::kBlobsHeader), "blob count field too narrow");
+static_assert(kMaxPoseSquares < (1u << report_bits::kPoseSquares), "pose squares field too narrow");
+static_assert(kMaxReportBytes == 584);
 
 // Bytes of the encoded report (depends on the sections present and the counts).
 std::size_t report_size(const MeasurementReport& report);
-// Returns the bytes written, or 0 if `out` is too small. Counts above the maxima are clamped.
+// Returns the bytes written, or 0 if `out` is too small. Counts above the maxima are clamped, and
+// pose_squares to 1..kMaxPoseSquares (a pose rests on at least its reference square).
 std::size_t encode(const MeasurementReport& report, std::span<std::uint8_t> out);
 DecodeStatus decode(std::span<const std::uint8_t> message, MeasurementReport& report);
 

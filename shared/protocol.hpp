@@ -46,7 +46,9 @@ namespace kincal::shared {
 // The heartbeat carries both; the host refuses a platform of another major version.
 //   2.0: the measurement report's pose section carries the pose's covariance
 //        (measurement_report.hpp); a 1.x report's pose section is 180 bits shorter.
-inline constexpr std::uint8_t kProtocolVersionMajor = 2;
+//   3.0: 2.0 plus, at the start of the pose section, how many squares of the strip the pose
+//        used (4 bits); a 2.x report's pose section is 4 bits shorter.
+inline constexpr std::uint8_t kProtocolVersionMajor = 3;
 inline constexpr std::uint8_t kProtocolVersionMinor = 0;
 
 namespace can_id {

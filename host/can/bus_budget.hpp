@@ -13,9 +13,9 @@
 //            (6 or 7).
 // Traffic model per correction cycle (6-joint arm): joint state in + corrected targets out
 // (classic: 4 frames of 8 bytes; CAN FD: 2 frames of 16 bytes). Per measurement: the trigger
-// frame, the report by ISO-TP (the ARID set: ranges, plane, 4 fiducials, camera pose = 54
-// bytes; classic: first + consecutive frames padded to 8 bytes, plus the host's flow control;
-// CAN FD: one 64-byte single frame), at 30 Hz. Plus the heartbeat at 10 Hz.
+// frame, the report by ISO-TP (the ARID set: ranges, plane, 4 fiducials, camera pose = 77
+// bytes in protocol 3.0; classic: first + consecutive frames padded to 8 bytes, plus the host's
+// flow control; CAN FD: one 64-byte single frame), at 30 Hz. Plus the heartbeat at 10 Hz.
 #pragma once
 
 #include <cstddef>

@@ -93,8 +93,8 @@ std::string describe_message(std::span<const std::uint8_t> message, bool to_plat
       if (r.sections & shared::section::kFiducials) out << " fiducials=" << int(r.fiducial_count);
       if (r.sections & shared::section::kBlobs) out << " blobs=" << int(r.blob_count);
       if (r.sections & shared::section::kPose)
-        out << " t_m=" << r.translation_raw[0] * shared::kTranslationLsbM << ","
-            << r.translation_raw[1] * shared::kTranslationLsbM << ","
+        out << " pose_squares=" << int(r.pose_squares) << " t_m=" << r.translation_raw[0] * shared::kTranslationLsbM
+            << "," << r.translation_raw[1] * shared::kTranslationLsbM << ","
             << r.translation_raw[2] * shared::kTranslationLsbM;
       return out.str();
     }

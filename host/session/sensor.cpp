@@ -99,7 +99,10 @@ Observation PlatformPoseSensor::measure(int index, const model::Transform& predi
   o.covariance = 0.5 * (covariance + covariance.transpose());  // exactly symmetric, as the journal checks
   o.sequence = report.sequence;
   o.timestamp_s = report.timestamp_us * 1e-6;
-  o.note = "square " + std::to_string(square + 1) + ", " + std::to_string(report.fiducial_count) + " fiducials";
+  // The report's square is the pose's reference; the platform may have used its neighbours too.
+  o.note = "square " + std::to_string(square + 1) +
+           (report.pose_squares > 1 ? " (of " + std::to_string(report.pose_squares) + " squares used)" : "") + ", " +
+           std::to_string(report.fiducial_count) + " fiducials";
   return o;
 }
 

@@ -9,8 +9,10 @@
 //                        square_T_camera. Which square k the platform measured against is the
 //                        one that puts the camera nearest the nominal prediction (squares are 4
 //                        inches apart, far more than any kinematic error), so the platform may
-//                        pick any square in view. The observation is a full pose, with the
-//                        position's covariance from the report's (protocol 2.0: the platform's
+//                        pick any square in view (protocol 3.0: its pose may rest on that
+//                        reference square's neighbours too; the report says how many squares,
+//                        the observation's note shows it). The observation is a full pose, with
+//                        the position's covariance from the report's (protocol 2.0: the platform's
 //                        fused pose covariance; its translation block turned into the strip
 //                        frame), so identification weights each row by it. The orientation's
 //                        covariance is in the report too, but the dataset has no columns for it.
@@ -38,7 +40,7 @@ struct Observation {
   std::optional<model::Matrix3> covariance;          // of position, m^2
   std::uint32_t sequence = 0;                        // the platform's trigger sequence, if any
   double timestamp_s = 0;                            // when the sensor saw it (sensor clock)
-  std::string note;                                  // e.g. "square 3, 6 fiducials"
+  std::string note;                                  // e.g. "square 3 (of 2 squares used), 6 fiducials"
 };
 
 class Sensor {

@@ -30,6 +30,7 @@ MeasurementReport full_report() {
   for (std::size_t i = 0; i < kMaxFiducials; ++i)
     r.fiducials[i] = {static_cast<std::uint8_t>(15 - i), static_cast<std::uint16_t>(i * 8191u),
                       static_cast<std::uint16_t>(65535u - i)};
+  r.pose_squares = kMaxPoseSquares;
   r.translation_raw = {-524288, 524287, 1};
   r.rotation_raw = {-131072, 131071, -1};
   r.pose_sigma_raw = {0, 1, 512, 896, 1022, kPoseSigmaRawMax};
@@ -60,6 +61,7 @@ void check_equal(const MeasurementReport& a, const MeasurementReport& b) {
     CHECK(a.fiducials[i].x_q6 == b.fiducials[i].x_q6);
     CHECK(a.fiducials[i].y_q6 == b.fiducials[i].y_q6);
   }
+  CHECK(a.pose_squares == b.pose_squares);
   CHECK(a.translation_raw == b.translation_raw);
   CHECK(a.rotation_raw == b.rotation_raw);
   CHECK(a.pose_sigma_raw == b.pose_sigma_raw);
@@ -435,16 +437,61 @@ TEST_CASE("measurement report: pose covariance encoding, its resolution and rang
 TEST_CASE("measurement report: pose section size and the invalid correlation -128") {
   MeasurementReport r;
   r.sections = section::kPose;
-  // 58 header bits + 114 pose + 60 sigma + 120 correlation bits = 352 bits -> 44 bytes.
-  REQUIRE(report_size(r) == 44);
-  std::array<std::uint8_t, 44> buf{};
-  REQUIRE(encode(r, buf) == 44);
+  // 58 header bits + 4 squares + 114 pose + 60 sigma + 120 correlation bits = 356 bits -> 45 bytes.
+  REQUIRE(report_size(r) == 45);
+  std::array<std::uint8_t, 45> buf{};
+  REQUIRE(encode(r, buf) == 45);
   MeasurementReport back;
   REQUIRE(decode(buf, back) == DecodeStatus::kOk);
-  // The last correlation is bits 344..351: byte 43.
-  buf[43] = 0x80;
+  // The last correlation is bits 348..355: the high nibble of byte 43, the low nibble of byte 44.
+  const auto set_last_correlation = [&buf](std::uint8_t raw) {
+    buf[43] = static_cast<std::uint8_t>((buf[43] & 0x0F) | ((raw & 0x0F) << 4));
+    buf[44] = static_cast<std::uint8_t>(raw >> 4);
+  };
+  set_last_correlation(0x80);
   CHECK(decode(buf, back) == DecodeStatus::kBadValue);
-  buf[43] = 0x81;  // -127: valid
+  set_last_correlation(0x81);  // -127: valid
   REQUIRE(decode(buf, back) == DecodeStatus::kOk);
   CHECK(back.pose_correlation_raw[kPoseCorrelations - 1] == -127);
+}
+
+TEST_CASE("measurement report: the pose's square count (protocol 3.0) round-trips, 0 is refused, encode clamps") {
+  MeasurementReport r;
+  r.sections = section::kPose;
+  std::array<std::uint8_t, 45> buf{};
+  MeasurementReport back;
+  // The count is the pose section's first field: bits 58..61, bits 2..5 of byte 7.
+  for (const std::uint8_t squares : {std::uint8_t{1}, std::uint8_t{2}, std::uint8_t{7}, kMaxPoseSquares}) {
+    r.pose_squares = squares;
+    REQUIRE(encode(r, buf) == 45);
+    CHECK(((buf[7] >> 2) & 0x0F) == squares);
+    REQUIRE(decode(buf, back) == DecodeStatus::kOk);
+    CHECK(back.pose_squares == squares);
+  }
+  buf[7] = static_cast<std::uint8_t>(buf[7] & ~0x3C);  // squares 0: a pose on no square
+  CHECK(decode(buf, back) == DecodeStatus::kBadValue);
+  r.pose_squares = 16;
+  REQUIRE(encode(r, buf) == 45);
+  REQUIRE(decode(buf, back) == DecodeStatus::kOk);
+  CHECK(back.pose_squares == kMaxPoseSquares);
+  r.pose_squares = 0;
+  REQUIRE(encode(r, buf) == 45);
+  REQUIRE(decode(buf, back) == DecodeStatus::kOk);
+  CHECK(back.pose_squares == 1);
+  // Without a pose section the count is not on the wire, and decode leaves the default.
+  r.sections = section::kRanges;
+  r.pose_squares = 5;
+  REQUIRE(encode(r, buf) == 16);
+  REQUIRE(decode(std::span<const std::uint8_t>(buf).first(16), back) == DecodeStatus::kOk);
+  CHECK(back.pose_squares == 1);
+}
+
+TEST_CASE("measurement report: the ARID report's sizes (protocol 3.0)") {
+  MeasurementReport r;
+  r.sections = section::kRanges | section::kPlane | section::kFiducials | section::kPose;
+  // 58 header + 64 ranges + 48 plane + 4 + n x 36 fiducials + 298 pose (squares, pose, covariance).
+  r.fiducial_count = 4;
+  CHECK(report_size(r) == 77);  // 616 bits
+  r.fiducial_count = 6;
+  CHECK(report_size(r) == 86);  // 688 bits (Doty's square)
 }

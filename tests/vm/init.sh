@@ -76,7 +76,7 @@ kincal exercise --can vcan0 --fd --measurements 10 --corrections 200 --correctio
   { show /tmp/ex2.txt; bad scenario_fd; }
 # The parameters uploaded in round 1 were loaded from storage by the restarted platform:
 # only the colour LUT and geometry flags (0x6) remain in its first heartbeat.
-grep -q "heartbeat state=idle protocol 2.0 error_flags=0x6" /tmp/ex2.txt && ok parameters_survive_restart ||
+grep -q "heartbeat state=idle protocol 3.0 error_flags=0x6" /tmp/ex2.txt && ok parameters_survive_restart ||
   bad parameters_survive_restart
 stop_platform platform_stops_cleanly_fd
 kill $CANDUMP

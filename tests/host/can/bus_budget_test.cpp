@@ -25,8 +25,8 @@ TEST_CASE("CAN FD frames: 16 bytes at 1/2 Mbit/s") {
 
 TEST_CASE("budget: correction rate from the load left by measurements and heartbeat") {
   const Budget b = compute_budget({1e6, 1e6, false}, 0.5, 30.0);
-  // 58 header + 64 ranges + 48 plane + 4 + 4 x 36 fiducials + 294 pose (with its covariance)
-  // = 612 bits.
+  // 58 header + 64 ranges + 48 plane + 4 + 4 x 36 fiducials + 298 pose (its square count,
+  // protocol 3.0, and its covariance) = 616 bits.
   CHECK(arid_report_bytes() == 77);
   // Trigger (75 us) + first frame + 11 consecutive frames + flow control (13 x 135 us): 30 x
   // 1830 us of measurement traffic and 10 x 135 us of heartbeat leave 443.75 ms per second for

@@ -1,6 +1,7 @@
 // The platform pose sensor (host/session/sensor.hpp) against a scripted platform: the report's
 // pose covariance (protocol 2.0) reaches the Observation, turned into the strip frame of the
-// square the pose was placed on.
+// square the pose was placed on; the note names that square and how many squares the pose used
+// (protocol 3.0).
 #include <doctest.h>
 
 #include <Eigen/Eigenvalues>
@@ -49,6 +50,7 @@ TEST_CASE("platform pose sensor: the report's covariance becomes the observation
   shared::MeasurementReport r;
   r.sequence = 1;  // the client's first trigger
   r.sections = shared::section::kPose;
+  r.pose_squares = 2;  // protocol 3.0: the pose used the reference square and one neighbour
   const model::Vector3 t(0.01, -0.02, 0.25);
   for (std::size_t k = 0; k < 3; ++k)
     r.translation_raw[k] = static_cast<std::int32_t>(std::lround(t(static_cast<int>(k)) / shared::kTranslationLsbM));
@@ -67,7 +69,7 @@ TEST_CASE("platform pose sensor: the report's covariance becomes the observation
   square_T_camera.rotation = Eigen::AngleAxisd(std::numbers::pi, model::Vector3::UnitX()).toRotationMatrix();
   model::Transform predicted = square1 * square_T_camera;
   const session::Observation o = sensor.measure(0, predicted);
-  CHECK(o.note.find("square 2") != std::string::npos);
+  CHECK(o.note.find("square 2 (of 2 squares used)") != std::string::npos);
   REQUIRE(o.covariance.has_value());
   model::Matrix3 square_c;
   square_c << 1e-8, 1e-8, 0, 1e-8, 4e-8, 0, 0, 0, 25e-8;
