@@ -101,7 +101,8 @@ R=$!
 listening $R
 echo "02 01" | isotpsend -s 150 -d 158 -p CC vcan0
 wait $R
-grep -q "^82 01 03 00 28 00" /tmp/recv.txt && ok platform_to_isotprecv || { show /tmp/recv.txt; bad platform_to_isotprecv; }
+# ParameterData 0x82, block 1, format version 4 (shared/parameters.hpp kBlockFormatVersion), 40 bytes.
+grep -q "^82 01 04 00 28 00" /tmp/recv.txt && ok platform_to_isotprecv || { show /tmp/recv.txt; bad platform_to_isotprecv; }
 cmp -s /tmp/recv.txt /vm/intrinsics_data.txt && ok isotprecv_bytes_exact || { show /tmp/recv.txt; bad isotprecv_bytes_exact; }
 
 # 4. Injected frames get defined responses (ErrorReport 0x140, reason in the first byte).
