@@ -2,7 +2,8 @@
 // platform application (firmware/app, with the test's RAM storage and rangers) runs in its own
 // thread on one endpoint, the host client on another; measurement, parameter upload and
 // read-back, and the correction stream, on classic CAN and on CAN FD. The bus writes a
-// candump -L log, which our reader and the monitor then decode completely.
+// candump -L log, which our reader and the monitor then decode completely. Also the monitor's
+// line for a report with a pose.
 #include <doctest.h>
 
 #include <atomic>
@@ -126,3 +127,17 @@ void run(bool fd) {
 TEST_CASE("loopback end to end: classic CAN") { run(false); }
 
 TEST_CASE("loopback end to end: CAN FD") { run(true); }
+
+TEST_CASE("the monitor prints how many squares a report's pose used (protocol 3.0)") {
+  shared::MeasurementReport r;
+  r.sequence = 7;
+  r.sections = shared::section::kPose;
+  r.pose_squares = 3;
+  r.translation_raw = {262144, 0, -131072};  // 1 m, 0, -0.5 m
+  std::array<std::uint8_t, shared::kMaxReportBytes> bytes{};
+  const std::size_t n = shared::encode(r, bytes);
+  REQUIRE(n == shared::report_size(r));
+  const std::string line = can::describe_message(std::span<const std::uint8_t>(bytes).first(n), false);
+  CHECK(line.find("MeasurementReport seq=7") != std::string::npos);
+  CHECK(line.find(" pose_squares=3 t_m=1,0,-0.5") != std::string::npos);
+}
