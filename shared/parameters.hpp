@@ -13,7 +13,7 @@
 //                    then the strip's square pitch (m): the centre-to-centre distance of neighbouring
 //                    calibration squares along the square frame's x axis (Doty's strip: squares in a
 //                    row, axes parallel), 0 when the platform uses one square per frame; refused
-//                    unless 0 or within [0.01, 2] m (a smaller pitch would overlap the squares).
+//                    unless 0 or within [0.01, 2] m (kMinSquarePitchM, kMaxSquarePitchM).
 //   kCorrection  v3  671 bytes: joint count (u8, <= 6); per joint its type (u8: 0 revolute, 1
 //                    prismatic), its link convention (u8: 0 standard DH, 1 modified DH, 2 Doty's
 //                    (d, theta, beta, a, alpha); link_model.hpp), the nominal values and their
@@ -97,8 +97,9 @@ struct PlatformGeometry {
 };
 inline constexpr std::size_t kGeometryBytes = kRangers * 6 * 4 + 1 + kMaxFiducials * 3 * 4 + 4;
 static_assert(kGeometryBytes == 197);
-// The square pitch a geometry block may carry besides 0: below the minimum the squares' fiducial
-// patterns would overlap, above the maximum no two squares are in one camera's view.
+// The square pitch a geometry block may carry besides 0. A pitch smaller than the fiducial
+// pattern would overlap the squares; 0.01 m is a floor well below any printed strip (Doty's
+// squares are 0.1016 m). The platform's camera sees a few decimetres, so no two squares 2 m apart.
 inline constexpr float kMinSquarePitchM = 0.01f;
 inline constexpr float kMaxSquarePitchM = 2.0f;
 
