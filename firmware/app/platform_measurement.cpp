@@ -136,7 +136,11 @@ void MeasurementPipeline::begin(const MeasureRequest& request, const ParameterSe
   histogram_.clear();
   width_px_ = height_px_ = 0;
   have_plane_ = false;
+  blob_count_ = 0;
   fiducial_side_m_ = has_geometry_ ? fiducial_side_m(geometry_) : 0.0f;
+  pose_options_ = core::PlanarPoseOptions{};
+  pose_options_.pixel_sigma_px = kPixelSigmaPx;
+  pose_options_.perspective_passes = fiducial_side_m_ > 0.0f ? 1 : 0;
   camera_ = core::CameraIntrinsics{};
   camera_.fx_px = intrinsics_.fx_px;
   camera_.fy_px = intrinsics_.fy_px;
@@ -228,12 +232,33 @@ void MeasurementPipeline::compute_fiducials_and_pose(shared::MeasurementReport& 
   if ((request_.sections & shared::section::kPose) == 0 || !has_intrinsics_ || !square_is_planar_ ||
       intrinsics_.width_px != width_px_ || intrinsics_.height_px != height_px_)
     return;  // why not was noted by finish()
-  if (!solve_pose(collect_correspondences()) || !encode_pose(report)) note(shared::MeasureStatus::kNoTarget);
+  if (!compute_pose() || !encode_pose(report)) note(shared::MeasureStatus::kNoTarget);
+}
+
+bool MeasurementPipeline::compute_pose() noexcept {
+  const std::size_t square_points = collect_correspondences();
+  if (!solve_pose(square_points)) return false;
+  pose_squares_ = 1;
+  const std::size_t all_points = match_strip(square_points);
+  if (all_points > square_points) {
+    // The square's own pose stands if the points found do not fit together (a wrong match).
+    square_pose_ = pose_;
+    if (solve_pose(all_points) && pose_.reprojection_rms_px <= kMaxReprojectionRmsPx)
+      pose_squares_ = static_cast<std::uint8_t>(1 + strip_squares_matched_);
+    else
+      pose_ = square_pose_;
+  }
+  return true;
+}
+
+core::Vector2<float> MeasurementPipeline::fiducial_half_size_m(std::uint8_t id) const noexcept {
+  // Doty's rectangles: s x s, the centre p4 s x 2s with its long side along y.
+  const float half_m = 0.5f * fiducial_side_m_;
+  return {half_m, id == kCentreFiducialId ? 2.0f * half_m : half_m};
 }
 
 std::size_t MeasurementPipeline::collect_correspondences() noexcept {
   std::size_t n = 0;
-  const float half_m = 0.5f * fiducial_side_m_;
   for (std::size_t i = 0; i < fid_.count; ++i) {
     const core::IdentifiedFiducial& f = fid_.fiducials[i];
     if (f.id < 1 || f.id > geometry_.fiducial_count) continue;
@@ -241,10 +266,36 @@ std::size_t MeasurementPipeline::collect_correspondences() noexcept {
     core::PlanarCorrespondence& c = correspondences_[n++];
     c.pixel_px = core::Vector2<float>(f.x_px.to_float(), f.y_px.to_float());
     c.target_m = core::Vector2<float>(s[0], s[1]);
-    // Doty's rectangles: s x s, the centre p4 s x 2s with its long side along y.
-    c.fiducial_half_size_m = core::Vector2<float>(half_m, f.id == kCentreFiducialId ? 2.0f * half_m : half_m);
+    c.fiducial_half_size_m = fiducial_half_size_m(f.id);
   }
   return n;
+}
+
+std::size_t MeasurementPipeline::match_strip(std::size_t square_points) noexcept {
+  const std::size_t fiducials = geometry_.fiducial_count < pattern_.size() ? geometry_.fiducial_count : pattern_.size();
+  for (std::size_t k = 0; k < fiducials; ++k) {
+    const auto& s = geometry_.fiducial_square_m[k];
+    pattern_[k].centre_m = core::Vector2<float>(s[0], s[1]);
+    pattern_[k].half_size_m = fiducial_half_size_m(static_cast<std::uint8_t>(k + 1));
+  }
+  // The square's fiducials in the pose are found; their blobs are theirs.
+  std::uint8_t found = 0;
+  for (std::size_t i = 0; i < blob_count_; ++i) blob_taken_[i] = 0;
+  for (std::size_t i = 0; i < fid_.count; ++i) {
+    const core::IdentifiedFiducial& f = fid_.fiducials[i];
+    if (f.id < 1 || f.id > fiducials) continue;
+    found = static_cast<std::uint8_t>(found | 1u << (f.id - 1));
+    if (f.blob_index < blob_count_) blob_taken_[f.blob_index] = 1;
+  }
+  core::StripMatch match;
+  if (core::match_strip_fiducials(camera_, width_px_, height_px_, pose_.camera_T_target,
+                                  std::span<const core::StripFiducial>(pattern_.data(), fiducials), found,
+                                  geometry_.square_pitch_m, std::span<const core::Blob>(blobs_.data(), blob_count_),
+                                  std::span<std::uint8_t>(blob_taken_.data(), blob_count_), core::StripMatchOptions{},
+                                  correspondences_, square_points, match) != core::StripMatchStatus::ok)
+    return square_points;
+  strip_squares_matched_ = match.squares_matched;
+  return square_points + match.points_added;
 }
 
 bool MeasurementPipeline::prepare_prior() noexcept {
@@ -257,11 +308,8 @@ bool MeasurementPipeline::prepare_prior() noexcept {
 
 bool MeasurementPipeline::solve_pose(std::size_t point_count) noexcept {
   const core::PlanePrior* prior = prepare_prior() ? &prior_ : nullptr;
-  core::PlanarPoseOptions options;
-  options.pixel_sigma_px = kPixelSigmaPx;
-  options.perspective_passes = fiducial_side_m_ > 0.0f ? 1 : 0;
   return core::planar_pose(camera_, std::span<const core::PlanarCorrespondence>(correspondences_.data(), point_count),
-                           prior, options, pose_workspace_, pose_) == core::PlanarPoseStatus::ok;
+                           prior, pose_options_, pose_workspace_, pose_) == core::PlanarPoseStatus::ok;
 }
 
 bool MeasurementPipeline::encode_pose(shared::MeasurementReport& report) noexcept {
@@ -276,6 +324,7 @@ bool MeasurementPipeline::encode_pose(shared::MeasurementReport& report) noexcep
   }
   report.translation_raw = translation_raw;
   report.rotation_raw = rotation_raw;
+  report.pose_squares = pose_squares_;
   report_covariance(pose_, report_covariance_);
   shared::set_pose_covariance(report_covariance_, report);
   report.sections |= shared::section::kPose;
@@ -339,6 +388,7 @@ void MeasurementPipeline::finish(CaptureStatus camera, bool labelled, RangerStat
       if ((s & shared::section::kBlobs) != 0) report_blobs(report, summary.blobs);
       if ((s & (shared::section::kFiducials | shared::section::kPose)) != 0) {
         const std::size_t n = summary.blobs < kMaxBlobsOut ? summary.blobs : kMaxBlobsOut;
+        blob_count_ = n;
         if (core::identify_fiducials(core::FidModel{}, std::span<const core::Blob>(blobs_.data(), n), verdicts_,
                                      fid_) == core::FidStatus::kOk) {
           compute_fiducials_and_pose(report);

@@ -37,6 +37,14 @@
 //              no p4 or no perimeter fiducial). Needs three fiducials with the plane prior, or
 //              four without it (then the rangers' failure is still the report's status); else
 //              kNoTarget and no section, as for a pose beyond the report's range (+-2 m).
+//              Then the fiducials that pose predicts (core::match_strip_fiducials,
+//              strip_fiducials.hpp): the square's own that FID missed and, with the geometry
+//              block's square_pitch_m (> 0), every square of the strip in view, whole or cut by the
+//              frame's edge. The FID's square stays the reference (its frame is the pose's, its
+//              fiducials the report's fiducials section); planar_pose runs again on all the points
+//              (at most kPlanarPoseMaxPoints), and that pose is kept only if its reprojection RMS
+//              is at most kMaxReprojectionRmsPx, else the square's own stands (a blob taken for a
+//              fiducial that is not one, a wrong pitch). pose_squares: how many squares it used.
 //              Its covariance (report_covariance below): planar_pose's, of its camera-frame
 //              twist, carried to the reported (t, delta) of measurement_report.hpp; it trusts
 //              kPixelSigmaPx and kRangeSigmaM as given.
@@ -61,16 +69,16 @@
 // another frame size than the camera's count as missing), kNoTarget, kNotAvailable. Sections
 // that could be produced are present whatever the status; nothing is ever invented.
 //
-// Memory: everything inside the object, 24,704 bytes on the M4 (the VGA labeler workspace of
+// Memory: everything inside the object, about 25.2 KB on the M4 (the VGA labeler workspace of
 // 16 KiB, 64 blobs, the histogram, the range-plane matrices, the planar pose's workspace and
-// correspondences, copies of the two parameter blocks): construct it statically, never on the
-// stack; the deepest call (finish) needs 1016 bytes of stack (m4.kincal_app.stack). Cost: poll()
-// handles at most kRowsPerPoll rows per call, a bounded slice (16 VGA rows are ~35k instructions
-// on the M4), so the correction stream keeps running between slices; the final call runs FID,
-// the plane fit and the pose (about 60k instructions). Measured on a VGA calibration-square frame
-// (tests/bench/measurement_m4_bench.cpp): 0.66M instructions for the metering frame, 1.0M for the
-// measurement frame including FID, plane and pose.
-// Thread/ISR safety: main loop only. One measurement at a time (start() while one runs: kBusy).
+// correspondences, the strip's pattern and a second pose, copies of the two parameter blocks): construct it statically,
+// never on the stack; the deepest call (finish) needs 1000 bytes of stack (m4.kincal_app.stack). Cost: poll() handles
+// at most kRowsPerPoll rows per call, a bounded slice (16 VGA rows are ~35k instructions on the M4), so the correction
+// stream keeps running between slices; the final call runs FID, the plane fit and the pose (about 60k instructions;
+// twice that and the strip's matching when neighbouring squares are in view). Measured on a VGA calibration-square
+// frame (tests/bench/measurement_m4_bench.cpp): 0.66M instructions for the metering frame, 1.0M for the measurement
+// frame including FID, plane and pose. Thread/ISR safety: main loop only. One measurement at a time (start() while one
+// runs: kBusy).
 #pragma once
 
 #include <array>
@@ -85,6 +93,7 @@
 #include "firmware/core/fiducial_id.hpp"
 #include "firmware/core/planar_pose.hpp"
 #include "firmware/core/range_plane.hpp"
+#include "firmware/core/strip_fiducials.hpp"
 #include "shared/measurement_report.hpp"
 
 namespace kincal::app {
@@ -114,6 +123,10 @@ class MeasurementPipeline {
   // range reading (the ARID platform's rangers; host/sim/rangers.hpp simulates the same).
   static constexpr float kPixelSigmaPx = 0.1f;
   static constexpr float kRangeSigmaM = 0.5e-3f;
+  // The strip's pose is kept only if its reprojection RMS is at most this (5 kPixelSigmaPx): a
+  // larger one means a blob taken for a fiducial is not that fiducial, and the square's own pose
+  // stands.
+  static constexpr float kMaxReprojectionRmsPx = 0.5f;
 
   MeasurementPipeline() noexcept : labeler_(buffers_.memory()) {}
 
@@ -145,7 +158,13 @@ class MeasurementPipeline {
   void compute_fiducials_and_pose(shared::MeasurementReport& report) noexcept;
   // The pose in three steps, kept out of line so that their locals do not stack up under
   // planar_pose (the app's stack budget, m4.kincal_app.stack).
+  core::Vector2<float> fiducial_half_size_m(std::uint8_t id) const noexcept;
+  // The reference square's pose, then the strip's (pose_, pose_squares_); false: no pose.
+  [[gnu::always_inline]] inline bool compute_pose() noexcept;
   [[gnu::noinline]] std::size_t collect_correspondences() noexcept;
+  // The fiducials the square's pose predicts (core::match_strip_fiducials: the square's own that
+  // FID missed, the strip's other squares' in view) appended to its points; the points in all.
+  [[gnu::noinline]] std::size_t match_strip(std::size_t square_points) noexcept;
   [[gnu::noinline]] bool prepare_prior() noexcept;  // the plane prior, if there is a plane
   [[gnu::noinline]] bool solve_pose(std::size_t point_count) noexcept;
   [[gnu::noinline]] bool encode_pose(shared::MeasurementReport& report) noexcept;
@@ -166,6 +185,7 @@ class MeasurementPipeline {
   core::FrameSummary summary_{};
   std::array<core::Blob, kMaxBlobsOut> blobs_{};
   std::array<core::FidVerdict, kMaxBlobsOut> verdicts_{};
+  std::size_t blob_count_ = 0;
   core::FidResult fid_{};
   core::RangePlaneModel plane_model_{};
   core::CalibrationPlane plane_{};
@@ -175,8 +195,14 @@ class MeasurementPipeline {
   bool square_is_planar_ = true;
   std::array<core::PlanarCorrespondence, core::kPlanarPoseMaxPoints> correspondences_{};
   core::PlanePrior prior_{};
+  core::PlanarPoseOptions pose_options_{};  // a member, not a local: the stack under planar_pose
   core::PlanarPoseWorkspace pose_workspace_{};
   core::PlanarPose pose_{};
+  std::array<core::StripFiducial, shared::kMaxFiducials> pattern_{};
+  std::array<std::uint8_t, kMaxBlobsOut> blob_taken_{};
+  core::PlanarPose square_pose_{};  // the reference square's alone, while the strip's is tried
+  std::uint8_t strip_squares_matched_ = 0;
+  std::uint8_t pose_squares_ = 1;
   std::array<float, 36> report_covariance_{};
   core::RigidTransform<float> square_T_camera_{};
 };

@@ -1,5 +1,7 @@
 #include "firmware/core/fiducial_id.hpp"
 
+#include <limits>
+
 namespace kincal::core {
 
 namespace {
@@ -95,13 +97,19 @@ void examine(const FidModel& model, std::span<const Blob> blobs, std::size_t cen
   for (int k = 0; k < 6; ++k) {
     const std::int64_t px = cx + (distance_q8 * (kSlots[k].ax * vx + kSlots[k].ay * h.ux)) / kUnit;
     const std::int64_t py = cy + (distance_q8 * (kSlots[k].ax * vy + kSlots[k].ay * h.uy)) / kUnit;
-    std::int64_t best = radius_q8 * radius_q8;
+    // On the x axis the nearest to the centre wins: a strip's neighbouring square puts its p3
+    // (p5) 2s beyond this square's p5 (p3), and s from the centre blob's area can be off enough
+    // to put the prediction nearer to it; nothing of the pattern lies between.
+    const bool x_axis = kSlots[k].ay == 0;
+    std::int64_t best = std::numeric_limits<std::int64_t>::max();
     for (std::size_t i = 0; i < blobs.size(); ++i) {
       if (i == centre) continue;
-      const std::int64_t dx = (blobs[i].x_px.raw() >> 8) - px, dy = (blobs[i].y_px.raw() >> 8) - py;
-      const std::int64_t d2 = dx * dx + dy * dy;
-      if (d2 <= best && perimeter_like(model, blobs[i], h.side_q8)) {
-        best = d2;
+      const std::int64_t bx = blobs[i].x_px.raw() >> 8, by = blobs[i].y_px.raw() >> 8;
+      const std::int64_t dx = bx - px, dy = by - py;
+      if (dx * dx + dy * dy > radius_q8 * radius_q8) continue;
+      const std::int64_t key = x_axis ? (bx - cx) * (bx - cx) + (by - cy) * (by - cy) : dx * dx + dy * dy;
+      if (key <= best && perimeter_like(model, blobs[i], h.side_q8)) {
+        best = key;
         h.found[k] = static_cast<std::int16_t>(i);
       }
     }

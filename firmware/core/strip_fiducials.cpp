@@ -64,20 +64,23 @@ std::size_t nearest_blob(const Prediction& p, std::span<const Blob> blobs, std::
 
 StripMatchStatus match_strip_fiducials(const CameraIntrinsics& camera, std::uint16_t width_px, std::uint16_t height_px,
                                        const RigidTransform<float>& camera_T_square,
-                                       std::span<const StripFiducial> pattern, float pitch_m,
-                                       std::span<const Blob> blobs, std::span<std::uint8_t> blob_taken,
+                                       std::span<const StripFiducial> pattern, std::uint8_t reference_found,
+                                       float pitch_m, std::span<const Blob> blobs, std::span<std::uint8_t> blob_taken,
                                        const StripMatchOptions& options, std::span<PlanarCorrespondence> points,
                                        std::size_t point_count, StripMatch& out) noexcept {
   out = StripMatch{};
-  if (!(pitch_m > 0.0f && std::isfinite(pitch_m)) || pattern.size() > kStripMaxPatternFiducials ||
+  if (!(pitch_m >= 0.0f && std::isfinite(pitch_m)) || pattern.size() > kStripMaxPatternFiducials ||
       blob_taken.size() < blobs.size() || width_px == 0 || height_px == 0 || point_count > points.size())
     return StripMatchStatus::bad_arguments;
   std::size_t n = point_count;
-  for (int step = 0; step < 2 * kStripMaxOffset && n < points.size(); ++step) {
-    const int offset = (step % 2 == 0 ? -1 : 1) * (step / 2 + 1);  // -1, +1, -2, +2, ...
+  const int steps = pitch_m > 0.0f ? 2 * kStripMaxOffset + 1 : 1;
+  for (int step = 0; step < steps && n < points.size(); ++step) {
+    // 0 (the reference square), then -1, +1, -2, +2, ...
+    const int offset = step == 0 ? 0 : (step % 2 == 1 ? -1 : 1) * ((step + 1) / 2);
     const float shift_m = static_cast<float>(offset) * pitch_m;
     bool matched = false;
     for (std::size_t k = 0; k < pattern.size() && n < points.size(); ++k) {
+      if (offset == 0 && (std::size_t{reference_found} >> k & 1u) != 0) continue;
       const Vector2<float> centre_m(pattern[k].centre_m.x() + shift_m, pattern[k].centre_m.y());
       Prediction p;
       if (!predict(camera, static_cast<float>(width_px), static_cast<float>(height_px), camera_T_square, centre_m,
@@ -91,8 +94,9 @@ StripMatchStatus match_strip_fiducials(const CameraIntrinsics& camera, std::uint
       c.target_m = centre_m;
       c.fiducial_half_size_m = pattern[k].half_size_m;
       matched = true;
+      if (offset == 0) ++out.reference_added;
     }
-    if (matched) ++out.squares_matched;
+    if (matched && offset != 0) ++out.squares_matched;
   }
   out.points_added = static_cast<std::uint8_t>(n - point_count);
   return StripMatchStatus::ok;

@@ -1,5 +1,6 @@
-// The fiducials of the strip's other squares, found where the reference square's pose puts them
-// (issue #13: every square in view, also partly visible ones).
+// The fiducials of the strip's squares, found where the reference square's pose puts them (issue
+// #13: every square in view, also partly visible ones): the reference square's own that its FID
+// did not give, and, with the strip's pitch, every fiducial of its neighbours.
 //
 // Why: one 4-inch square at 0.2-0.45 m spans a small part of the image, so its pose is weak in
 // tilt (1.7 mrad RMS on the simulated ARID rig); the strip's neighbouring squares in the same
@@ -8,13 +9,18 @@
 // in unrelated blobs. Here every fiducial of every neighbouring square is predicted from the
 // reference square's pose and the strip's layout, and taken only where a blob of the right size
 // lies at the predicted place: a square cut by the image edge still contributes what is visible,
-// and a blob that is not where the strip says cannot be taken.
+// and a blob that is not where the strip says cannot be taken. On a strip Doty's FID can also
+// take a neighbour's p3 or p5, 2 sides beyond the square's own p5 or p3, for the square's (its
+// prediction of 7 sides rests on the centre blob's area); the caller then drops those, solves
+// the pose without them, and finds the right blobs here.
 //
 // The strip (host/sim/strip.hpp): identical squares in a row along the square frame's x axis,
 // axes parallel, centres pitch_m apart; square n (n = +-1 .. +-kStripMaxOffset from the
-// reference) has fiducial k at pattern[k].centre_m + (n pitch_m, 0).
+// reference) has fiducial k at pattern[k].centre_m + (n pitch_m, 0). pitch_m = 0: the reference
+// square alone.
 //
-// Matching, per predicted fiducial (offsets in order -1, +1, -2, +2, ...; fiducials in pattern
+// Matching, per predicted fiducial (the reference square's fiducials whose bit in
+// reference_found is clear, then the offsets in order -1, +1, -2, +2, ...; fiducials in pattern
 // order): its centre projected through the full lens model (camera_model.hpp) and its rectangle's
 // image area A from the four projected corners (shoelace). Skipped if a corner is behind the
 // camera or outside the model's domain, or the centre is not inside the frame. The candidate is
@@ -26,7 +32,7 @@
 // REFERENCE square's frame: target (centre + (n pitch, 0)), half size, and the blob's centroid.
 // The caller solves planar_pose on them with the reference square's own points.
 //
-// Bounds: at most 2 kStripMaxOffset x pattern.size() predictions (kMaxFiducials = 8 per square)
+// Bounds: at most (2 kStripMaxOffset + 1) x pattern.size() predictions (kMaxFiducials = 8 per square)
 // against blobs.size() blobs; output stops when `points` is full. Cost on the M4: one projection
 // per prediction plus four per one in the frame, and a pass over the blobs for each.
 // Numerics: float, fixed order: the same bits natively and on the M4. No heap; pure.
@@ -58,22 +64,24 @@ struct StripMatchOptions {
 };
 
 struct StripMatch {
-  std::uint8_t points_added = 0;     // correspondences appended
+  std::uint8_t points_added = 0;     // correspondences appended, in all
+  std::uint8_t reference_added = 0;  // of them the reference square's own
   std::uint8_t squares_matched = 0;  // neighbouring squares with at least one fiducial taken
 };
 
 enum class [[nodiscard]] StripMatchStatus : std::uint8_t{
     ok,
-    bad_arguments,  // pitch not positive and finite, too large a pattern, blob_taken shorter than blobs,
+    bad_arguments,  // pitch negative or not finite, too large a pattern, blob_taken shorter than blobs,
                     // frame size zero, or point_count beyond points
 };
 
-// Appends the neighbouring squares' fiducials found in `blobs` to points[point_count ..], taking
-// each blob at most once (blob_taken: non-zero = already used, e.g. by the reference square's FID).
+// Appends the fiducials found in `blobs` to points[point_count ..], taking each blob at most once
+// (blob_taken: non-zero = already used, e.g. by the reference square's FID). reference_found: bit
+// k set if the reference square's pattern[k] is among the caller's points already.
 StripMatchStatus match_strip_fiducials(const CameraIntrinsics& camera, std::uint16_t width_px, std::uint16_t height_px,
                                        const RigidTransform<float>& camera_T_square,
-                                       std::span<const StripFiducial> pattern, float pitch_m,
-                                       std::span<const Blob> blobs, std::span<std::uint8_t> blob_taken,
+                                       std::span<const StripFiducial> pattern, std::uint8_t reference_found,
+                                       float pitch_m, std::span<const Blob> blobs, std::span<std::uint8_t> blob_taken,
                                        const StripMatchOptions& options, std::span<PlanarCorrespondence> points,
                                        std::size_t point_count, StripMatch& out) noexcept;
 

@@ -101,7 +101,7 @@ Observation PlatformPoseSensor::measure(int index, const model::Transform& predi
   o.timestamp_s = report.timestamp_us * 1e-6;
   // The report's square is the pose's reference; the platform may have used its neighbours too.
   o.note = "square " + std::to_string(square + 1) +
-           (report.pose_squares > 1 ? " (of " + std::to_string(report.pose_squares) + " squares used)" : "") + ", " +
+           (report.pose_squares > 1 ? " (pose over " + std::to_string(report.pose_squares) + " squares)" : "") + ", " +
            std::to_string(report.fiducial_count) + " fiducials";
   return o;
 }

@@ -40,7 +40,7 @@ struct Observation {
   std::optional<model::Matrix3> covariance;          // of position, m^2
   std::uint32_t sequence = 0;                        // the platform's trigger sequence, if any
   double timestamp_s = 0;                            // when the sensor saw it (sensor clock)
-  std::string note;                                  // e.g. "square 3 (of 2 squares used), 6 fiducials"
+  std::string note;                                  // e.g. "square 3 (pose over 2 squares), 6 fiducials"
 };
 
 class Sensor {

@@ -7,8 +7,10 @@
 //
 // The frame (vga_square_frame.hpp) is rendered a row at a time inside the camera port, outside
 // the counted instructions (on the platform the camera's DMA writes the rows); the step's own
-// copy of each row is counted. The scene: the square 0.25 m below the camera, facing it
-// (fx = fy = 1181.1 px: 1.75 inch = 210 px at 0.25 m), the four rangers reading 0.25 m.
+// copy of each row is counted. The scene: a strip 0.25 m below the camera, facing it
+// (fx = fy = 1181.1 px: 1.75 inch = 210 px at 0.25 m), the four rangers reading 0.25 m; its
+// square centred at (239.5, 239.5) px is whole, the next one's left fiducials (p1, p3) are in the
+// frame at x = 509.5 px: the strip's matching and the second pose over both squares are counted.
 // Frames per second assume one instruction per cycle at 168 MHz (STM32F407); the M4 takes more
 // cycles for loads, divisions and flash wait states, so the real rate is lower.
 #include <array>
@@ -23,7 +25,7 @@ using namespace kincal;
 
 namespace {
 
-constexpr int kCx = 320, kCy = 240;  // the centre fiducial's centre at (319.5, 239.5) px
+constexpr int kCx = 240, kCy = 240;  // the centre fiducial's centre at (239.5, 239.5) px
 constexpr float kSideM = 0.00635f;   // Doty's 1/4-inch fiducial side
 constexpr float kDistanceM = 0.25f;
 constexpr float kFocalPx = static_cast<float>(bench::kVgaPerimeterDistancePx) * kDistanceM / (7.0f * kSideM);
@@ -49,7 +51,7 @@ struct BenchCamera {
   app::CaptureStatus read_row(std::span<std::uint8_t> out) {
     if (row >= bench::kVgaHeight) return app::CaptureStatus::kFailed;
     counted[current] += counter->stop_instructions();
-    bench::render_vga_square_row(row++, kCx, kCy, out.data());
+    bench::render_vga_square_row(row++, kCx, kCy, out.data(), bench::kVgaSquarePitchPx);
     counter->start();
     return app::CaptureStatus::kOk;
   }
@@ -75,6 +77,7 @@ app::ParameterSet parameters() {
   const float fiducials[6][2] = {{-7 * s, 7 * s}, {0, 7 * s}, {-7 * s, 0}, {0, 0}, {7 * s, 0}, {0, -7 * s}};
   p.geometry.fiducial_count = 6;
   for (std::size_t k = 0; k < 6; ++k) p.geometry.fiducial_square_m[k] = {fiducials[k][0], fiducials[k][1], 0};
+  p.geometry.square_pitch_m = 16 * s;  // Doty's 4-inch squares
   return p;
 }
 
@@ -111,11 +114,11 @@ int main() {
   }
   metering /= kRuns;
   measuring /= kRuns;
-  const bool ok =
-      g_report.status == shared::MeasureStatus::kOk && g_report.sections == kArid && g_report.fiducial_count == 6;
-  std::printf("status %u, sections 0x%x, fiducials %u; camera in the square (um): %ld %ld %ld\n",
+  const bool ok = g_report.status == shared::MeasureStatus::kOk && g_report.sections == kArid &&
+                  g_report.fiducial_count == 6 && g_report.pose_squares == 2;
+  std::printf("status %u, sections 0x%x, fiducials %u, squares %u; camera in the square (um): %ld %ld %ld\n",
               static_cast<unsigned>(g_report.status), static_cast<unsigned>(g_report.sections),
-              static_cast<unsigned>(g_report.fiducial_count),
+              static_cast<unsigned>(g_report.fiducial_count), static_cast<unsigned>(g_report.pose_squares),
               static_cast<long>(g_report.translation_raw[0] * 1e6 / 262144.0),
               static_cast<long>(g_report.translation_raw[1] * 1e6 / 262144.0),
               static_cast<long>(g_report.translation_raw[2] * 1e6 / 262144.0));

@@ -1,26 +1,28 @@
-// The ARID platform's pose on the simulated rig (issue #13): today's ranger-plane pose against the
-// camera-first pose fused with the ranger plane (core::planar_pose), in the same run, against the
-// known true pose.
+// The ARID platform's pose on the simulated rig (issue #13): the old ranger-plane pose against
+// the platform's camera-first pose (app::MeasurementPipeline, the firmware's own measurement step
+// with core::planar_pose fused with the ranger plane), on one square and on every square of the
+// strip in view, in the same run, against the known true pose.
 //
 // Each view: Doty's strip (host/sim/strip.hpp, 16 four-inch squares) rendered by host/sim/render.hpp
 // with the ARID camera (640x480, f = 600 px, k1 = -0.05, k2 = 0.01, as host/demo/simulated_rig.cpp)
 // and the default imaging conditions, from 0.2-0.45 m, tilted up to 25 degrees about random axes,
 // turned up to 20 degrees about the optical axis; the four rangers (host/sim/rangers.hpp: + of
-// 10 cm, 0.5 mm noise). Then, as the platform does: the core labeler (fixed threshold) and Doty's
-// FID on the blobs; FID again on the blobs left, for up to four squares; each square's identity in
-// the strip from the truth (the host's job), its fiducials checked against the truth (a misidentified
-// square is dropped and counted).
-//   ranger plane   the first square's fiducials through pixel_to_plane_point on the ranger plane,
+// 10 cm, 0.5 mm noise). Then:
+//   every square   the platform's report with the geometry block's square pitch: the reference
+//                  square's FID, then every fiducial of the strip in view (core::match_strip_fiducials)
+//   one square     the same frame, the block without the pitch (the reference square alone)
+//   no bias pass   planar_pose on the FID's square without the perspective pass
+//   ranger plane   the FID's square's fiducials through pixel_to_plane_point on the ranger plane,
 //                  pose_from_points (firmware/app's method before #13)
-//   camera-first   planar_pose with the ranger plane as prior (range_plane_covariance), one square
-//                  or every identified square (target = strip frame), with and without the
-//                  perspective pass
-// Error: the camera's pose in the first square's frame (square_T_camera, what the platform reports)
-// against the truth: position (mm) and rotation angle (mrad), RMS over the views with a pose.
-// Coverage: the fraction of views whose 6-D error (the estimate's own twist convention) lies in the
-// 95% ellipsoid of the reported covariance (chi^2 6 dof <= 12.59). Also counted: views whose first
-// square has only three fiducials (the prior then fixes what they cannot), and such squares in all.
+// The reference square's identity in the strip from the truth (the host's job: its fiducials
+// within 3 px of a square's projected ones). Error: the camera's pose in the reference square's
+// frame (square_T_camera, what the platform reports) against the truth: position (mm) and rotation
+// angle (mrad), RMS over the views with a pose. Coverage: the fraction of views whose 6-D error
+// (the report's (t, delta) convention) lies in the 95% ellipsoid of the reported covariance
+// (chi^2 6 dof <= 12.59). Also counted: views whose square has only three fiducials, and how many
+// squares the platform's poses used.
 #include <Eigen/Dense>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -29,12 +31,14 @@
 #include <random>
 #include <vector>
 
+#include "firmware/app/platform_measurement.hpp"
 #include "firmware/core/blob_labeler.hpp"
 #include "firmware/core/camera_model.hpp"
 #include "firmware/core/fiducial_id.hpp"
 #include "firmware/core/planar_pose.hpp"
 #include "firmware/core/pose_from_points.hpp"
 #include "firmware/core/range_plane.hpp"
+#include "host/sim/parameter_blocks.hpp"
 #include "host/sim/rangers.hpp"
 #include "host/sim/render.hpp"
 #include "host/sim/strip.hpp"
@@ -44,8 +48,6 @@ using namespace kincal;
 namespace {
 
 constexpr int kViews = 200;
-constexpr int kMaxSquares = 4;
-constexpr float kPixelSigmaPx = 0.07f;  // the fiducial centroid noise of issue #13
 
 struct Accumulator {
   double sum2_mm = 0, sum2_mrad = 0;
@@ -68,16 +70,56 @@ Eigen::Isometry3d to_isometry(const core::RigidTransform<float>& t) {
   return out;
 }
 
-// Whether the error of camera_T_target lies in the 95% ellipsoid of the covariance of the twist
-// [dt; dphi] (camera frame; R_true = exp([dphi]x) R_est, t_true = t_est + dt).
-bool inside_95(const core::PlanarPose& pose, const Eigen::Isometry3d& camera_T_target_true) {
-  const Eigen::Isometry3d est = to_isometry(pose.camera_T_target);
+// The report's pose: square_T_camera.
+Eigen::Isometry3d reported_pose(const shared::MeasurementReport& report) {
+  Eigen::Vector3d phi;
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  for (int k = 0; k < 3; ++k) {
+    out.translation()(k) = report.translation_raw[static_cast<std::size_t>(k)] * shared::kTranslationLsbM;
+    phi(k) = report.rotation_raw[static_cast<std::size_t>(k)] * shared::kRotationLsbRad;
+  }
+  if (phi.norm() > 0) out.linear() = Eigen::AngleAxisd(phi.norm(), phi.normalized()).toRotationMatrix();
+  return out;
+}
+
+// Whether the report's error lies in the 95% ellipsoid of its covariance: (t, delta) with
+// true square_R_camera = exp([delta]x) reported (shared/measurement_report.hpp).
+bool inside_95(const shared::MeasurementReport& report, const Eigen::Isometry3d& estimate,
+               const Eigen::Isometry3d& truth) {
   Eigen::Matrix<double, 6, 1> e;
-  e.head<3>() = camera_T_target_true.translation() - est.translation();
-  const Eigen::AngleAxisd d(camera_T_target_true.linear() * est.linear().transpose());
+  e.head<3>() = truth.translation() - estimate.translation();
+  const Eigen::AngleAxisd d(truth.linear() * estimate.linear().transpose());
   e.tail<3>() = d.angle() * d.axis();
-  const Eigen::Matrix<double, 6, 6> c = pose.covariance.cast<double>();
+  const Eigen::Matrix<double, 6, 6, Eigen::RowMajor> c(shared::pose_covariance(report).data());
   return e.dot(c.ldlt().solve(e)) <= 12.59;
+}
+
+// One ARID measurement of a rendered frame through the platform's pipeline, as its ports would
+// drive it: the frame twice (metering, then labelling), the rangers' readings in micrometres.
+void measure_frame(app::MeasurementPipeline& pipeline, const app::ParameterSet& parameters, const cv::Mat& image,
+                   const std::array<double, 4>& ranges_m, shared::MeasurementReport& report) {
+  constexpr std::uint8_t kArid =
+      shared::section::kRanges | shared::section::kPlane | shared::section::kFiducials | shared::section::kPose;
+  pipeline.begin({0, kArid}, parameters);
+  const auto width = static_cast<std::uint16_t>(image.cols), height = static_cast<std::uint16_t>(image.rows);
+  bool labelled = false;
+  if (pipeline.accept_frame_size(width, height)) {
+    for (int y = 0; y < image.rows; ++y) {
+      std::copy_n(image.ptr<std::uint8_t>(y), width, pipeline.row().begin());
+      pipeline.meter_row();
+    }
+    labelled = pipeline.begin_labelling();
+    for (int y = 0; y < image.rows && labelled; ++y) {
+      std::copy_n(image.ptr<std::uint8_t>(y), width, pipeline.row().begin());
+      labelled = pipeline.label_row();
+    }
+  }
+  std::array<std::uint32_t, shared::kRangers> ranges_um{};
+  for (std::size_t i = 0; i < shared::kRangers; ++i)
+    ranges_um[i] = std::isfinite(ranges_m[i]) && ranges_m[i] >= 0 && ranges_m[i] < 1.0
+                       ? static_cast<std::uint32_t>(std::lround(ranges_m[i] * 1e6))
+                       : app::kNoEchoUm;
+  pipeline.finish(app::CaptureStatus::kOk, labelled, app::RangerStatus::kOk, ranges_um, 0, report);
 }
 
 }  // namespace
@@ -88,13 +130,18 @@ int main() {
   const auto fiducials = sim::square_fiducials(strip);
   sim::CameraSpec camera_spec;
   camera_spec.distortion = {-0.05, 0.01, 0, 0, 0};
-  core::CameraIntrinsics camera;
-  camera.fx_px = static_cast<float>(camera_spec.fx_px);
-  camera.fy_px = static_cast<float>(camera_spec.fy_px);
-  camera.cx_px = static_cast<float>(camera_spec.cx_px);
-  camera.cy_px = static_cast<float>(camera_spec.cy_px);
-  camera.distortion = {-0.05f, 0.01f, 0.0f, 0.0f, 0.0f};
   const sim::RangerSpec rangers;
+  app::ParameterSet platform_parameters;
+  platform_parameters.has_intrinsics = platform_parameters.has_geometry = true;
+  platform_parameters.intrinsics = sim::to_intrinsics(camera_spec);
+  platform_parameters.geometry = sim::platform_geometry(strip, rangers);
+  const shared::CameraIntrinsics& k = platform_parameters.intrinsics;
+  core::CameraIntrinsics camera;
+  camera.fx_px = k.fx_px;
+  camera.fy_px = k.fy_px;
+  camera.cx_px = k.cx_px;
+  camera.cy_px = k.cy_px;
+  camera.distortion = {k.k1, k.k2, k.p1, k.p2, k.k3};
   core::RangePlaneModel plane_model;
   core::RangeSensorLayout layout =
       core::plus_pattern_layout(static_cast<float>(rangers.spacing_m), core::RangeModel::along_beam);
@@ -102,16 +149,16 @@ int main() {
   if (core::prepare_range_plane(layout, plane_model) != core::PlaneStatus::ok) return 1;
 
   auto buffers = std::make_unique<core::VgaLabelerBuffers>();
-  std::vector<core::Blob> blobs(256), remaining(256);
+  std::vector<core::Blob> blobs(256);
   std::vector<core::FidVerdict> verdicts(256);
   auto workspace = std::make_unique<core::PlanarPoseWorkspace>();
+  auto pipeline = std::make_unique<app::MeasurementPipeline>();
 
   std::mt19937_64 rng(1313);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  Accumulator ranger_plane, one_square, one_square_no_bias, all_squares, all_squares_no_bias;
-  int views_with_pose = 0, three_fiducial_views = 0, three_fiducial_squares = 0, misidentified = 0, squares_used = 0,
-      prior_rejected = 0;
-  double worst_bias_px = 0;
+  Accumulator ranger_plane, one_square, one_square_no_bias, all_squares;
+  int views_with_pose = 0, three_fiducial_views = 0, misidentified = 0;
+  std::array<int, 6> squares_per_view{};  // the platform's pose_squares, 5 and more in the last
   for (int view = 0; view < kViews; ++view) {
     // The camera looks at a strip point from 0.2-0.45 m, tilted and turned.
     const double along = strip.square_m * (1.5 + (strip.squares - 3) * unit(rng));
@@ -153,75 +200,61 @@ int main() {
     }
     prior.plane = plane;
 
-    // Up to four squares: FID, then FID again on the blobs it did not use.
-    std::size_t blob_count = summary.blobs;
-    remaining.assign(blobs.begin(), blobs.begin() + static_cast<std::ptrdiff_t>(blob_count));
-    struct Found {
-      int index;
-      core::FidResult fid;
+    // The platform's own measurement step on this frame (app::MeasurementPipeline: Otsu threshold,
+    // FID, ranger plane, camera-first pose), with the strip's pitch (every square in view) and
+    // without it (the reference square alone).
+    const auto platform_pose = [&](float pitch_m, shared::MeasurementReport& report) {
+      app::ParameterSet parameters = platform_parameters;
+      parameters.geometry.square_pitch_m = pitch_m;
+      measure_frame(*pipeline, parameters, image, ranges, report);
+      return report.status == shared::MeasureStatus::kOk && (report.sections & shared::section::kPose) != 0;
     };
-    std::vector<Found> found;
-    for (int k = 0; k < kMaxSquares && blob_count > 0; ++k) {
-      core::FidResult fid;
-      if (core::identify_fiducials(core::FidModel{}, std::span<const core::Blob>(remaining.data(), blob_count),
-                                   verdicts, fid) != core::FidStatus::kOk) {
-        break;
-      }
-      // Which square: the one whose centre fiducial projects nearest the FID's p4 (or first point).
-      const Eigen::Vector2d seen(fid.fiducials[0].x_px.to_double(), fid.fiducials[0].y_px.to_double());
-      int best = -1;
-      double best_d = 1e9;
-      for (int s = 0; s < strip.squares; ++s) {
-        const auto& f = fiducials[static_cast<std::size_t>(fid.fiducials[0].id - 1)];
-        const Eigen::Vector3d p = sim::strip_T_square(strip, s) * Eigen::Vector3d(f.centre_m.x(), f.centre_m.y(), 0);
-        const auto px = sim::project_points(camera_spec, camera_T_strip, std::span<const Eigen::Vector3d>(&p, 1));
-        const double d = std::hypot(px[0].x - seen.x(), px[0].y - seen.y());
-        if (d < best_d) {
-          best_d = d;
-          best = s;
-        }
-      }
-      bool right = best >= 0 && best_d < 3.0;
-      for (int i = 0; i < fid.count && right; ++i) {
-        const auto& f = fiducials[static_cast<std::size_t>(fid.fiducials[static_cast<std::size_t>(i)].id - 1)];
-        const Eigen::Vector3d p = sim::strip_T_square(strip, best) * Eigen::Vector3d(f.centre_m.x(), f.centre_m.y(), 0);
-        const auto px = sim::project_points(camera_spec, camera_T_strip, std::span<const Eigen::Vector3d>(&p, 1));
-        right = std::hypot(px[0].x - fid.fiducials[static_cast<std::size_t>(i)].x_px.to_double(),
-                           px[0].y - fid.fiducials[static_cast<std::size_t>(i)].y_px.to_double()) < 3.0;
-      }
-      for (const Found& g : found) right = right && g.index != best;
-      if (right) {
-        found.push_back({best, fid});
-      } else {
-        ++misidentified;
-      }
-      // Drop the blobs this FID used, keep the rest in order.
-      std::vector<bool> used(blob_count, false);
-      for (int i = 0; i < fid.count; ++i) used[fid.fiducials[static_cast<std::size_t>(i)].blob_index] = true;
-      std::size_t kept = 0;
-      for (std::size_t b = 0; b < blob_count; ++b)
-        if (!used[b]) remaining[kept++] = remaining[b];
-      blob_count = kept;
-    }
-    if (found.empty()) continue;
-    ++views_with_pose;
-    squares_used += static_cast<int>(found.size());
-    const Eigen::Isometry3d strip_T_first = sim::strip_T_square(strip, found[0].index);
-    const Eigen::Isometry3d square_T_camera_true = (camera_T_strip * strip_T_first).inverse();
-    if (found[0].fid.count == 3) ++three_fiducial_views;
-    for (const Found& f : found) three_fiducial_squares += f.fid.count == 3 ? 1 : 0;
+    shared::MeasurementReport strip_report, square_report;
+    const bool strip_ok = platform_pose(platform_parameters.geometry.square_pitch_m, strip_report);
+    const bool square_ok = platform_pose(0.0f, square_report);
 
-    // (a) today's: the first square's points on the ranger plane, rigid fit.
+    // FID on the core labeler's blobs, for the ranger-plane pose and the no-bias variant.
+    core::FidResult fid;
+    if (core::identify_fiducials(core::FidModel{}, std::span<const core::Blob>(blobs.data(), summary.blobs), verdicts,
+                                 fid) != core::FidStatus::kOk)
+      continue;
+    // Which square of the strip (the host's job; here from the truth): the one whose fiducial
+    // projects nearest the first identified point, all its points within 3 px.
+    const auto square_of = [&](std::span<const core::IdentifiedFiducial> identified) {
+      for (int q = 0; q < strip.squares; ++q) {
+        bool all = true;
+        for (const auto& f : identified) {
+          const auto& rect = fiducials[static_cast<std::size_t>(f.id - 1)];
+          const Eigen::Vector3d p =
+              sim::strip_T_square(strip, q) * Eigen::Vector3d(rect.centre_m.x(), rect.centre_m.y(), 0);
+          const auto px = sim::project_points(camera_spec, camera_T_strip, std::span<const Eigen::Vector3d>(&p, 1));
+          all = all && std::hypot(px[0].x - f.x_px.to_double(), px[0].y - f.y_px.to_double()) < 3.0;
+        }
+        if (all) return q;
+      }
+      return -1;
+    };
+    const int square = square_of(std::span<const core::IdentifiedFiducial>(fid.fiducials.data(), fid.count));
+    if (square < 0) {
+      ++misidentified;
+      continue;
+    }
+    ++views_with_pose;
+    const Eigen::Isometry3d strip_T_first = sim::strip_T_square(strip, square);
+    const Eigen::Isometry3d square_T_camera_true = (camera_T_strip * strip_T_first).inverse();
+    if (fid.count == 3) ++three_fiducial_views;
+
+    // (a) the old pose: the square's points on the ranger plane, rigid fit.
     {
       std::vector<core::Vector3<float>> square_points, camera_points;
-      for (int i = 0; i < found[0].fid.count; ++i) {
-        const auto& f = found[0].fid.fiducials[static_cast<std::size_t>(i)];
+      for (int i = 0; i < fid.count; ++i) {
+        const auto& f = fid.fiducials[static_cast<std::size_t>(i)];
         core::Vector3<float> c;
         if (core::pixel_to_plane_point(camera, plane, {f.x_px.to_float(), f.y_px.to_float()}, c) !=
             core::CameraStatus::ok)
           continue;
-        const auto& s = fiducials[static_cast<std::size_t>(f.id - 1)].centre_m;
-        square_points.emplace_back(static_cast<float>(s.x()), static_cast<float>(s.y()), 0.0f);
+        const auto& sq = fiducials[static_cast<std::size_t>(f.id - 1)].centre_m;
+        square_points.emplace_back(static_cast<float>(sq.x()), static_cast<float>(sq.y()), 0.0f);
         camera_points.push_back(c);
       }
       core::PoseFit fit;
@@ -233,72 +266,83 @@ int main() {
       }
     }
 
-    // (b) camera-first: one square (square frame) or every square (strip frame).
-    for (const bool every : {false, true}) {
+    // (b) camera-first on the square alone without the perspective pass (core::planar_pose).
+    {
       std::vector<core::PlanarCorrespondence> points;
-      for (std::size_t q = 0; q < (every ? found.size() : 1u); ++q) {
-        const Eigen::Isometry3d first_T_square = strip_T_first.inverse() * sim::strip_T_square(strip, found[q].index);
-        for (int i = 0; i < found[q].fid.count; ++i) {
-          const auto& f = found[q].fid.fiducials[static_cast<std::size_t>(i)];
-          const auto& rect = fiducials[static_cast<std::size_t>(f.id - 1)];
-          const Eigen::Vector3d t = first_T_square * Eigen::Vector3d(rect.centre_m.x(), rect.centre_m.y(), 0);
-          core::PlanarCorrespondence c;
-          c.pixel_px = {f.x_px.to_float(), f.y_px.to_float()};
-          c.target_m = {static_cast<float>(t.x()), static_cast<float>(t.y())};
-          c.fiducial_half_size_m = (0.5 * rect.size_m).cast<float>();
-          points.push_back(c);
-        }
+      for (int i = 0; i < fid.count; ++i) {
+        const auto& f = fid.fiducials[static_cast<std::size_t>(i)];
+        const auto& rect = fiducials[static_cast<std::size_t>(f.id - 1)];
+        core::PlanarCorrespondence c;
+        c.pixel_px = {f.x_px.to_float(), f.y_px.to_float()};
+        c.target_m = rect.centre_m.cast<float>();
+        points.push_back(c);
       }
-      for (const int passes : {0, 1}) {
-        core::PlanarPoseOptions options;
-        options.pixel_sigma_px = kPixelSigmaPx;
-        options.perspective_passes = static_cast<std::uint8_t>(passes);
-        core::PlanarPose pose;
-        Accumulator& acc =
-            every ? (passes == 1 ? all_squares : all_squares_no_bias) : (passes == 1 ? one_square : one_square_no_bias);
-        if (core::planar_pose(camera, points, &prior, options, *workspace, pose) != core::PlanarPoseStatus::ok) {
-          ++acc.failed;
-          continue;
-        }
-        acc.add(to_isometry(pose.camera_T_target).inverse(), square_T_camera_true);
-        acc.inside95 += inside_95(pose, camera_T_strip * strip_T_first) ? 1 : 0;
-        if (every && passes == 1) {
-          prior_rejected += pose.prior_rejected ? 1 : 0;
-          for (const auto& c : points) {
-            core::Vector2<float> bias;
-            if (core::fiducial_centroid_bias_px(camera, pose.camera_T_target, c.target_m, c.fiducial_half_size_m, bias))
-              worst_bias_px = std::fmax(worst_bias_px, static_cast<double>(bias.norm()));
-          }
-        }
+      core::PlanarPoseOptions options;
+      options.pixel_sigma_px = app::MeasurementPipeline::kPixelSigmaPx;
+      options.perspective_passes = 0;
+      core::PlanarPose pose;
+      if (core::planar_pose(camera, points, &prior, options, *workspace, pose) == core::PlanarPoseStatus::ok)
+        one_square_no_bias.add(to_isometry(pose.camera_T_target).inverse(), square_T_camera_true);
+      else
+        ++one_square_no_bias.failed;
+    }
+
+    // (c) the platform's reports, in the frame of their reference square (the FID's, as above).
+    for (const bool every : {false, true}) {
+      const shared::MeasurementReport& report = every ? strip_report : square_report;
+      Accumulator& acc = every ? all_squares : one_square;
+      if (!(every ? strip_ok : square_ok)) {
+        ++acc.failed;
+        continue;
       }
+      std::vector<core::IdentifiedFiducial> reported;
+      for (std::size_t i = 0; i < report.fiducial_count; ++i) {
+        core::IdentifiedFiducial f;
+        f.id = report.fiducials[i].id;
+        f.x_px = core::q16_16::from_double(report.fiducials[i].x_q6 * shared::kPixelLsbPx);
+        f.y_px = core::q16_16::from_double(report.fiducials[i].y_q6 * shared::kPixelLsbPx);
+        reported.push_back(f);
+      }
+      const int reference = square_of(reported);
+      if (reference < 0) {
+        ++acc.failed;
+        continue;
+      }
+      const Eigen::Isometry3d truth = (camera_T_strip * sim::strip_T_square(strip, reference)).inverse();
+      const Eigen::Isometry3d estimate = reported_pose(report);
+      acc.add(estimate, truth);
+      acc.inside95 += inside_95(report, estimate, truth) ? 1 : 0;
+      if (every) squares_per_view[std::min<std::size_t>(report.pose_squares, squares_per_view.size() - 1)] += 1;
     }
   }
 
-  std::printf("views %d, with a pose %d, squares used %d, misidentified squares dropped %d, prior rejected %d\n",
-              kViews, views_with_pose, squares_used, misidentified, prior_rejected);
-  const auto report = [&ranger_plane](const char* name, const Accumulator& a) {
+  std::printf("views %d, with a pose %d, the square's identity not found %d; the platform's poses by squares used:",
+              kViews, views_with_pose, misidentified);
+  for (std::size_t n = 1; n < squares_per_view.size(); ++n) std::printf(" %zu: %d", n, squares_per_view[n]);
+  std::printf("\n");
+  const auto report = [&ranger_plane, &one_square_no_bias](const char* name, const Accumulator& a) {
     std::printf("%-40s rms %.3f mm %.3f mrad over %d views (%d failed)", name, a.rms_mm(), a.rms_mrad(), a.count,
                 a.failed);
-    if (&a != &ranger_plane) std::printf(", 95%% coverage %.3f", static_cast<double>(a.inside95) / a.count);
+    if (&a != &ranger_plane && &a != &one_square_no_bias)
+      std::printf(", 95%% coverage %.3f", static_cast<double>(a.inside95) / a.count);
     std::printf("\n");
   };
-  report("ranger plane (today)", ranger_plane);
+  report("ranger plane (the old pose)", ranger_plane);
   report("camera-first, one square, no bias pass", one_square_no_bias);
-  report("camera-first, one square", one_square);
-  report("camera-first, every square, no bias pass", all_squares_no_bias);
-  report("camera-first, every square", all_squares);
+  report("platform, one square", one_square);
+  report("platform, every square in view", all_squares);
   std::printf("FIGURE platform_pose_rms_mm %.4f mm\n", all_squares.rms_mm());
   std::printf("FIGURE platform_pose_rms_mrad %.4f mrad\n", all_squares.rms_mrad());
   std::printf("FIGURE platform_pose_ranger_plane_rms_mm %.4f mm\n", ranger_plane.rms_mm());
   std::printf("FIGURE platform_pose_ranger_plane_rms_mrad %.4f mrad\n", ranger_plane.rms_mrad());
-  std::printf("FIGURE platform_pose_no_bias_rms_mm %.4f mm\n", all_squares_no_bias.rms_mm());
-  std::printf("FIGURE platform_pose_no_bias_rms_mrad %.4f mrad\n", all_squares_no_bias.rms_mrad());
+  std::printf("FIGURE platform_pose_one_square_no_bias_rms_mm %.4f mm\n", one_square_no_bias.rms_mm());
+  std::printf("FIGURE platform_pose_one_square_no_bias_rms_mrad %.4f mrad\n", one_square_no_bias.rms_mrad());
   std::printf("FIGURE platform_pose_one_square_rms_mm %.4f mm\n", one_square.rms_mm());
   std::printf("FIGURE platform_pose_one_square_rms_mrad %.4f mrad\n", one_square.rms_mrad());
   std::printf("FIGURE platform_pose_coverage_95 %.3f fraction\n",
               static_cast<double>(all_squares.inside95) / all_squares.count);
+  std::printf("FIGURE platform_pose_one_square_coverage_95 %.3f fraction\n",
+              static_cast<double>(one_square.inside95) / one_square.count);
   std::printf("FIGURE platform_pose_three_fiducial_views %d views\n", three_fiducial_views);
-  std::printf("FIGURE platform_pose_three_fiducial_squares %d squares\n", three_fiducial_squares);
-  std::printf("FIGURE platform_pose_max_perspective_bias_px %.3f px\n", worst_bias_px);
   return views_with_pose > kViews / 2 ? 0 : 1;
 }

@@ -1,7 +1,9 @@
 // A 640x480 calibration-square frame for the M4 benchmarks, rendered a row at a time (so no
 // frame buffer is needed): light vellum (200 DN, +-4 DN texture) with Doty's six dark fiducials
 // at 120 px per inch (30x30 px, the centre one 30x60, 210 px apart, the corner marker top left),
-// edges blurred over one pixel. The centre fiducial's centre is at (cx - 0.5, cy - 0.5) px.
+// edges blurred over one pixel. The centre fiducial's centre is at (cx - 0.5, cy - 0.5) px. With
+// pitch_px > 0, the strip's neighbouring squares too, centred pitch_px to the left and right
+// (Doty's 4-inch squares: 480 px).
 #pragma once
 
 #include <cstdint>
@@ -9,10 +11,10 @@
 namespace kincal::bench {
 
 inline constexpr int kVgaWidth = 640, kVgaHeight = 480;
-inline constexpr int kVgaFiducialSidePx = 30, kVgaPerimeterDistancePx = 210;
+inline constexpr int kVgaFiducialSidePx = 30, kVgaPerimeterDistancePx = 210, kVgaSquarePitchPx = 480;
 
 // Row y of the frame with the square centred at (cx, cy), into row[0..kVgaWidth).
-inline void render_vga_square_row(int y, int cx, int cy, std::uint8_t* row) {
+inline void render_vga_square_row(int y, int cx, int cy, std::uint8_t* row, int pitch_px = 0) {
   struct Square {
     int x0, y0, x1, y1;  // inclusive
   };
@@ -29,11 +31,14 @@ inline void render_vga_square_row(int y, int cx, int cy, std::uint8_t* row) {
   for (int x = 0; x < kVgaWidth; ++x) {
     hash = hash * 1664525u + 1013904223u;
     int v = 200 + static_cast<int>(hash >> 29) - 4;
-    for (const Square& f : fiducials) {
-      if (x >= f.x0 && x <= f.x1 && y >= f.y0 && y <= f.y1)
-        v = 40;
-      else if (x >= f.x0 - 1 && x <= f.x1 + 1 && y >= f.y0 - 1 && y <= f.y1 + 1)
-        v = 120;  // blurred rim
+    for (int square = pitch_px > 0 ? -1 : 0; square <= (pitch_px > 0 ? 1 : 0); ++square) {
+      const int sx = x - square * pitch_px;
+      for (const Square& f : fiducials) {
+        if (sx >= f.x0 && sx <= f.x1 && y >= f.y0 && y <= f.y1)
+          v = 40;
+        else if (sx >= f.x0 - 1 && sx <= f.x1 + 1 && y >= f.y0 - 1 && y <= f.y1 + 1)
+          v = 120;  // blurred rim
+      }
     }
     row[x] = static_cast<std::uint8_t>(v);
   }

@@ -24,6 +24,7 @@ constexpr double kSideM = 0.00635;  // Doty's 1/4-inch fiducial side s
 constexpr double kFx = 400.0, kFy = 400.0, kCx = 159.5, kCy = 119.5;
 constexpr std::uint8_t kVellumDn = 200, kInkDn = 40;
 constexpr double kBeamOffsetM = 0.03;
+constexpr double kPitchM = 16 * kSideM;  // Doty's strip: 4-inch squares side by side along x
 
 using Measure = app::PlatformMeasurement<test::FakeCamera, test::FakeRangers>;
 
@@ -73,8 +74,9 @@ struct Scene {
 
 // 4 x 4 samples per pixel (pixel (u, v) covers [u - 1/2, u + 1/2] x [v - 1/2, v + 1/2]), each
 // ray met with the square's plane: ink inside a fiducial, vellum elsewhere.
-// drawn: bit k - 1 set draws fiducial p_k.
-void render(const Scene& scene, std::span<std::uint8_t> image, unsigned drawn = 0x3F) {
+// drawn: bit k - 1 set draws fiducial p_k. neighbours: the strip's squares n = -neighbours ..
+// +neighbours (square n's fiducials at n kPitchM along the square's x) drawn too, all of them.
+void render(const Scene& scene, std::span<std::uint8_t> image, unsigned drawn = 0x3F, int neighbours = 0) {
   const Eigen::Vector3d n = scene.normal();
   const double distance = scene.distance_m();
   const Eigen::Matrix3d square_R_camera = scene.camera_R_square.transpose();
@@ -86,13 +88,16 @@ void render(const Scene& scene, std::span<std::uint8_t> image, unsigned drawn = 
           const Eigen::Vector3d ray((u - 0.5 + (sx + 0.5) / 4 - kCx) / kFx, (v - 0.5 + (sy + 0.5) / 4 - kCy) / kFy,
                                     1.0);
           const Eigen::Vector3d p = square_R_camera * (ray * (distance / n.dot(ray)) - scene.camera_t_square);
-          for (std::size_t k = 0; k < 6; ++k) {
-            const Rectangle& r = kFiducials[k];
-            if ((drawn >> k & 1u) != 0 && std::fabs(p.x() - r.x) <= r.half_x && std::fabs(p.y() - r.y) <= r.half_y) {
-              ++ink;
-              break;
+          bool inked = false;
+          for (int square = -neighbours; square <= neighbours && !inked; ++square) {
+            const double x = p.x() - square * kPitchM;
+            for (std::size_t k = 0; k < 6 && !inked; ++k) {
+              const Rectangle& r = kFiducials[k];
+              inked = (square != 0 || (drawn >> k & 1u) != 0) && std::fabs(x - r.x) <= r.half_x &&
+                      std::fabs(p.y() - r.y) <= r.half_y;
             }
           }
+          ink += inked ? 1 : 0;
         }
       }
       image[static_cast<std::size_t>(v) * kWidth + static_cast<std::size_t>(u)] =
@@ -104,6 +109,7 @@ void render(const Scene& scene, std::span<std::uint8_t> image, unsigned drawn = 
 std::array<std::uint8_t, kWidth * kHeight> g_square_image;  // static: 77 KB
 std::array<std::uint8_t, kWidth * kHeight> g_blank_image;
 std::array<std::uint8_t, kWidth * kHeight> g_three_image;  // p1, p4, p5 only
+std::array<std::uint8_t, kWidth * kHeight> g_strip_image;  // squares -1, 0, +1 of a strip
 
 const Scene& scene() {
   static const Scene s;
@@ -111,20 +117,23 @@ const Scene& scene() {
   if (!rendered) {
     render(s, g_square_image);
     render(s, g_three_image, 0b011001);
+    render(s, g_strip_image, 0x3F, 1);
     g_blank_image.fill(kVellumDn);
     rendered = true;
   }
   return s;
 }
 
-// The reported pose's errors against the scene's truth: translation (m) and rotation (rad).
+// The reported pose's errors against the scene's truth: translation (m) and rotation (rad); the
+// pose in the frame of the strip's square `square` (0: the scene's square).
 struct PoseError {
   double translation_m, rotation_rad;
 };
-PoseError pose_error(const shared::MeasurementReport& r) {
+PoseError pose_error(const shared::MeasurementReport& r, int square = 0) {
   const Scene& s = scene();
   const Eigen::Matrix3d square_R_camera = s.camera_R_square.transpose();
-  const Eigen::Vector3d camera_in_square = -(square_R_camera * s.camera_t_square);
+  const Eigen::Vector3d camera_in_square =
+      -(square_R_camera * s.camera_t_square) - Eigen::Vector3d(square * kPitchM, 0.0, 0.0);
   Eigen::Vector3d translation, rotation;
   for (int k = 0; k < 3; ++k) {
     translation(k) = r.translation_raw[static_cast<std::size_t>(k)] * shared::kTranslationLsbM;
@@ -359,6 +368,23 @@ TEST_CASE("measurement: the reported covariance is planar_pose's carried through
       CHECK(reported[static_cast<std::size_t>(i * 6 + j)] == doctest::Approx(expected(i, j)).epsilon(2e-3).scale(1e-8));
 }
 
+// The report's encoding against the golden bytes; on a mismatch the message shows the new ones.
+void check_encoded(const shared::MeasurementReport& r, std::span<const std::uint8_t> golden) {
+  std::array<std::uint8_t, shared::kMaxReportBytes> bytes{};
+  const std::size_t n = shared::encode(r, bytes);
+  std::string hex;
+  for (std::size_t i = 0; i < n; ++i) {
+    static constexpr char kDigits[] = "0123456789abcdef";
+    hex += "0x";
+    hex += kDigits[bytes[i] >> 4];
+    hex += kDigits[bytes[i] & 15];
+    hex += ", ";
+  }
+  INFO("encoded: " << hex);
+  REQUIRE(n == golden.size());
+  for (std::size_t i = 0; i < n; ++i) CHECK(bytes[i] == golden[i]);
+}
+
 TEST_CASE("measurement: the encoded report of the tilted square is the same bytes natively and on the M4") {
   // Golden: the ARID report (ranges, plane, fiducials, pose and its covariance) of the first case,
   // as the native build encoded it; the M4 run of this test must give the same bytes, so the
@@ -372,20 +398,88 @@ TEST_CASE("measurement: the encoded report of the tilted square is the same byte
       0xf8, 0xbf, 0x03, 0xb9, 0x59, 0x45, 0xb7, 0x9f, 0xab, 0x20, 0xe3, 0x8b, 0x11, 0xca, 0x49, 0xe7, 0x8b, 0x0a,
       0x3f, 0xfb, 0x7f, 0xc1, 0xa3, 0x81, 0x07, 0xe6, 0x62, 0x42, 0xf0, 0xfe, 0x14, 0xc7};
   Rig rig;
-  const shared::MeasurementReport r = rig.measure(kArid);
-  std::array<std::uint8_t, shared::kMaxReportBytes> bytes{};
-  const std::size_t n = shared::encode(r, bytes);
-  std::string hex;
-  for (std::size_t i = 0; i < n; ++i) {
-    static constexpr char kDigits[] = "0123456789abcdef";
-    hex += "0x";
-    hex += kDigits[bytes[i] >> 4];
-    hex += kDigits[bytes[i] & 15];
-    hex += ", ";
-  }
-  INFO("encoded: " << hex);
-  REQUIRE(n == sizeof(kGolden));
-  for (std::size_t i = 0; i < n; ++i) CHECK(bytes[i] == kGolden[i]);
+  check_encoded(rig.measure(kArid), kGolden);
+}
+
+// The strip's square whose frame the report's pose is in: the one whose fiducials the report lists.
+int reference_square(const shared::MeasurementReport& r) {
+  REQUIRE(r.fiducial_count >= 1);
+  const shared::Fiducial& f = r.fiducials[0];
+  REQUIRE(f.id >= 1);
+  REQUIRE(f.id <= 6);
+  const Rectangle& rect = kFiducials[f.id - 1];
+  const Eigen::Vector2d seen(f.x_q6 * shared::kPixelLsbPx, f.y_q6 * shared::kPixelLsbPx);
+  int best = 0;
+  for (int square = -1; square <= 1; ++square)
+    if ((scene().project({rect.x + square * kPitchM, rect.y, 0.0}) - seen).norm() <
+        (scene().project({rect.x + best * kPitchM, rect.y, 0.0}) - seen).norm())
+      best = square;
+  return best;
+}
+
+TEST_CASE("measurement: the strip's neighbouring squares in view join the pose and shrink its covariance") {
+  // Three squares of a strip; the neighbours are cut by the frame's edges (the camera sees 0.2 m
+  // of the strip). The same frame measured with the strip's pitch (every square) and without it.
+  Rig rig;
+  rig.camera.image = g_strip_image;
+  rig.parameters.geometry.square_pitch_m = 0.0f;
+  const shared::MeasurementReport one = rig.measure(kArid);
+  rig.parameters.geometry.square_pitch_m = static_cast<float>(kPitchM);
+  const shared::MeasurementReport strip = rig.measure(kArid);
+  REQUIRE(one.status == shared::MeasureStatus::kOk);
+  REQUIRE(strip.status == shared::MeasureStatus::kOk);
+  CHECK(one.pose_squares == 1);
+  CHECK(strip.pose_squares == 3);
+  const int square = reference_square(strip);
+  CHECK(reference_square(one) == square);
+  const PoseError e_one = pose_error(one, square), e_strip = pose_error(strip, square);
+  const std::array<double, 2> sigma_one = largest_sigmas(one), sigma_strip = largest_sigmas(strip);
+  MESSAGE("reference square " << square << "; one square: " << e_one.translation_m * 1e3 << " mm, "
+                              << e_one.rotation_rad * 1e3 << " mrad (largest sigma " << sigma_one[0] * 1e3 << " mm, "
+                              << sigma_one[1] * 1e3 << " mrad); the strip: " << e_strip.translation_m * 1e3 << " mm, "
+                              << e_strip.rotation_rad * 1e3 << " mrad (" << sigma_strip[0] * 1e3 << " mm, "
+                              << sigma_strip[1] * 1e3 << " mrad)");
+  // The neighbours' points widen the baseline: the covariance shrinks (measured: the largest
+  // sigmas by 0.69 and 0.71), and so does the error (0.204 mm, 0.848 mrad -> 0.089 mm, 0.334 mrad).
+  CHECK(sigma_strip[0] < 0.8 * sigma_one[0]);
+  CHECK(sigma_strip[1] < 0.8 * sigma_one[1]);
+  CHECK(e_strip.translation_m < 0.3e-3);
+  CHECK(e_strip.rotation_rad < 1.3e-3);
+  CHECK(sigma_strip[0] > e_strip.translation_m);
+  CHECK(sigma_strip[1] > e_strip.rotation_rad);
+}
+
+TEST_CASE("measurement: the encoded report of the strip is the same bytes natively and on the M4") {
+  // Golden, as above, of the strip's case: the match of the neighbours' fiducials and the pose
+  // over three squares agree bit for bit on both targets too.
+  static constexpr std::uint8_t kGolden[] = {
+      0x81, 0x09, 0x28, 0xdb, 0x0b, 0x00, 0x0f, 0x74, 0x08, 0x35, 0x06, 0x81, 0xf6, 0xc0, 0xf8, 0x74, 0x8c, 0x58,
+      0x69, 0xfc, 0xef, 0x58, 0xe4, 0x45, 0xd4, 0x4c, 0x48, 0xc2, 0x08, 0xfa, 0xc2, 0x44, 0x64, 0x70, 0x90, 0xd0,
+      0x5d, 0x8a, 0x29, 0x47, 0x99, 0xe3, 0xb0, 0x56, 0xd8, 0xd0, 0x4b, 0xf0, 0xca, 0xac, 0x3b, 0x3f, 0x9e, 0x12,
+      0x1c, 0xc0, 0x03, 0xbd, 0x59, 0x3b, 0xb7, 0x1f, 0xac, 0xf0, 0x60, 0x88, 0xfe, 0x91, 0x09, 0xe5, 0x86, 0x02,
+      0x4a, 0x05, 0x7e, 0xb3, 0xa8, 0x82, 0xfe, 0xe3, 0x5e, 0x50, 0xe5, 0x0a, 0x14, 0xbb};
+  Rig rig;
+  rig.camera.image = g_strip_image;
+  rig.parameters.geometry.square_pitch_m = static_cast<float>(kPitchM);
+  check_encoded(rig.measure(kArid), kGolden);
+}
+
+TEST_CASE("measurement: a strip whose pitch is wrong leaves the square's own pose") {
+  // The geometry block says the squares are 2 % farther apart than they are: the neighbours'
+  // blobs are found near the predicted places (within the gate) but cannot fit one pose with the
+  // square's own points, so the report keeps the square's pose, bit for bit.
+  Rig rig;
+  rig.camera.image = g_strip_image;
+  rig.parameters.geometry.square_pitch_m = 0.0f;
+  const shared::MeasurementReport one = rig.measure(kArid);
+  rig.parameters.geometry.square_pitch_m = static_cast<float>(1.02 * kPitchM);
+  const shared::MeasurementReport wrong = rig.measure(kArid);
+  CHECK(wrong.status == shared::MeasureStatus::kOk);
+  CHECK(wrong.pose_squares == 1);
+  CHECK(wrong.translation_raw == one.translation_raw);
+  CHECK(wrong.rotation_raw == one.rotation_raw);
+  CHECK(wrong.pose_sigma_raw == one.pose_sigma_raw);
+  CHECK(wrong.pose_correlation_raw == one.pose_correlation_raw);
 }
 
 TEST_CASE("measurement: ranges only read the rangers, no frame, stamped with the rangers' time") {

@@ -147,3 +147,25 @@ TEST_CASE("FID: look-alikes are rejected with their reason") {
   CHECK(identify_fiducials(FidModel{}, std::span<const Blob>(g_blobs, n), std::span<FidVerdict>(g_verdicts, 2), r) ==
         FidStatus::kVerdictsTooShort);
 }
+
+TEST_CASE("FID: on a strip, the square's own p3 and p5, not the neighbours' fiducials 2s beyond them") {
+  // Doty's strip: the next squares' p3 and p5 lie 9s from this centre, 2s beyond its p5 and p3.
+  // The centre blob drawn larger (8 x 14 px for 6 x 12: blur and threshold do that) makes s =
+  // sqrt(area / 2) 7.5 px, so the 7s prediction falls nearer the neighbours'; the nearest to the
+  // centre along the x axis is the square's own.
+  SquareView view{70.0, 70.0, 0, -1, 6.0};  // +y up: p5 to the right
+  kincal::test::render_square(g_img, view);
+  g_img.rect(66, 63, 73, 76, 40);    // the enlarged centre
+  g_img.rect(121, 67, 126, 72, 40);  // the right neighbour's p3, 9s to the right
+  g_img.rect(13, 67, 18, 72, 40);    // the left neighbour's p5, 9s to the left
+  FidResult r;
+  REQUIRE(identify(label(), r) == FidStatus::kOk);
+  for (const int id : {3, 5}) {
+    const IdentifiedFiducial* f = find_id(r, id);
+    REQUIRE(f != nullptr);
+    double x, y;
+    kincal::test::fiducial_image_point(view, id, x, y);
+    CHECK(std::fabs(f->x_px.to_double() - x) < 0.1);
+    CHECK(std::fabs(f->y_px.to_double() - y) < 0.1);
+  }
+}

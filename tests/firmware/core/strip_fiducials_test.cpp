@@ -99,10 +99,11 @@ struct Setup {
         taken.push_back(n == 0 ? 1 : 0);
       }
   }
-  StripMatchStatus run(std::size_t point_count = 0, std::size_t capacity = kPlanarPoseMaxPoints) {
+  StripMatchStatus run(std::size_t point_count = 0, std::size_t capacity = kPlanarPoseMaxPoints,
+                       std::uint8_t reference_found = 0x3F, float pitch_m = kPitchM) {
     const auto p = pattern();
-    return match_strip_fiducials(camera(), kWidth, kHeight, camera_T_square(), p, kPitchM, blobs, taken,
-                                 StripMatchOptions{}, std::span<PlanarCorrespondence>(points.data(), capacity),
+    return match_strip_fiducials(camera(), kWidth, kHeight, camera_T_square(), p, reference_found, pitch_m, blobs,
+                                 taken, StripMatchOptions{}, std::span<PlanarCorrespondence>(points.data(), capacity),
                                  point_count, match);
   }
 };
@@ -161,6 +162,28 @@ TEST_CASE("strip fiducials: blobs of the wrong size, off the prediction, cut or 
   CHECK(t.taken.back() == 1);
 }
 
+TEST_CASE("strip fiducials: the reference square's own missing fiducials are found, also without a pitch") {
+  // FID gave p1, p2, p4, p6 of square 0 (their blobs taken); p3 and p5 are searched where the
+  // pose puts them, not the neighbours' p5 and p3 two sides beyond them.
+  Setup s({0, -1, 1});
+  for (const std::size_t k : {2u, 4u}) s.taken[k] = 0;
+  REQUIRE(s.run(0, kPlanarPoseMaxPoints, 0b101011, 0.0f) == StripMatchStatus::ok);
+  CHECK(s.match.points_added == 2);
+  CHECK(s.match.reference_added == 2);
+  CHECK(s.match.squares_matched == 0);
+  CHECK(s.points[0].pixel_px.x() == s.blobs[2].x_px.to_float());  // p3
+  CHECK(s.points[1].pixel_px.x() == s.blobs[4].x_px.to_float());  // p5
+  CHECK(s.points[0].target_m == pattern()[2].centre_m);
+  for (std::size_t i = 6; i < s.blobs.size(); ++i) CHECK(s.taken[i] == 0);
+
+  // With the pitch: the square's two, then both neighbours' six.
+  for (const std::size_t k : {2u, 4u}) s.taken[k] = 0;
+  REQUIRE(s.run(0, kPlanarPoseMaxPoints, 0b101011) == StripMatchStatus::ok);
+  CHECK(s.match.points_added == 14);
+  CHECK(s.match.reference_added == 2);
+  CHECK(s.match.squares_matched == 2);
+}
+
 TEST_CASE("strip fiducials: the output stops when full; refused arguments") {
   Setup s({-1, 1});
   REQUIRE(s.run(0, 4) == StripMatchStatus::ok);
@@ -173,13 +196,13 @@ TEST_CASE("strip fiducials: the output stops when full; refused arguments") {
   std::array<PlanarCorrespondence, 4> points{};
   const auto call = [&](float pitch_m, std::span<const StripFiducial> pat, std::size_t taken_size, std::uint16_t width,
                         std::size_t point_count) {
-    return match_strip_fiducials(camera(), width, kHeight, camera_T_square(), pat, pitch_m, s.blobs,
+    return match_strip_fiducials(camera(), width, kHeight, camera_T_square(), pat, 0x3F, pitch_m, s.blobs,
                                  std::span<std::uint8_t>(s.taken.data(), taken_size), StripMatchOptions{}, points,
                                  point_count, m);
   };
   const std::size_t n = s.blobs.size();
   CHECK(call(kPitchM, p, n, kWidth, 0) == StripMatchStatus::ok);
-  CHECK(call(0.0f, p, n, kWidth, 0) == StripMatchStatus::bad_arguments);
+  CHECK(call(0.0f, p, n, kWidth, 0) == StripMatchStatus::ok);  // the reference square alone
   CHECK(call(-kPitchM, p, n, kWidth, 0) == StripMatchStatus::bad_arguments);
   CHECK(call(std::numeric_limits<float>::infinity(), p, n, kWidth, 0) == StripMatchStatus::bad_arguments);
   CHECK(call(std::numeric_limits<float>::quiet_NaN(), p, n, kWidth, 0) == StripMatchStatus::bad_arguments);

@@ -69,7 +69,7 @@ TEST_CASE("platform pose sensor: the report's covariance becomes the observation
   square_T_camera.rotation = Eigen::AngleAxisd(std::numbers::pi, model::Vector3::UnitX()).toRotationMatrix();
   model::Transform predicted = square1 * square_T_camera;
   const session::Observation o = sensor.measure(0, predicted);
-  CHECK(o.note.find("square 2 (of 2 squares used)") != std::string::npos);
+  CHECK(o.note.find("square 2 (pose over 2 squares)") != std::string::npos);
   REQUIRE(o.covariance.has_value());
   model::Matrix3 square_c;
   square_c << 1e-8, 1e-8, 0, 1e-8, 4e-8, 0, 0, 0, 25e-8;
