@@ -141,12 +141,7 @@ void MeasurementPipeline::begin(const MeasureRequest& request, const ParameterSe
   pose_options_ = core::PlanarPoseOptions{};
   pose_options_.pixel_sigma_px = kPixelSigmaPx;
   pose_options_.perspective_passes = fiducial_side_m_ > 0.0f ? 1 : 0;
-  camera_ = core::CameraIntrinsics{};
-  camera_.fx_px = intrinsics_.fx_px;
-  camera_.fy_px = intrinsics_.fy_px;
-  camera_.cx_px = intrinsics_.cx_px;
-  camera_.cy_px = intrinsics_.cy_px;
-  camera_.distortion = {intrinsics_.k1, intrinsics_.k2, intrinsics_.p1, intrinsics_.p2, intrinsics_.k3};
+  camera_ = core::camera_from_block(intrinsics_);
   square_is_planar_ = true;
   for (std::size_t k = 0; k < geometry_.fiducial_count && k < geometry_.fiducial_square_m.size(); ++k)
     if (!(std::fabs(geometry_.fiducial_square_m[k][2]) <= kSquarePlanarToleranceM)) square_is_planar_ = false;

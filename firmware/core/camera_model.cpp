@@ -15,6 +15,16 @@ bool intrinsics_ok(const CameraIntrinsics& c) {
 
 }  // namespace
 
+CameraIntrinsics camera_from_block(const shared::CameraIntrinsics& block) noexcept {
+  CameraIntrinsics c;
+  c.fx_px = block.fx_px;
+  c.fy_px = block.fy_px;
+  c.cx_px = block.cx_px;
+  c.cy_px = block.cy_px;
+  c.distortion = {block.k1, block.k2, block.p1, block.p2, block.k3};
+  return c;
+}
+
 CameraStatus project_point(const CameraIntrinsics& camera, const Vector3<float>& point_camera_m,
                            Vector2<float>& pixel) noexcept {
   if (!intrinsics_ok(camera)) return CameraStatus::bad_intrinsics;

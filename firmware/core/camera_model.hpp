@@ -38,6 +38,7 @@
 
 #include "firmware/core/range_plane.hpp"
 #include "firmware/core/rigid_transform.hpp"
+#include "shared/parameters.hpp"
 
 namespace kincal::core {
 
@@ -65,6 +66,9 @@ struct CameraIntrinsics {
   Distortion<float> distortion{};
   float max_normalized_radius = 2.0f;  // |(x, y)| up to which the distortion model is trusted
 };
+
+// The camera of an intrinsics parameter block (shared/parameters.hpp), as this model takes it.
+CameraIntrinsics camera_from_block(const shared::CameraIntrinsics& block) noexcept;
 
 // OpenCV's distortion of a normalized point: written once, for any scalar.
 template <class S>

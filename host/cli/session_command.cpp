@@ -36,6 +36,7 @@
 #include <random>
 #include <sstream>
 
+#include "firmware/core/camera_model.hpp"
 #include "host/camera/calibration_file.hpp"
 #include "host/can/socketcan.hpp"
 #include "host/capture/stereo_source.hpp"
@@ -233,19 +234,9 @@ class CapturedStereo {
 // left camera's.
 session::StereoSetup stereo_setup(const SessionArgs& a) {
   const camera::StereoCalibration c = camera::load_stereo(a.stereo);
-  auto intrinsics = [](const camera::CameraModel& m) {
-    const shared::CameraIntrinsics p = camera::to_platform(m);
-    core::CameraIntrinsics k;
-    k.fx_px = p.fx_px;
-    k.fy_px = p.fy_px;
-    k.cx_px = p.cx_px;
-    k.cy_px = p.cy_px;
-    k.distortion = {p.k1, p.k2, p.p1, p.p2, p.k3};
-    return k;
-  };
   session::StereoSetup setup;
-  setup.pair.left = intrinsics(c.left);
-  setup.pair.right = intrinsics(c.right);
+  setup.pair.left = core::camera_from_block(camera::to_platform(c.left));
+  setup.pair.right = core::camera_from_block(camera::to_platform(c.right));
   // x_right = R x_left + t: the right camera's pose in the left frame is the inverse.
   core::RigidTransform<float> right_T_left;
   for (int i = 0; i < 3; ++i) {

@@ -135,13 +135,7 @@ int main() {
   platform_parameters.has_intrinsics = platform_parameters.has_geometry = true;
   platform_parameters.intrinsics = sim::to_intrinsics(camera_spec);
   platform_parameters.geometry = sim::platform_geometry(strip, rangers);
-  const shared::CameraIntrinsics& k = platform_parameters.intrinsics;
-  core::CameraIntrinsics camera;
-  camera.fx_px = k.fx_px;
-  camera.fy_px = k.fy_px;
-  camera.cx_px = k.cx_px;
-  camera.cy_px = k.cy_px;
-  camera.distortion = {k.k1, k.k2, k.p1, k.p2, k.k3};
+  const core::CameraIntrinsics camera = core::camera_from_block(platform_parameters.intrinsics);
   core::RangePlaneModel plane_model;
   core::RangeSensorLayout layout =
       core::plus_pattern_layout(static_cast<float>(rangers.spacing_m), core::RangeModel::along_beam);

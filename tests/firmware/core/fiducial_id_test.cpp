@@ -43,6 +43,16 @@ const IdentifiedFiducial* find_id(const FidResult& r, int id) {
   return nullptr;
 }
 
+// Fiducial `id` identified, at its image point in the view within 0.1 px.
+void check_image_point(const FidResult& r, const SquareView& view, int id) {
+  const IdentifiedFiducial* f = find_id(r, id);
+  REQUIRE(f != nullptr);
+  double x, y;
+  kincal::test::fiducial_image_point(view, id, x, y);
+  CHECK(std::fabs(f->x_px.to_double() - x) < 0.1);
+  CHECK(std::fabs(f->y_px.to_double() - y) < 0.1);
+}
+
 }  // namespace
 
 TEST_CASE("FID: every fiducial identified at its image point, at any rotation") {
@@ -55,14 +65,7 @@ TEST_CASE("FID: every fiducial identified at its image point, at any rotation") 
     REQUIRE(identify(label(), r) == FidStatus::kOk);
     CHECK(r.count == 6);
     CHECK(r.orientation_from_marker);
-    for (int id = 1; id <= 6; ++id) {
-      const IdentifiedFiducial* f = find_id(r, id);
-      REQUIRE(f != nullptr);
-      double x, y;
-      kincal::test::fiducial_image_point(view, id, x, y);
-      CHECK(std::fabs(f->x_px.to_double() - x) < 0.1);
-      CHECK(std::fabs(f->y_px.to_double() - y) < 0.1);
-    }
+    for (int id = 1; id <= 6; ++id) check_image_point(r, view, id);
     CHECK(std::fabs(r.y_axis_x.to_double() - a[0]) < 0.01);
     CHECK(std::fabs(r.y_axis_y.to_double() - a[1]) < 0.01);
     CHECK(std::fabs(r.x_axis_x.to_double() + a[1]) < 0.01);
@@ -160,12 +163,5 @@ TEST_CASE("FID: on a strip, the square's own p3 and p5, not the neighbours' fidu
   g_img.rect(13, 67, 18, 72, 40);    // the left neighbour's p5, 9s to the left
   FidResult r;
   REQUIRE(identify(label(), r) == FidStatus::kOk);
-  for (const int id : {3, 5}) {
-    const IdentifiedFiducial* f = find_id(r, id);
-    REQUIRE(f != nullptr);
-    double x, y;
-    kincal::test::fiducial_image_point(view, id, x, y);
-    CHECK(std::fabs(f->x_px.to_double() - x) < 0.1);
-    CHECK(std::fabs(f->y_px.to_double() - y) < 0.1);
-  }
+  for (const int id : {3, 5}) check_image_point(r, view, id);
 }
