@@ -47,9 +47,16 @@ Budget compute_budget(const BusConfig& bus, double load_limit, double measuremen
   BudgetLine m{"measurement (trigger + ARID report by ISO-TP)", measurement_hz, 0, 0};
   m.seconds_per_event += frame(2, false);  // MeasureTrigger
   m.frames = 1;
-  if (bus.fd) {
+  if (bus.fd && report + 2 <= 64) {
     m.seconds_per_event += frame(report + 2, true);  // one escape single frame
     m.frames += 1;
+  } else if (bus.fd) {
+    // First frame (2 PCI bytes, 62 of the report), the host's flow control, consecutive frames
+    // of 63 bytes each (the last one rounded up to an FD length).
+    const std::size_t rest = report - 62, full = rest / 63, last = rest % 63;
+    m.seconds_per_event += frame(64, true) + frame(8, true) + static_cast<double>(full) * frame(64, true) +
+                           (last > 0 ? frame(last + 1, true) : 0.0);
+    m.frames += static_cast<unsigned>(2 + full + (last > 0 ? 1 : 0));
   } else {
     const std::size_t consecutive = (report - 6 + 6) / 7;  // FF carries 6 bytes, each CF 7
     m.seconds_per_event += frame(8, false) * static_cast<double>(1 + consecutive) + frame(8, false);  // + host FC

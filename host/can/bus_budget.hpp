@@ -15,7 +15,10 @@
 // (classic: 4 frames of 8 bytes; CAN FD: 2 frames of 16 bytes). Per measurement: the trigger
 // frame, the report by ISO-TP (the ARID set: ranges, plane, 4 fiducials, camera pose = 77
 // bytes in protocol 3.0; classic: first + consecutive frames padded to 8 bytes, plus the host's
-// flow control; CAN FD: one 64-byte single frame), at 30 Hz. Plus the heartbeat at 10 Hz.
+// flow control; CAN FD, whose frames carry at most 64 bytes: a single frame up to 62 report
+// bytes, else a 64-byte first frame (62), the host's flow control (8 bytes) and consecutive frames
+// of 63, the last rounded up to an FD length: 77 bytes are 64 + 8 + 16), at 30 Hz. Plus the
+// heartbeat at 10 Hz.
 #pragma once
 
 #include <cstddef>

@@ -35,3 +35,15 @@ TEST_CASE("budget: correction rate from the load left by measurements and heartb
   CHECK(b.max_correction_hz >= 500);
   CHECK(compute_budget({1e6, 2e6, true}, 0.5, 30.0).max_correction_hz >= 1500);
 }
+
+TEST_CASE("budget: on CAN FD the 77-byte report is a first frame, a flow control and a consecutive frame") {
+  // An FD frame carries at most 64 bytes: a single frame at most 62 of the report (escape PCI),
+  // a first frame 62, a consecutive frame 63; the host's flow control comes between.
+  const BusConfig bus{1e6, 2e6, true};
+  const Budget b = compute_budget(bus, 0.5, 30.0);
+  REQUIRE(!b.fixed.empty());
+  const BudgetLine& m = b.fixed.front();
+  CHECK(m.frames == 4);  // trigger, first frame, flow control, consecutive frame (1 PCI + 15 bytes)
+  CHECK(m.seconds_per_event == doctest::Approx(classic_frame_time(2, bus).seconds + fd_frame_time(64, bus).seconds +
+                                               fd_frame_time(8, bus).seconds + fd_frame_time(16, bus).seconds));
+}
