@@ -26,14 +26,7 @@ void validate(const StripSpec& s) {
 
 std::array<FiducialRect, 6> square_fiducials(const StripSpec& spec) {
   validate(spec);
-  const double s = spec.fiducial_side_m, far = 7 * s;
-  const Eigen::Vector2d small(s, s);
-  return {{{1, {-far, far}, small},
-           {2, {0, far}, small},
-           {3, {-far, 0}, small},
-           {4, {0, 0}, {s, 2 * s}},
-           {5, {far, 0}, small},
-           {6, {0, -far}, small}}};
+  return target::doty_square_fiducials(spec.fiducial_side_m);
 }
 
 PlanarTarget strip_target(const StripSpec& spec) {

@@ -2,15 +2,7 @@
 // row, each printed dark on light with the fiducial layout that Doty's FID identifies
 // (firmware/core/fiducial_id.hpp), as a PlanarTarget the renderer draws.
 //
-// One square, in its own frame (the frame of fiducial_id.hpp and of the platform's pose
-// report: origin at the centre fiducial p4, x toward p5, y toward p2, z out of the printed side),
-// with s the small fiducial's side (1/4 inch):
-//   p1 corner marker  s x s  at (-7s, +7s)
-//   p2                s x s  at (0, +7s)
-//   p3                s x s  at (-7s, 0)
-//   p4 centre         s x 2s at (0, 0) (its long side along y)
-//   p5                s x s  at (+7s, 0)
-//   p6                s x s  at (0, -7s)
+// One square, in its own frame, carries Doty's fiducial layout (host/target/doty_square.hpp).
 // Strip frame: square k's centre at (k square_m, 0, 0), axes parallel to the squares'
 // (so the strip is read from +z too); squares touch, the strip is square_m wide in y; beyond
 // it the surround's reflectance.
@@ -25,10 +17,11 @@
 #include <Eigen/Geometry>
 
 #include "host/sim/render.hpp"
+#include "host/target/doty_square.hpp"
 
 namespace kincal::sim {
 
-inline constexpr double kInch_m = 0.0254;
+using target::kInch_m;
 
 struct StripSpec {
   int squares = 5;
@@ -39,15 +32,10 @@ struct StripSpec {
   double surround = 0.5;                 // beyond the strip
 };
 
-// A fiducial rectangle in the square frame: centre and full sizes along x and y, metres.
-struct FiducialRect {
-  int id = 0;  // Doty's p1..p6
-  Eigen::Vector2d centre_m;
-  Eigen::Vector2d size_m;
-};
+using target::FiducialRect;
 
-// The six fiducials of one square, in the order the FID reports them (p1..p6): element k - 1
-// is p_k, so their centres load directly into PlatformGeometry::fiducial_square_m.
+// The six fiducials of one square (target::doty_square_fiducials with the spec's side), after
+// the spec's checks.
 std::array<FiducialRect, 6> square_fiducials(const StripSpec& spec);
 
 // The strip as the renderer's target (strip frame).
