@@ -15,6 +15,7 @@
 #include "host/cli/import_command.hpp"
 #include "host/cli/monitor.hpp"
 #include "host/cli/plan_command.hpp"
+#include "host/cli/platform_command.hpp"
 #include "host/cli/predict_command.hpp"
 #include "host/cli/session_command.hpp"
 #include "host/cli/urdf_command.hpp"
@@ -29,6 +30,7 @@ int main(int argc, char** argv) {
   kincal::cli::add_session_command(app, status);
   kincal::cli::add_monitor_command(app, status);
   kincal::cli::add_exercise_command(app, status);
+  kincal::cli::add_platform_command(app, status);
   kincal::cli::add_dbc_command(app, status);
   kincal::cli::add_blobs_command(app, status);
   kincal::cli::add_fiducials_command(app, status);

@@ -1,0 +1,280 @@
+#include "host/session/platform_setup.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <initializer_list>
+#include <sstream>
+#include <vector>
+
+#include "firmware/core/range_plane.hpp"
+#include "host/camera/calibration_file.hpp"
+#include "host/target/doty_square.hpp"
+
+namespace kincal::session {
+
+namespace {
+
+// The firmware's limits for a usable geometry block (firmware/app/platform_measurement.cpp,
+// compared there in float as here).
+constexpr float kBeamAxisTolerance = 1.0e-3f;
+constexpr float kBeamOriginZToleranceM = 1.0e-4f;
+
+// Where a node came from, for messages: "PATH:LINE: KEY".
+class Place {
+ public:
+  Place(const std::string& path, const YAML::Node& node, std::string key)
+      : path_(path), line_(node.Mark().line + 1), key_(std::move(key)) {}
+  [[noreturn]] void fail(const std::string& what) const {
+    throw PlatformSetupError(path_ + ":" + std::to_string(line_) + ": " + key_ + ": " + what);
+  }
+  const std::string& key() const { return key_; }
+
+ private:
+  const std::string& path_;
+  int line_;
+  std::string key_;
+};
+
+std::string list(std::initializer_list<const char*> names) {
+  std::string out;
+  for (const char* n : names) out += (out.empty() ? "" : ", ") + std::string(n);
+  return out;
+}
+
+// The map's keys, each one of `allowed` (else an error naming it and its line).
+void check_keys(const std::string& path, const YAML::Node& map, const std::string& prefix,
+                std::initializer_list<const char*> allowed) {
+  for (auto it = map.begin(); it != map.end(); ++it) {
+    const std::string key = it->first.Scalar();
+    bool known = false;
+    for (const char* a : allowed) known = known || key == a;
+    if (!known) Place(path, it->first, prefix + key).fail("unknown key (expected " + list(allowed) + ")");
+  }
+}
+
+double number(const std::string& path, const YAML::Node& node, const std::string& key) {
+  const Place place(path, node, key);
+  if (!node.IsScalar()) place.fail("not a number");
+  double value = 0;
+  try {
+    value = node.as<double>();
+  } catch (const YAML::Exception&) {
+    place.fail("'" + node.Scalar() + "' is not a number");
+  }
+  if (!std::isfinite(value)) place.fail("'" + node.Scalar() + "' is not finite");
+  return value;
+}
+
+std::array<double, 3> vector3(const std::string& path, const YAML::Node& node, const std::string& key) {
+  if (!node.IsSequence() || node.size() != 3) Place(path, node, key).fail("not a list of three numbers [x, y, z]");
+  std::array<double, 3> v{};
+  for (std::size_t k = 0; k < 3; ++k) {
+    v[k] = number(path, node[k], key + "[" + std::to_string(k) + "]");
+    if (!std::isfinite(static_cast<float>(v[k]))) Place(path, node[k], key).fail("beyond float's range");
+  }
+  return v;
+}
+
+const YAML::Node required(const std::string& path, const YAML::Node& map, const char* key, const std::string& where) {
+  const YAML::Node node = map[key];
+  if (!node) Place(path, map, where).fail(std::string("key '") + key + "' missing");
+  return node;
+}
+
+shared::RangerBeam read_beam(const std::string& path, const YAML::Node& node, const std::string& name) {
+  if (!node.IsMap()) Place(path, node, name).fail("not a map with origin_m and direction");
+  check_keys(path, node, name + ".", {"origin_m", "direction"});
+  const std::array<double, 3> origin = vector3(path, required(path, node, "origin_m", name), name + ".origin_m");
+  const YAML::Node direction_node = required(path, node, "direction", name);
+  const std::array<double, 3> d = vector3(path, direction_node, name + ".direction");
+  const double norm = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  const Place place(path, direction_node, name + ".direction");
+  if (!(norm > 0) || !std::isfinite(norm)) place.fail("zero or unusable length: a beam needs a direction");
+  shared::RangerBeam beam;
+  for (std::size_t k = 0; k < 3; ++k) {
+    beam.origin_m[k] = static_cast<float>(origin[k]);
+    beam.direction[k] = static_cast<float>(d[k] / norm);
+  }
+  // The firmware's test, on the block's floats.
+  if (!(std::fabs(beam.direction[0]) <= kBeamAxisTolerance && std::fabs(beam.direction[1]) <= kBeamAxisTolerance &&
+        beam.direction[2] > 0.0f)) {
+    std::ostringstream s;
+    s << "(" << beam.direction[0] << ", " << beam.direction[1] << ", " << beam.direction[2]
+      << ") normalized is not along the optical axis +z within 1e-3 in x and y: the platform's plane fit needs "
+         "beams parallel to it and would answer kNoParameters";
+    place.fail(s.str());
+  }
+  return beam;
+}
+
+}  // namespace
+
+shared::CameraIntrinsics read_camera_block(const std::string& camera_yaml) {
+  if (!std::filesystem::is_regular_file(camera_yaml)) throw PlatformSetupError(camera_yaml + ": no such file");
+  try {
+    return camera::to_platform(camera::load_camera(camera_yaml));
+  } catch (const PlatformSetupError&) {
+    throw;
+  } catch (const std::exception& e) {
+    const std::string what = e.what();
+    // The loader's messages start with the path; to_platform's name only the parameter.
+    throw PlatformSetupError(what.rfind(camera_yaml, 0) == 0 ? what : camera_yaml + ": " + what);
+  }
+}
+
+shared::PlatformGeometry read_geometry_block(const std::string& path) {
+  if (!std::filesystem::is_regular_file(path)) throw PlatformSetupError(path + ": no such file");
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::ParserException& e) {
+    throw PlatformSetupError(path + ":" + std::to_string(e.mark.line + 1) + ": not valid YAML: " + e.msg);
+  } catch (const YAML::Exception& e) {
+    throw PlatformSetupError(path + ": cannot read: " + e.what());
+  }
+  if (!root.IsMap()) throw PlatformSetupError(path + ": not a map of rangers, fiducial_side_m, square_pitch_m");
+  check_keys(path, root, "", {"rangers", "fiducial_side_m", "square_pitch_m"});
+
+  shared::PlatformGeometry block;
+  const YAML::Node rangers = required(path, root, "rangers", "rangers");
+  if (!rangers.IsSequence() || rangers.size() != shared::kRangers) {
+    Place(path, rangers, "rangers")
+        .fail("must list exactly " + std::to_string(shared::kRangers) + " rangers, found " +
+              (rangers.IsSequence() ? std::to_string(rangers.size()) : std::string("no list")));
+  }
+  for (std::size_t i = 0; i < shared::kRangers; ++i)
+    block.rangers[i] = read_beam(path, rangers[i], "rangers[" + std::to_string(i) + "]");
+  const float z0_m = block.rangers[0].origin_m[2];
+  for (std::size_t i = 1; i < shared::kRangers; ++i) {
+    if (!(std::fabs(block.rangers[i].origin_m[2] - z0_m) <= kBeamOriginZToleranceM)) {
+      std::ostringstream s;
+      s << "z " << block.rangers[i].origin_m[2] << " m differs from rangers[0]'s " << z0_m
+        << " m by more than 0.1 mm: the platform's plane fit needs a common origin z and would answer "
+           "kNoParameters";
+      Place(path, rangers[i]["origin_m"], "rangers[" + std::to_string(i) + "].origin_m").fail(s.str());
+    }
+  }
+  core::RangeSensorLayout layout;
+  for (std::size_t i = 0; i < shared::kRangers; ++i)
+    layout.position_m[i] = core::Vector2<float>(block.rangers[i].origin_m[0], block.rangers[i].origin_m[1]);
+  layout.origin_z_m = z0_m;
+  layout.model = core::RangeModel::along_beam;
+  layout.allow_three_point = false;
+  core::RangePlaneModel plane_model;
+  if (core::prepare_range_plane(layout, plane_model) != core::PlaneStatus::ok) {
+    Place(path, rangers, "rangers")
+        .fail(
+            "three of the origins lie on one line in (x, y): the platform cannot fit a plane to the ranges and "
+            "would answer kNoParameters");
+  }
+
+  double side_m = target::kDotyFiducialSideM;
+  if (const YAML::Node n = root["fiducial_side_m"]) {
+    side_m = number(path, n, "fiducial_side_m");
+    if (!(side_m > 0) || static_cast<float>(side_m) <= 0.0f) Place(path, n, "fiducial_side_m").fail("must be positive");
+  }
+  double pitch_m = target::kDotySquareM;
+  const YAML::Node pitch_node = root["square_pitch_m"];
+  if (pitch_node) pitch_m = number(path, pitch_node, "square_pitch_m");
+  block.square_pitch_m = static_cast<float>(pitch_m);
+  if (block.square_pitch_m != 0.0f) {
+    const auto fail = [&](const std::string& what) {
+      if (pitch_node) Place(path, pitch_node, "square_pitch_m").fail(what);
+      std::ostringstream s;
+      s << path << ": square_pitch_m (default " << pitch_m << "): " << what;
+      throw PlatformSetupError(s.str());
+    };
+    if (!(block.square_pitch_m >= shared::kMinSquarePitchM && block.square_pitch_m <= shared::kMaxSquarePitchM)) {
+      std::ostringstream s;
+      s << pitch_m << " m: must be 0 (one square per frame) or within [" << shared::kMinSquarePitchM << ", "
+        << shared::kMaxSquarePitchM << "] m";
+      fail(s.str());
+    }
+    if (!(pitch_m > 2 * 7.5 * side_m)) {
+      std::ostringstream s;
+      s << pitch_m << " m: neighbouring squares' fiducials would overlap (the pitch must exceed 15 x fiducial_side_m = "
+        << 15 * side_m << " m)";
+      fail(s.str());
+    }
+  }
+
+  const std::array<target::FiducialRect, 6> fiducials = target::doty_square_fiducials(side_m);
+  static_assert(6 <= shared::kMaxFiducials);
+  block.fiducial_count = static_cast<std::uint8_t>(fiducials.size());
+  for (std::size_t k = 0; k < fiducials.size(); ++k) {
+    block.fiducial_square_m[k] = {static_cast<float>(fiducials[k].centre_m.x()),
+                                  static_cast<float>(fiducials[k].centre_m.y()), 0.0f};
+  }
+
+  // The block's own decoder must take it (the platform runs the same).
+  std::array<std::uint8_t, shared::kGeometryBytes> image{};
+  shared::PlatformGeometry decoded;
+  if (shared::encode_block(block, image) != image.size() ||
+      shared::decode_block(image, decoded) != shared::DecodeStatus::kOk)
+    throw PlatformSetupError(path + ": the geometry block does not encode (a value beyond the block's range)");
+  return block;
+}
+
+namespace {
+
+template <class Block>
+std::uint32_t upload_and_verify(can::PlatformClient& client, shared::ParameterBlock id, const Block& block,
+                                const char* name) {
+  std::array<std::uint8_t, shared::kMaxBlockBytes> image{};
+  const std::size_t n = shared::encode_block(block, image);
+  const std::span<const std::uint8_t> sent(image.data(), n);
+  const std::uint32_t sequence = client.upload(id, sent);
+  const std::vector<std::uint8_t> back = client.download(id);
+  if (back.size() != n)
+    throw PlatformSetupError(std::string(name) + " block read back with " + std::to_string(back.size()) +
+                             " bytes, uploaded " + std::to_string(n));
+  for (std::size_t i = 0; i < n; ++i) {
+    if (back[i] != sent[i])
+      throw PlatformSetupError(std::string(name) + " block read back differs from the upload at byte " +
+                               std::to_string(i));
+  }
+  return sequence;
+}
+
+}  // namespace
+
+std::uint32_t load_block(can::PlatformClient& client, const shared::CameraIntrinsics& camera) {
+  return upload_and_verify(client, shared::ParameterBlock::kIntrinsics, camera, "camera");
+}
+
+std::uint32_t load_block(can::PlatformClient& client, const shared::PlatformGeometry& geometry) {
+  return upload_and_verify(client, shared::ParameterBlock::kGeometry, geometry, "geometry");
+}
+
+std::string describe(const shared::CameraIntrinsics& c) {
+  std::ostringstream s;
+  s << "camera: " << c.width_px << " x " << c.height_px << " px, fx " << c.fx_px << " fy " << c.fy_px << " cx "
+    << c.cx_px << " cy " << c.cy_px << " px\n"
+    << "  distortion k1 " << c.k1 << " k2 " << c.k2 << " p1 " << c.p1 << " p2 " << c.p2 << " k3 " << c.k3 << "\n";
+  return s.str();
+}
+
+std::string describe(const shared::PlatformGeometry& g) {
+  std::ostringstream s;
+  s << "geometry: " << int{shared::kRangers} << " rangers (camera frame, m)\n";
+  for (std::size_t i = 0; i < g.rangers.size(); ++i) {
+    const shared::RangerBeam& b = g.rangers[i];
+    s << "  ranger " << i << ": origin (" << b.origin_m[0] << ", " << b.origin_m[1] << ", " << b.origin_m[2]
+      << ") direction (" << b.direction[0] << ", " << b.direction[1] << ", " << b.direction[2] << ")\n";
+  }
+  s << "  fiducials: " << int{g.fiducial_count} << " (square frame, m):";
+  for (std::size_t k = 0; k < g.fiducial_count && k < g.fiducial_square_m.size(); ++k)
+    s << " p" << k + 1 << " (" << g.fiducial_square_m[k][0] << ", " << g.fiducial_square_m[k][1] << ")";
+  // The side, as the firmware recovers it: p5's distance from p4 over 7 (Doty's layout).
+  if (g.fiducial_count >= 5)
+    s << "\n  fiducial side: "
+      << (g.fiducial_square_m[4][0] - g.fiducial_square_m[3][0]) / static_cast<float>(target::kDotyFarSides) << " m";
+  s << "\n  square pitch: " << g.square_pitch_m << " m" << (g.square_pitch_m == 0.0f ? " (one square per frame)" : "")
+    << "\n";
+  return s.str();
+}
+
+}  // namespace kincal::session
