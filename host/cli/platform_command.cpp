@@ -1,10 +1,10 @@
 #include "host/cli/platform_command.hpp"
 
+#include <chrono>
 #include <iostream>
 #include <memory>
 #include <optional>
 #include <string>
-#include <vector>
 
 #include "host/can/platform_client.hpp"
 #include "host/can/socketcan.hpp"
@@ -36,6 +36,7 @@ int load(const PlatformOptions& o) {
 
   can::SocketCanTransport transport(o.interface, {o.fd, true, {}});
   can::PlatformClient client(transport);
+  (void)client.wait_heartbeat(std::chrono::milliseconds(1000));  // a platform is there, of our protocol
   if (camera) {
     const std::uint32_t sequence = session::load_block(client, *camera);
     std::cout << "loaded " << o.camera << " (read back equal, storage sequence " << sequence << ")\n"
@@ -49,32 +50,12 @@ int load(const PlatformOptions& o) {
   return 0;
 }
 
-// The block decoded and described, or why not (printed; false).
-template <class Block>
-bool show_block(can::PlatformClient& client, shared::ParameterBlock id, const char* name) {
-  std::vector<std::uint8_t> image;
-  try {
-    image = client.download(id);
-  } catch (const can::PlatformError& e) {
-    std::cout << name << ": not loaded (" << e.what() << ")\n";
-    return false;
-  }
-  Block block;
-  const shared::DecodeStatus status = shared::decode_block(image, block);
-  if (status != shared::DecodeStatus::kOk) {
-    std::cout << name << ": does not decode (" << can::to_string(status) << ")\n";
-    return false;
-  }
-  std::cout << session::describe(block);
-  return true;
-}
-
 int show(const PlatformOptions& o) {
   can::SocketCanTransport transport(o.interface, {o.fd, true, {}});
   can::PlatformClient client(transport);
-  const bool camera = show_block<shared::CameraIntrinsics>(client, shared::ParameterBlock::kIntrinsics, "camera");
-  const bool geometry = show_block<shared::PlatformGeometry>(client, shared::ParameterBlock::kGeometry, "geometry");
-  return camera && geometry ? 0 : 1;
+  const session::PlatformBlocks blocks = session::read_platform_blocks(client);
+  std::cout << blocks.text;
+  return blocks.complete ? 0 : 1;
 }
 
 // Runs `run` for the subcommand; an exception is its message and exit status 1.

@@ -3,10 +3,12 @@
 #include <yaml-cpp/yaml.h>
 
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <initializer_list>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 #include "firmware/core/range_plane.hpp"
@@ -17,8 +19,8 @@ namespace kincal::session {
 
 namespace {
 
-// The firmware's limits for a usable geometry block (firmware/app/platform_measurement.cpp,
-// compared there in float as here).
+// The firmware's limits for a usable geometry block, private to firmware/app/platform_measurement.cpp
+// (its header states them: 1e-3 per direction component, 0.1 mm), compared there in float as here.
 constexpr float kBeamAxisTolerance = 1.0e-3f;
 constexpr float kBeamOriginZToleranceM = 1.0e-4f;
 
@@ -30,7 +32,6 @@ class Place {
   [[noreturn]] void fail(const std::string& what) const {
     throw PlatformSetupError(path_ + ":" + std::to_string(line_) + ": " + key_ + ": " + what);
   }
-  const std::string& key() const { return key_; }
 
  private:
   const std::string& path_;
@@ -275,6 +276,41 @@ std::string describe(const shared::PlatformGeometry& g) {
   s << "\n  square pitch: " << g.square_pitch_m << " m" << (g.square_pitch_m == 0.0f ? " (one square per frame)" : "")
     << "\n";
   return s.str();
+}
+
+namespace {
+
+// The block described, or why not; false when it is not there.
+template <class Block>
+bool describe_stored(can::PlatformClient& client, shared::ParameterBlock id, const char* name, std::string& text) {
+  std::vector<std::uint8_t> image;
+  try {
+    image = client.download(id);
+  } catch (const can::PlatformError& e) {
+    text += std::string(name) + ": not loaded (" + e.what() + ")\n";
+    return false;
+  }
+  Block block;
+  const shared::DecodeStatus status = shared::decode_block(image, block);
+  if (status != shared::DecodeStatus::kOk) {
+    text += std::string(name) + ": stored, but does not decode (" + can::to_string(status) + ")\n";
+    return false;
+  }
+  text += describe(block);
+  return true;
+}
+
+}  // namespace
+
+PlatformBlocks read_platform_blocks(can::PlatformClient& client) {
+  PlatformBlocks out;
+  (void)client.wait_heartbeat(std::chrono::milliseconds(1000));  // a platform is there, of our protocol
+  const bool camera =
+      describe_stored<shared::CameraIntrinsics>(client, shared::ParameterBlock::kIntrinsics, "camera", out.text);
+  const bool geometry =
+      describe_stored<shared::PlatformGeometry>(client, shared::ParameterBlock::kGeometry, "geometry", out.text);
+  out.complete = camera && geometry;
+  return out;
 }
 
 }  // namespace kincal::session

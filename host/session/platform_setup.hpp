@@ -57,4 +57,14 @@ std::uint32_t load_block(can::PlatformClient& client, const shared::PlatformGeom
 std::string describe(const shared::CameraIntrinsics& camera);
 std::string describe(const shared::PlatformGeometry& geometry);
 
+// What `kincal platform show` prints: the platform's camera and geometry blocks downloaded and
+// described, or for each block it does not hold (or that does not decode), a line saying so and
+// why ("camera: not loaded (...)"). complete: both blocks were there. Throws can::CanError, and
+// can::PlatformError when no heartbeat comes within 1 s or it is of another protocol version.
+struct PlatformBlocks {
+  std::string text;
+  bool complete = false;
+};
+PlatformBlocks read_platform_blocks(can::PlatformClient& client);
+
 }  // namespace kincal::session

@@ -79,6 +79,11 @@ TEST_CASE("kincal platform load's steps: a platform set up from files measures t
   CHECK(before.status == shared::MeasureStatus::kNoParameters);
   CHECK((before.sections & shared::section::kPose) == 0);
   client.set_mode(false, false);
+  // `kincal platform show` says what is missing.
+  const session::PlatformBlocks empty = session::read_platform_blocks(client);
+  CHECK_FALSE(empty.complete);
+  CHECK(empty.text.find("camera: not loaded (") != std::string::npos);
+  CHECK(empty.text.find("geometry: not loaded (") != std::string::npos);
 
   // The files, as the integrator has them.
   const std::string camera_yaml = (test_dir() / "camera.yaml").string();
@@ -111,6 +116,9 @@ TEST_CASE("kincal platform load's steps: a platform set up from files measures t
           shared::DecodeStatus::kOk);
   CHECK(stored.square_pitch_m == geometry.square_pitch_m);
   CHECK(stored.rangers[3].origin_m == geometry.rangers[3].origin_m);
+  const session::PlatformBlocks shown = session::read_platform_blocks(client);
+  CHECK(shown.complete);
+  CHECK(shown.text == session::describe(intrinsics) + session::describe(geometry));
 
   // Now the pose: the camera centre in the square's frame, within a few millimetres of the truth
   // (the reference square is the one the FID found: the nearest of the strip's).
