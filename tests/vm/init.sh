@@ -181,6 +181,26 @@ kincal exercise --can vcan0 --measurements 1 --corrections 10 --correction-timeo
   ok platform_alive_after_unplug || { show /tmp/ex4.txt; bad platform_alive_after_unplug; }
 stop_platform platform_stops_cleanly_after_unplug
 
+# 7. A platform set up from files (kincal platform load / show): with an empty store show names
+#    both blocks missing (exit 1); load uploads the camera calibration and platform.yaml and reads
+#    them back; after a restart (on CAN FD) the platform still holds them.
+step "7: kincal platform load / show"
+rm -f /tmp/store/*
+platform
+kincal platform show --can vcan0 >/tmp/show1.txt 2>&1
+[ $? -eq 1 ] && grep -q "camera: not loaded" /tmp/show1.txt && grep -q "geometry: not loaded" /tmp/show1.txt &&
+  ok platform_show_missing || { show /tmp/show1.txt; bad platform_show_missing; }
+kincal platform load --can vcan0 --camera /vm/camera.yaml --geometry /vm/platform.yaml >/tmp/load.txt 2>&1 &&
+  grep -q "camera: 640 x 480 px, fx 600 fy 600 cx 319.5 cy 239.5 px" /tmp/load.txt &&
+  grep -q "square pitch: 0.1016 m" /tmp/load.txt && ok platform_load || { show /tmp/load.txt; bad platform_load; }
+cat /tmp/load.txt
+stop_platform platform_stops_cleanly_after_load
+platform --fd
+kincal platform show --can vcan0 --fd >/tmp/show2.txt 2>&1 && grep -q "distortion k1 -0.05 k2 0.01" /tmp/show2.txt &&
+  grep -q "ranger 2: origin (-0.05, 0, 0) direction (0, 0, 1)" /tmp/show2.txt &&
+  ok platform_show_after_restart || { show /tmp/show2.txt; bad platform_show_after_restart; }
+stop_platform platform_stops_cleanly_after_show
+
 step done
 echo "VMTEST DONE"
 poweroff -f

@@ -63,6 +63,26 @@ open(sys.argv[1] + "/intrinsics_write.hex", "w").write(hexline(header(0x01) + pa
 open(sys.argv[1] + "/intrinsics_data.txt", "w").write(hexline(header(0x82) + payload) + " \n")
 PY
 
+# The integrator's files for `kincal platform load`: a camera calibration as `kincal camera
+# calibrate` writes it (OpenCV YAML) and a platform.yaml.
+cp "$here/../host/session/platform_example.yaml" "$root/vm/platform.yaml"
+cat >"$root/vm/camera.yaml" <<'YAML'
+%YAML:1.0
+---
+image_width: 640
+image_height: 480
+camera_matrix: !!opencv-matrix
+   rows: 3
+   cols: 3
+   dt: d
+   data: [ 600., 0., 319.5, 0., 600., 239.5, 0., 0., 1. ]
+distortion_coefficients: !!opencv-matrix
+   rows: 1
+   cols: 5
+   dt: d
+   data: [ -0.05, 0.01, 0., 0., 0. ]
+YAML
+
 (cd "$root" && find . | cpio -o -H newc --quiet | gzip -1) >"$work/initramfs.gz"
 log=$work/console.log
 timeout_s=${KINCAL_VM_TIMEOUT:-540}
