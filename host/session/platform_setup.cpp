@@ -227,7 +227,16 @@ std::uint32_t upload_and_verify(can::PlatformClient& client, shared::ParameterBl
   std::array<std::uint8_t, shared::kMaxBlockBytes> image{};
   const std::size_t n = shared::encode_block(block, image);
   const std::span<const std::uint8_t> sent(image.data(), n);
-  const std::uint32_t sequence = client.upload(id, sent);
+  std::uint32_t sequence = 0;
+  try {
+    sequence = client.upload(id, sent);
+  } catch (const can::PlatformError& e) {
+    const bool running = client.last_heartbeat() && client.last_heartbeat()->state == shared::PlatformState::kRunning;
+    throw can::PlatformError(std::string(name) + " block: " + e.what() +
+                             (running ? " (the platform is measuring or correcting: it takes parameters only when "
+                                        "idle; stop the session or the correction stream first)"
+                                      : ""));
+  }
   const std::vector<std::uint8_t> back = client.download(id);
   if (back.size() != n)
     throw PlatformSetupError(std::string(name) + " block read back with " + std::to_string(back.size()) +

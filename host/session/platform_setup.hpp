@@ -18,17 +18,20 @@
 //                              the strip's neighbouring squares; 0 = one square per frame
 // What the platform's measurement needs (firmware/app/platform_measurement.hpp) is checked here,
 // because the platform would take such a block and then answer kNoParameters: every beam's
-// direction (normalized, float) within 1e-3 of +z in x and y (the beams parallel to the optical
-// axis), every origin's z within 0.1 mm of the first ranger's, no three origins on one line in
+// direction (normalized, float) within 1e-3 of +z in x and y and pointing forward (the beams
+// parallel to the optical axis), every origin's z within 0.1 mm of the first ranger's, no three origins on one line in
 // (x, y) (core::prepare_range_plane). square_pitch_m is 0 or within [shared::kMinSquarePitchM,
 // shared::kMaxSquarePitchM], and above 15 s (the squares' fiducials would overlap).
 //
 // Errors: PlatformSetupError, its message naming the file and, for a bad value, the line and the
 // key ("platform.yaml:4: rangers[1].direction: ..."): a missing file, YAML that does not parse,
 // an unknown or missing key, a value that is not a number, not finite or out of range; for a
-// camera file the loader's and to_platform's messages behind the file's name. load_* also throw
-// PlatformSetupError when the block read back differs from the one uploaded, and pass on the
-// client's can::PlatformError (the platform's refusal, or no answer) and can::CanError.
+// camera file the loader's and to_platform's messages behind the file's name. load_block also
+// throws PlatformSetupError when the block read back differs from the one uploaded, and passes on
+// the client's can::PlatformError (the platform's refusal, e.g. kNotIdle while it measures or
+// corrects, or no answer) and can::CanError.
+// Cost: reading a file; load_block is two ISO-TP transfers, each waiting at most the client's
+// timeout (3 s). Thread safety: as the client's (one thread per client).
 #pragma once
 
 #include <cstdint>

@@ -78,6 +78,10 @@ TEST_CASE("kincal platform load's steps: a platform set up from files measures t
   const shared::MeasurementReport before = client.measure(kPoseSections);
   CHECK(before.status == shared::MeasureStatus::kNoParameters);
   CHECK((before.sections & shared::section::kPose) == 0);
+  // A running platform refuses the load, and the message says why.
+  CHECK_THROWS_WITH_AS(session::load_block(client, sim::to_intrinsics(camera)),
+                       doctest::Contains("camera block: parameter upload refused: not idle (the platform is measuring"),
+                       can::PlatformError);
   client.set_mode(false, false);
   // `kincal platform show` says what is missing.
   const session::PlatformBlocks empty = session::read_platform_blocks(client);
