@@ -71,14 +71,15 @@
 //
 // Memory: everything inside the object, about 25.2 KB on the M4 (the VGA labeler workspace of
 // 16 KiB, 64 blobs, the histogram, the range-plane matrices, the planar pose's workspace and
-// correspondences, the strip's pattern and a second pose, copies of the two parameter blocks): construct it statically,
-// never on the stack; the deepest call (finish) needs 1000 bytes of stack (m4.kincal_app.stack). Cost: poll() handles
-// at most kRowsPerPoll rows per call, a bounded slice (16 VGA rows are ~35k instructions on the M4), so the correction
-// stream keeps running between slices; the final call runs FID, the plane fit and the pose (about 60k instructions;
-// twice that and the strip's matching when neighbouring squares are in view). Measured on a VGA calibration-square
-// frame (tests/bench/measurement_m4_bench.cpp): 0.66M instructions for the metering frame, 1.0M for the measurement
-// frame including FID, plane and pose. Thread/ISR safety: main loop only. One measurement at a time (start() while one
-// runs: kBusy).
+// correspondences, the strip's pattern and a second pose, copies of the two parameter blocks):
+// construct it statically, never on the stack; the deepest call (finish) needs 1000 bytes of
+// stack (m4.kincal_app.stack). Cost: poll() handles at most kRowsPerPoll rows per call, a bounded
+// slice (16 VGA rows are ~35k instructions on the M4), so the correction stream keeps running
+// between slices; the final call runs FID, the plane fit and the pose (about 60k instructions;
+// twice that and the strip's matching when other squares are in view). Measured on a VGA strip
+// frame (tests/bench/measurement_m4_bench.cpp): 0.66M instructions for the metering frame,
+// 1.18M for the measurement frame including FID, plane, pose and the strip's pose.
+// Thread/ISR safety: main loop only. One measurement at a time (start() while one runs: kBusy).
 #pragma once
 
 #include <array>
@@ -156,11 +157,12 @@ class MeasurementPipeline {
   void note(shared::MeasureStatus status) noexcept;
   [[gnu::noinline]] bool compute_plane(const std::array<std::uint32_t, shared::kRangers>& ranges_um) noexcept;
   void compute_fiducials_and_pose(shared::MeasurementReport& report) noexcept;
-  // The pose in three steps, kept out of line so that their locals do not stack up under
-  // planar_pose (the app's stack budget, m4.kincal_app.stack).
   core::Vector2<float> fiducial_half_size_m(std::uint8_t id) const noexcept;
-  // The reference square's pose, then the strip's (pose_, pose_squares_); false: no pose.
+  // The reference square's pose, then the strip's (pose_, pose_squares_); false: no pose. Inline
+  // in compute_fiducials_and_pose: one frame less under planar_pose.
   [[gnu::always_inline]] inline bool compute_pose() noexcept;
+  // The pose in steps, kept out of line so that their locals do not stack up under planar_pose
+  // (the app's stack budget, m4.kincal_app.stack).
   [[gnu::noinline]] std::size_t collect_correspondences() noexcept;
   // The fiducials the square's pose predicts (core::match_strip_fiducials: the square's own that
   // FID missed, the strip's other squares' in view) appended to its points; the points in all.

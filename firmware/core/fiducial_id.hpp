@@ -21,7 +21,8 @@
 //      hypothesis, (7s, -7s)): room for perspective. The nearest to the prediction wins, but on
 //      the x axis the nearest to the centre: on Doty's strip the next squares' p3 and p5 lie 2s
 //      beyond this square's p5 and p3, and a centre blob enlarged by blur and threshold puts
-//      the 7s prediction nearer to them (21 of the 200 strip views of platform_pose_bench failed so);
+//      the 7s prediction nearer to them (21 of the 200 strip views of platform_pose_bench
+//      failed so before);
 //   3. the corner marker decides the orientation: found only at the flipped position, both axes
 //      flip (and p2/p6, p3/p5 swap); found at neither, the prior stands (orientation_from_marker
 //      false); found at both, the prior stands and both are rejected as ambiguous;

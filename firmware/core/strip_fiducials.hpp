@@ -9,10 +9,9 @@
 // in unrelated blobs. Here every fiducial of every neighbouring square is predicted from the
 // reference square's pose and the strip's layout, and taken only where a blob of the right size
 // lies at the predicted place: a square cut by the image edge still contributes what is visible,
-// and a blob that is not where the strip says cannot be taken. On a strip Doty's FID can also
-// take a neighbour's p3 or p5, 2 sides beyond the square's own p5 or p3, for the square's (its
-// prediction of 7 sides rests on the centre blob's area); the caller then drops those, solves
-// the pose without them, and finds the right blobs here.
+// and a blob that is not where the strip says cannot be taken. The reference square's own
+// fiducials that FID missed (beyond its search radius under strong perspective) are found the
+// same way.
 //
 // The strip (host/sim/strip.hpp): identical squares in a row along the square frame's x axis,
 // axes parallel, centres pitch_m apart; square n (n = +-1 .. +-kStripMaxOffset from the
@@ -27,15 +26,17 @@
 // the nearest blob (best centroid) that is not taken, is complete and does not touch the border
 // (Blob::flags), whose area is within [options.area_ratio_min, options.area_ratio_max] x A, and
 // lies within options.gate_sides x sqrt(A) of the prediction (the strip's fiducials are at least
-// 7 sides apart, so a correct prediction never reaches the next one's blob). It is taken (its
-// flag set in blob_taken) and appended to `points` as the fiducial's correspondence in the
-// REFERENCE square's frame: target (centre + (n pitch, 0)), half size, and the blob's centroid.
-// The caller solves planar_pose on them with the reference square's own points.
+// 2 sides apart, a square's p5 and the next one's p3, so one side around a correct prediction
+// reaches no other fiducial's blob). It is taken (its flag set in blob_taken) and appended to
+// `points` as the fiducial's correspondence in the REFERENCE square's frame: target (centre +
+// (n pitch, 0)), half size, and the blob's centroid. The caller solves planar_pose on them with
+// the reference square's own points.
 //
-// Bounds: at most (2 kStripMaxOffset + 1) x pattern.size() predictions (kMaxFiducials = 8 per square)
-// against blobs.size() blobs; output stops when `points` is full. Cost on the M4: one projection
-// per prediction plus four per one in the frame, and a pass over the blobs for each.
-// Numerics: float, fixed order: the same bits natively and on the M4. No heap; pure.
+// Bounds: at most (2 kStripMaxOffset + 1) x pattern.size() predictions (at most
+// kStripMaxPatternFiducials per square) against blobs.size() blobs; output stops when `points`
+// is full. Cost on the M4: one projection per prediction plus four per one in the frame, and a
+// pass over the blobs for each. Numerics: float, fixed order: the same bits natively and on the
+// M4. No heap; pure.
 #pragma once
 
 #include <cstddef>
