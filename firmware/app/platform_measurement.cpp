@@ -9,8 +9,6 @@ namespace kincal::app {
 
 namespace {
 
-constexpr float kBeamAxisTolerance = 1.0e-3f;  // beam direction components off the optical axis
-constexpr float kBeamOriginZToleranceM = 1.0e-4f;
 constexpr float kSquarePlanarToleranceM = 1.0e-4f;  // fiducial z in the square frame
 constexpr std::uint8_t kCentreFiducialId = 4;
 constexpr std::uint32_t kMinBlobAreaPx = 4;  // single pixels and pairs are noise, not fiducials or a beacon
@@ -51,10 +49,9 @@ std::uint16_t pixel_q6(core::q16_16 v) {
   return static_cast<std::uint16_t>(q6 > 0xFFFFu ? 0xFFFFu : q6);
 }
 
-// The fiducials' side s in the geometry block: the perimeter fiducials p2, p3, p5, p6 are
-// FidModel::perimeter_distance_sides s from the centre p4 (fiducial_id.hpp); their mean distance.
-// 0 when the block has not the centre and at least one of them.
-float fiducial_side_m(const shared::PlatformGeometry& g) {
+}  // namespace
+
+float fiducial_side_m(const shared::PlatformGeometry& g) noexcept {
   if (g.fiducial_count < kCentreFiducialId) return 0.0f;
   const auto& centre = g.fiducial_square_m[kCentreFiducialId - 1u];
   float sum_m = 0.0f;
@@ -71,7 +68,24 @@ float fiducial_side_m(const shared::PlatformGeometry& g) {
   return side_m > 0.0f && side_m < 1.0f ? side_m : 0.0f;
 }
 
-}  // namespace
+RangerLayoutCheck prepare_ranger_plane(const shared::PlatformGeometry& g, core::RangePlaneModel& model) noexcept {
+  core::RangeSensorLayout layout;
+  const float z0_m = g.rangers[0].origin_m[2];
+  for (std::size_t i = 0; i < shared::kRangers; ++i) {
+    const shared::RangerBeam& beam = g.rangers[i];
+    const auto ranger = static_cast<std::uint8_t>(i);
+    if (!(std::fabs(beam.direction[0]) <= kBeamAxisTolerance && std::fabs(beam.direction[1]) <= kBeamAxisTolerance &&
+          beam.direction[2] > 0.0f))
+      return {RangerLayoutStatus::kBeamOffAxis, ranger};
+    if (!(std::fabs(beam.origin_m[2] - z0_m) <= kBeamOriginZToleranceM)) return {RangerLayoutStatus::kOriginZ, ranger};
+    layout.position_m[i] = core::Vector2<float>(beam.origin_m[0], beam.origin_m[1]);
+  }
+  layout.origin_z_m = z0_m;
+  layout.model = core::RangeModel::along_beam;
+  layout.allow_three_point = false;
+  if (core::prepare_range_plane(layout, model) != core::PlaneStatus::ok) return {RangerLayoutStatus::kNoPlane, 0};
+  return {};
+}
 
 void report_covariance(const core::PlanarPose& pose, std::array<float, 36>& covariance) noexcept {
   // planar_pose's covariance is of the twist [dt; dphi] of camera_T_square in the camera frame
@@ -169,21 +183,7 @@ bool MeasurementPipeline::begin_labelling() noexcept {
 bool MeasurementPipeline::label_row() noexcept { return labeler_.commit_row(width_px_) == core::LabelStatus::kOk; }
 
 bool MeasurementPipeline::compute_plane(const std::array<std::uint32_t, shared::kRangers>& ranges_um) noexcept {
-  core::RangeSensorLayout layout;
-  const float z0_m = geometry_.rangers[0].origin_m[2];
-  for (std::size_t i = 0; i < shared::kRangers; ++i) {
-    const shared::RangerBeam& beam = geometry_.rangers[i];
-    if (!(std::fabs(beam.direction[0]) <= kBeamAxisTolerance && std::fabs(beam.direction[1]) <= kBeamAxisTolerance &&
-          beam.direction[2] > 0.0f && std::fabs(beam.origin_m[2] - z0_m) <= kBeamOriginZToleranceM)) {
-      note(shared::MeasureStatus::kNoParameters);
-      return false;
-    }
-    layout.position_m[i] = core::Vector2<float>(beam.origin_m[0], beam.origin_m[1]);
-  }
-  layout.origin_z_m = z0_m;
-  layout.model = core::RangeModel::along_beam;
-  layout.allow_three_point = false;
-  if (core::prepare_range_plane(layout, plane_model_) != core::PlaneStatus::ok) {
+  if (prepare_ranger_plane(geometry_, plane_model_).status != RangerLayoutStatus::kOk) {
     note(shared::MeasureStatus::kNoParameters);
     return false;
   }

@@ -106,6 +106,29 @@ constexpr std::uint16_t range_raw_from_um(std::uint32_t range_um) {
   return raw >= shared::kNoEcho ? shared::kNoEcho : static_cast<std::uint16_t>(raw);
 }
 
+// What the plane fit needs of the geometry block's rangers (the `plane` section above), checked
+// here for the platform and for the host that writes the block (host/session/platform_setup.hpp).
+inline constexpr float kBeamAxisTolerance = 1.0e-3f;      // each direction's x and y, off the optical axis
+inline constexpr float kBeamOriginZToleranceM = 1.0e-4f;  // each origin's z from the first ranger's
+enum class RangerLayoutStatus : std::uint8_t {
+  kOk,
+  kBeamOffAxis,  // a direction's x or y beyond kBeamAxisTolerance, or z not positive
+  kOriginZ,      // an origin's z more than kBeamOriginZToleranceM from the first ranger's
+  kNoPlane,      // the origins give no least-squares plane (three on one line in x, y)
+};
+struct RangerLayoutCheck {
+  RangerLayoutStatus status = RangerLayoutStatus::kOk;
+  std::uint8_t ranger = 0;  // the first ranger that fails (kBeamOffAxis, kOriginZ)
+};
+// The rangers checked in order (each beam's direction, then its origin's z), then the along-beam
+// plane model prepared (core::prepare_range_plane, no three-point fit); `model` is usable on kOk.
+RangerLayoutCheck prepare_ranger_plane(const shared::PlatformGeometry& geometry, core::RangePlaneModel& model) noexcept;
+
+// The fiducials' side s in the geometry block: the perimeter fiducials p2, p3, p5, p6 are
+// FidModel::perimeter_distance_sides s from the centre p4 (fiducial_id.hpp); their mean distance.
+// 0 when the block has not the centre and at least one of them.
+float fiducial_side_m(const shared::PlatformGeometry& geometry) noexcept;
+
 // The covariance of the reported pose (measurement_report.hpp: square_T_camera's translation and
 // its rotation error delta, row-major 6 x 6) from planar_pose's covariance of its camera-frame
 // twist: first order, exact for the twist's definition. Plain float loops (the same bits on both
@@ -166,6 +189,8 @@ class MeasurementPipeline {
   [[gnu::noinline]] std::size_t collect_correspondences() noexcept;
   // The fiducials the square's pose predicts (core::match_strip_fiducials: the square's own that
   // FID missed, the strip's other squares' in view) appended to its points; the points in all.
+  // The squares it matched go to strip_squares_matched_, not a returned struct: 16 bytes less of
+  // stack under planar_pose (m4.kincal_app.stack).
   [[gnu::noinline]] std::size_t match_strip(std::size_t square_points) noexcept;
   [[gnu::noinline]] bool prepare_prior() noexcept;  // the plane prior, if there is a plane
   [[gnu::noinline]] bool solve_pose(std::size_t point_count) noexcept;

@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "firmware/app/platform_measurement.hpp"
 #include "firmware/core/range_plane.hpp"
 #include "host/camera/calibration_file.hpp"
 #include "host/target/doty_square.hpp"
@@ -18,11 +19,6 @@
 namespace kincal::session {
 
 namespace {
-
-// The firmware's limits for a usable geometry block, private to firmware/app/platform_measurement.cpp
-// (its header states them: 1e-3 per direction component, 0.1 mm), compared there in float as here.
-constexpr float kBeamAxisTolerance = 1.0e-3f;
-constexpr float kBeamOriginZToleranceM = 1.0e-4f;
 
 // Where a node came from, for messages: "PATH:LINE: KEY".
 class Place {
@@ -92,23 +88,45 @@ shared::RangerBeam read_beam(const std::string& path, const YAML::Node& node, co
   const YAML::Node direction_node = required(path, node, "direction", name);
   const std::array<double, 3> d = vector3(path, direction_node, name + ".direction");
   const double norm = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-  const Place place(path, direction_node, name + ".direction");
-  if (!(norm > 0) || !std::isfinite(norm)) place.fail("zero or unusable length: a beam needs a direction");
+  if (!(norm > 0) || !std::isfinite(norm))
+    Place(path, direction_node, name + ".direction").fail("zero or unusable length: a beam needs a direction");
   shared::RangerBeam beam;
   for (std::size_t k = 0; k < 3; ++k) {
     beam.origin_m[k] = static_cast<float>(origin[k]);
     beam.direction[k] = static_cast<float>(d[k] / norm);
   }
-  // The firmware's test, on the block's floats.
-  if (!(std::fabs(beam.direction[0]) <= kBeamAxisTolerance && std::fabs(beam.direction[1]) <= kBeamAxisTolerance &&
-        beam.direction[2] > 0.0f)) {
-    std::ostringstream s;
-    s << "(" << beam.direction[0] << ", " << beam.direction[1] << ", " << beam.direction[2]
-      << ") normalized is not along the optical axis +z within 1e-3 in x and y: the platform's plane fit needs "
-         "beams parallel to it and would answer kNoParameters";
-    place.fail(s.str());
-  }
   return beam;
+}
+
+// The platform's own judgement of the rangers (app::prepare_ranger_plane, on the block's floats),
+// as an error at the offending key: the platform would take the block and answer kNoParameters.
+void check_rangers(const std::string& path, const YAML::Node& rangers, const shared::PlatformGeometry& block) {
+  core::RangePlaneModel model;
+  const app::RangerLayoutCheck check = app::prepare_ranger_plane(block, model);
+  const std::size_t i = check.ranger;
+  const std::string name = "rangers[" + std::to_string(i) + "]";
+  std::ostringstream s;
+  switch (check.status) {
+    case app::RangerLayoutStatus::kOk:
+      return;
+    case app::RangerLayoutStatus::kBeamOffAxis: {
+      const auto& d = block.rangers[i].direction;
+      s << "(" << d[0] << ", " << d[1] << ", " << d[2]
+        << ") normalized is not along the optical axis +z within 1e-3 in x and y: the "
+           "platform's plane fit needs beams parallel to it and would answer kNoParameters";
+      Place(path, rangers[i]["direction"], name + ".direction").fail(s.str());
+    }
+    case app::RangerLayoutStatus::kOriginZ:
+      s << "z " << block.rangers[i].origin_m[2] << " m differs from rangers[0]'s " << block.rangers[0].origin_m[2]
+        << " m by more than 0.1 mm: the platform's plane fit needs a common origin z "
+           "and would answer kNoParameters";
+      Place(path, rangers[i]["origin_m"], name + ".origin_m").fail(s.str());
+    case app::RangerLayoutStatus::kNoPlane:
+      Place(path, rangers, "rangers")
+          .fail(
+              "three of the origins lie on one line in (x, y): the platform cannot fit a plane to the ranges and "
+              "would answer kNoParameters");
+  }
 }
 
 }  // namespace
@@ -148,29 +166,7 @@ shared::PlatformGeometry read_geometry_block(const std::string& path) {
   }
   for (std::size_t i = 0; i < shared::kRangers; ++i)
     block.rangers[i] = read_beam(path, rangers[i], "rangers[" + std::to_string(i) + "]");
-  const float z0_m = block.rangers[0].origin_m[2];
-  for (std::size_t i = 1; i < shared::kRangers; ++i) {
-    if (!(std::fabs(block.rangers[i].origin_m[2] - z0_m) <= kBeamOriginZToleranceM)) {
-      std::ostringstream s;
-      s << "z " << block.rangers[i].origin_m[2] << " m differs from rangers[0]'s " << z0_m
-        << " m by more than 0.1 mm: the platform's plane fit needs a common origin z and would answer "
-           "kNoParameters";
-      Place(path, rangers[i]["origin_m"], "rangers[" + std::to_string(i) + "].origin_m").fail(s.str());
-    }
-  }
-  core::RangeSensorLayout layout;
-  for (std::size_t i = 0; i < shared::kRangers; ++i)
-    layout.position_m[i] = core::Vector2<float>(block.rangers[i].origin_m[0], block.rangers[i].origin_m[1]);
-  layout.origin_z_m = z0_m;
-  layout.model = core::RangeModel::along_beam;
-  layout.allow_three_point = false;
-  core::RangePlaneModel plane_model;
-  if (core::prepare_range_plane(layout, plane_model) != core::PlaneStatus::ok) {
-    Place(path, rangers, "rangers")
-        .fail(
-            "three of the origins lie on one line in (x, y): the platform cannot fit a plane to the ranges and "
-            "would answer kNoParameters");
-  }
+  check_rangers(path, rangers, block);
 
   double side_m = target::kDotyFiducialSideM;
   if (const YAML::Node n = root["fiducial_side_m"]) {
@@ -278,10 +274,8 @@ std::string describe(const shared::PlatformGeometry& g) {
   s << "  fiducials: " << int{g.fiducial_count} << " (square frame, m):";
   for (std::size_t k = 0; k < g.fiducial_count && k < g.fiducial_square_m.size(); ++k)
     s << " p" << k + 1 << " (" << g.fiducial_square_m[k][0] << ", " << g.fiducial_square_m[k][1] << ")";
-  // The side, as the firmware recovers it: p5's distance from p4 over 7 (Doty's layout).
-  if (g.fiducial_count >= 5)
-    s << "\n  fiducial side: "
-      << (g.fiducial_square_m[4][0] - g.fiducial_square_m[3][0]) / static_cast<float>(target::kDotyFarSides) << " m";
+  // The side as the platform recovers it.
+  if (const float side_m = app::fiducial_side_m(g); side_m > 0.0f) s << "\n  fiducial side: " << side_m << " m";
   s << "\n  square pitch: " << g.square_pitch_m << " m" << (g.square_pitch_m == 0.0f ? " (one square per frame)" : "")
     << "\n";
   return s.str();

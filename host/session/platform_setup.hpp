@@ -16,12 +16,13 @@
 //                              positions follow (host/target/doty_square.hpp)
 //   square_pitch_m: 0.1016     optional, default Doty's 4 inch: centre-to-centre distance of
 //                              the strip's neighbouring squares; 0 = one square per frame
-// What the platform's measurement needs (firmware/app/platform_measurement.hpp) is checked here,
-// because the platform would take such a block and then answer kNoParameters: every beam's
-// direction (normalized, float) within 1e-3 of +z in x and y and pointing forward (the beams
-// parallel to the optical axis), every origin's z within 0.1 mm of the first ranger's, no three
-// origins on one line in (x, y) (core::prepare_range_plane). square_pitch_m is 0 or within [shared::kMinSquarePitchM,
-// shared::kMaxSquarePitchM], and above 15 s (the squares' fiducials would overlap).
+// What the platform's measurement needs is checked here by the platform's own test
+// (app::prepare_ranger_plane, firmware/app/platform_measurement.hpp), because the platform would
+// take such a block and then answer kNoParameters: every beam's direction (normalized, float)
+// within 1e-3 of +z in x and y and pointing forward (the beams parallel to the optical axis),
+// every origin's z within 0.1 mm of the first ranger's, no three origins on one line in (x, y).
+// square_pitch_m is 0 or within [shared::kMinSquarePitchM, shared::kMaxSquarePitchM], and above
+// 15 s (the squares' fiducials would overlap).
 //
 // Errors: PlatformSetupError, its message naming the file and, for a bad value, the line and the
 // key ("platform.yaml:4: rangers[1].direction: ..."): a missing file, YAML that does not parse,
