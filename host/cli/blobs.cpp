@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "host/cli/colour_table.hpp"
+#include "host/cli/number_options.hpp"
 #include "host/cli/threshold_option.hpp"
 #include "host/files/input_limits.hpp"
 #include "host/vision/blob_json.hpp"
@@ -88,7 +89,7 @@ void add_blobs_command(CLI::App& app, int& status) {
       ->capture_default_str();
   cmd->add_option("--min-area", options->min_area_px, "Drop blobs with fewer pixels")->capture_default_str();
   cmd->add_option("--max-blobs", options->max_blobs, "Fail (exit 1) rather than print more blobs than this per image")
-      ->check(CLI::Range(1, 1 << 20))
+      ->check(whole_in(1, 1 << 20))
       ->capture_default_str();
   cmd->add_flag("--no-refine", options->no_refine, "Skip the Gaussian-window refinement of spot-like blobs");
   cmd->callback([options, &status] {

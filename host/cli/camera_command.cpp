@@ -61,7 +61,7 @@ int run_calibrate(const CameraArgs& a) {
     camera::save_camera_ros(a.out, c.camera, a.camera_name);
   else
     camera::save_camera(a.out, c, board.text());
-  std::cout << "written: " << a.out << "\n";
+  std::cout << "wrote " << a.out << "\n";
   return 0;
 }
 
@@ -92,7 +92,7 @@ int run_stereo(const CameraArgs& a) {
   const camera::StereoCalibration s = camera::calibrate_stereo(left, right, left_camera, right_camera, options);
   std::cout << camera::describe(s);
   camera::save_stereo(a.out, s);
-  std::cout << "written: " << a.out << "\n";
+  std::cout << "wrote " << a.out << "\n";
   return 0;
 }
 
@@ -122,7 +122,7 @@ int run_hand_eye(const CameraArgs& a) {
   const camera::HandEyeCalibration h = camera::calibrate_hand_eye(views, cam, options);
   std::cout << camera::describe(h);
   camera::save_hand_eye(a.out, h);
-  std::cout << "written: " << a.out << "\n";
+  std::cout << "wrote " << a.out << "\n";
   return 0;
 }
 

@@ -6,6 +6,7 @@
 #include "host/can/platform_client.hpp"
 #include "host/can/scenario.hpp"
 #include "host/can/socketcan.hpp"
+#include "host/cli/number_options.hpp"
 
 namespace kincal::cli {
 
@@ -30,10 +31,10 @@ void add_exercise_command(CLI::App& app, int& status) {
   cmd->add_flag("--fd", o->fd, "CAN FD: ISO-TP frames of 64 bytes and the FD joint stream");
   cmd->add_flag("--no-padding", o->no_padding, "do not pad ISO-TP frames");
   cmd->add_option("--log", o->log, "write the session as a candump -L log");
-  cmd->add_option("--measurements", o->measurements, "measurements to run")->check(CLI::Range(0, 100000));
-  cmd->add_option("--corrections", o->corrections, "correction cycles to run")->check(CLI::Range(0, 1000000));
+  cmd->add_option("--measurements", o->measurements, "measurements to run")->check(whole_in(0, 100000));
+  cmd->add_option("--corrections", o->corrections, "correction cycles to run")->check(whole_in(0, 1000000));
   cmd->add_option("--correction-timeout-ms", o->correction_timeout_ms, "longest wait for one corrected joint state")
-      ->check(CLI::Range(1, 60000))
+      ->check(whole_in(1, 60000))
       ->capture_default_str();
   cmd->callback([o, &status] {
     try {

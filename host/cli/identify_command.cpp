@@ -1,9 +1,11 @@
 #include "host/cli/identify_command.hpp"
 
+#include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 #include "host/cli/model_option.hpp"
@@ -15,6 +17,7 @@
 #include "host/identify/plausibility.hpp"
 #include "host/model/dataset.hpp"
 #include "host/model/model_file.hpp"
+#include "host/model/ur_kinematics.hpp"
 #include "host/model/urdf.hpp"
 
 namespace kincal::cli {
@@ -28,6 +31,95 @@ struct IdentifyArgs {
   double sigma_m = 0.0, orientation_sigma_deg = 0.0, outlier_probability = 1e-3, max_rejected_fraction = 0.05;
   bool no_robust = false, no_model_error = false, accept_implausible = false;
 };
+
+std::string stats_line(const char* what, const identify::AccuracyStats& s) {
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  out.precision(4);
+  out << "  " << what << ": position mean " << s.mean_m * 1e3 << " mm, rms " << s.rms_m * 1e3 << " mm, max "
+      << s.max_m * 1e3 << " mm";
+  if (s.has_orientation) {
+    const double d = 180.0 / std::numbers::pi;
+    out << "; orientation mean " << s.mean_rad * d << " deg, rms " << s.rms_rad * d << " deg, max " << s.max_rad * d
+        << " deg";
+  }
+  return out.str() + "\n";
+}
+
+// Where the user stands: the registered nominal beside the calibrated model, on the training
+// data and on held-out data, and a one-line verdict.
+std::string summary(const IdentifyArgs& a, const identify::IdentifyResult& result,
+                    const std::optional<identify::IdentifyResult>& registered, const model::Dataset* held_out) {
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  out.precision(3);
+  const char* const kBaseline = "nominal, registered";  // base (and tool) fitted, geometry nominal
+  const char* const kCalibrated = "calibrated         ";
+  if (registered) {
+    out << "baseline: the nominal geometry with only the registration and the tool fitted ("
+        << registered->identifiability.identified.size() << " parameters)\n";
+    out << "training (" << a.data << ", " << result.residuals.count << " measurements used):\n"
+        << stats_line(kBaseline, registered->residuals) << stats_line(kCalibrated, result.residuals);
+  }
+  double before = registered ? registered->residuals.rms_m : 0.0, after = result.residuals.rms_m;
+  if (held_out != nullptr) {
+    const identify::AccuracyStats calibrated = identify::accuracy(result.model, *held_out);
+    out << "validation (" << a.validate << ", " << calibrated.count << " held-out measurements):\n";
+    if (registered) {
+      const identify::AccuracyStats baseline = identify::accuracy(registered->model, *held_out);
+      out << stats_line(kBaseline, baseline);
+      before = baseline.rms_m;
+    }
+    out << stats_line(kCalibrated, calibrated);
+    after = calibrated.rms_m;
+  }
+  if (!registered) return out.str();
+  out << "verdict: ";
+  char numbers[96];
+  std::snprintf(numbers, sizeof numbers, "(%.3f mm RMS registered nominal, %.3f mm calibrated)", before * 1e3,
+                after * 1e3);
+  if (held_out == nullptr) {
+    out << "no held-out data to judge by " << numbers
+        << ": the training residuals flatter a larger model; give --validate with measurements not used here\n";
+  } else if (after < before / 1.2) {
+    out.precision(1);
+    out << "the calibration predicts held-out positions " << before / after << " times better " << numbers << '\n';
+  } else if (after <= before * 1.05) {
+    out << "the calibration gains little on held-out data " << numbers
+        << ": the arm is close to its nominal geometry, or the data cannot tell more (try more, better spread "
+           "configurations: kincal plan)\n";
+  } else {
+    out << "the calibration is WORSE on held-out data " << numbers
+        << ": too few or badly spread measurements for its parameters (kincal plan; --params for a smaller "
+           "model), or the held-out data differ\n";
+  }
+  return out.str();
+}
+
+// What to do with the calibrated model next.
+std::string next_steps(const IdentifyArgs& a, const identify::IdentifyResult& result) {
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  out.precision(3);
+  out << "next:\n";
+  if (a.urdf.empty()) {
+    out << "  kincal urdf --model " << a.out
+        << (model::is_urdf_path(a.model.path) ? " --original " + a.model.path : std::string()) << " -o "
+        << "calibrated.urdf    # for a ROS stack\n";
+  }
+  try {
+    model::ur_kinematics(result.model);  // refuses a model that is not a UR arm
+    out << "  kincal export --format ur-kinematics --model " << a.out
+        << " -o ur_calibration.yaml    # the UR description's kinematics_params_file\n";
+  } catch (const model::InputError&) {
+  }
+  out << "  kincal predict --model " << a.out << " --joints q.csv    # where the calibrated arm puts its tool\n";
+  const model::Transform& tool = result.model.flange_T_tool;
+  out << "  on the controller, the tool (TCP) from the last joint's frame (flange_T_tool): x "
+      << tool.translation.x() * 1e3 << ", y " << tool.translation.y() * 1e3 << ", z " << tool.translation.z() * 1e3
+      << " mm\n";
+  return out.str();
+}
 
 int run_identify(const IdentifyArgs& a) {
   identify::IdentifyOptions options;
@@ -52,29 +144,17 @@ int run_identify(const IdentifyArgs& a) {
       identify::require_plausible(nominal, data, "--accept-implausible", {.noise_given = a.sigma_m > 0});
     identify::IdentifyResult result = identify::identify(nominal, data, options);
     std::cout << "kincal identify: " << nominal.name << " from " << a.data << '\n' << identify::format_report(result);
+    // The baseline: the nominal geometry registered to the device, its tool fitted.
+    std::optional<identify::IdentifyResult> registered;
+    if (a.params.empty() && result.identifiability.identified.size() > 0)
+      registered = identify::identify_registration(nominal, data, options, result);
+    std::optional<model::Dataset> held_out;
     if (!a.validate.empty()) {
-      const model::Dataset held_out = model::read_dataset(a.validate);
-      model::check_joint_count(nominal, held_out.joint_count, held_out.source);
-      const identify::AccuracyStats before = identify::accuracy(nominal, held_out);
-      const identify::AccuracyStats after = identify::accuracy(result.model, held_out);
-      const auto line = [](const char* what, const identify::AccuracyStats& s) {
-        std::ostringstream out;
-        out.setf(std::ios::fixed);
-        out.precision(4);
-        out << "  " << what << ": position mean " << s.mean_m * 1e3 << " mm, rms " << s.rms_m * 1e3 << " mm, max "
-            << s.max_m * 1e3 << " mm";
-        if (s.has_orientation) {
-          const double d = 180.0 / std::numbers::pi;
-          out << "; orientation mean " << s.mean_rad * d << " deg, rms " << s.rms_rad * d << " deg, max "
-              << s.max_rad * d << " deg";
-        }
-        return out.str();
-      };
-      std::cout << "validation on " << a.validate << " (" << after.count << " held-out measurements):\n"
-                << line("nominal   ", before) << '\n'
-                << line("calibrated", after) << '\n';
-      result.model.calibration->validation_rms_m = after.rms_m;
+      held_out = model::read_dataset(a.validate);
+      model::check_joint_count(nominal, held_out->joint_count, held_out->source);
     }
+    std::cout << summary(a, result, registered, held_out ? &*held_out : nullptr);
+    if (held_out) result.model.calibration->validation_rms_m = identify::accuracy(result.model, *held_out).rms_m;
     model::save_model(result.model, a.out);
     std::cout << "wrote " << a.out << '\n';
     if (!a.urdf.empty()) {
@@ -92,6 +172,7 @@ int run_identify(const IdentifyArgs& a) {
         std::cout << "wrote " << a.urdf << '\n';
       }
     }
+    std::cout << next_steps(a, result);
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "kincal identify: " << e.what() << '\n';

@@ -5,6 +5,7 @@
 #include "host/cli/blobs.hpp"
 #include "host/cli/camera_command.hpp"
 #include "host/cli/colour_table.hpp"
+#include "host/cli/command_line.hpp"
 #include "host/cli/dbc_command.hpp"
 #include "host/cli/demo.hpp"
 #include "host/cli/discover_command.hpp"
@@ -24,6 +25,7 @@ int main(int argc, char** argv) {
   CLI::App app{"kincal: find the true kinematic parameters of a serial robot and correct it online", "kincal"};
   app.set_version_flag("--version", KINCAL_VERSION);
   app.require_subcommand(1);
+  app.footer("Run 'kincal COMMAND --help' for a command's options.\n");
 
   int status = 0;
   kincal::cli::add_demo_command(app, status);
@@ -45,6 +47,6 @@ int main(int argc, char** argv) {
   kincal::cli::add_export_command(app, status);
   kincal::cli::add_camera_command(app, status);
 
-  CLI11_PARSE(app, argc, argv);
+  if (const auto stop = kincal::cli::parse_command_line(app, argc, argv)) return *stop;
   return status;
 }

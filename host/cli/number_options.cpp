@@ -37,6 +37,18 @@ CLI::Validator finite_in(double lower, double upper) {
   return finite_check(lower, upper, false, "NUMBER in [" + readable(lower) + ", " + readable(upper) + "]");
 }
 
+CLI::Validator whole_in(long long lower, long long upper) {
+  const std::string range = "[" + std::to_string(lower) + ", " + std::to_string(upper) + "]";
+  return CLI::Validator(
+      [=](std::string& input) -> std::string {
+        long long v = 0;
+        if (!CLI::detail::lexical_cast(input, v)) return "'" + input + "' is not a whole number in " + range;
+        if (v < lower || v > upper) return input + " is out of range: must be in " + range;
+        return {};
+      },
+      "INTEGER in " + range);
+}
+
 CLI::Validator finite_positive() {
   return finite_check(0.0, std::numeric_limits<double>::max(), true, "finite NUMBER > 0");
 }

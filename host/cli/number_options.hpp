@@ -9,6 +9,8 @@ namespace kincal::cli {
 
 // A finite number in [lower, upper].
 CLI::Validator finite_in(double lower, double upper);
+// A whole number in [lower, upper] (CLI::Range says "Value abc not in range" for a word).
+CLI::Validator whole_in(long long lower, long long upper);
 // A finite number > 0.
 CLI::Validator finite_positive();
 // A finite number >= 0.

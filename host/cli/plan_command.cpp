@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "host/cli/model_option.hpp"
+#include "host/cli/number_options.hpp"
 #include "host/files/output_file.hpp"
 #include "host/identify/plan.hpp"
 #include "host/model/model_file.hpp"
@@ -73,9 +74,9 @@ void add_plan_command(CLI::App& app, int& status) {
   auto a = std::make_shared<PlanArgs>();
   auto* cmd = app.add_subcommand("plan", "Propose calibration configurations that maximize observability");
   add_model_option(*cmd, a->model, "model with joint limits");
-  cmd->add_option("-n,--count", a->count, "number of configurations (default 30)")->check(CLI::Range(1, 100000));
+  cmd->add_option("-n,--count", a->count, "number of configurations (default 30)")->check(whole_in(1, 100000));
   cmd->add_option("--pool", a->pool, "random candidate configurations to choose from (default 1000)")
-      ->check(CLI::Range(1, 1000000));
+      ->check(whole_in(1, 1000000));
   cmd->add_option("--seed", a->seed, "random seed (default 1)");
   cmd->add_flag("--orientation", a->orientation, "plan for pose measurements (tool frame) instead of points");
   cmd->add_option("-o,--out", a->out, "output CSV q1..qN (default: standard output)");

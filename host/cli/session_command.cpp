@@ -432,7 +432,7 @@ int run(const SessionArgs& a) {
     r.runs.push_back(session::report_run(d, start, data, calibration,
                                          rig ? std::optional<model::RobotModel>(rig->truth()) : std::nullopt, nullptr));
     report::write_html(r, a.report);
-    std::cout << "report: " << a.report << "\n";
+    std::cout << "wrote " << a.report << "\n";
   }
   return 0;
 }
@@ -451,13 +451,13 @@ void add_session_command(CLI::App& app, int& status) {
   cmd->add_option("--sweeps", a->sweeps,
                   "single-joint sweeps with this many readings per joint (default 10 on the stereo rig and with "
                   "--discover)")
-      ->check(CLI::Range(4, 1000));
+      ->check(whole_in(4, 1000));
   cmd->add_option("--poses", a->poses, "random calibration poses in view (simulated robot, platform rig)")
-      ->check(CLI::Range(1, 10000))
+      ->check(whole_in(1, 10000))
       ->capture_default_str();
   cmd->add_option("--home", a->home, "home readings of the sweeps, comma-separated (rad, m)");
   cmd->add_option("--validation", a->validation, "random validation poses (simulated robot)")
-      ->check(CLI::Range(0, 10000))
+      ->check(whole_in(0, 10000))
       ->capture_default_str();
   cmd->add_option("--validation-plan", a->validation_plan, "validation poses (joints CSV)")->check(CLI::ExistingFile);
   cmd->add_option("--robot", a->robot, "sim or manual")->check(CLI::IsMember({"sim", "manual"}))->capture_default_str();
@@ -490,7 +490,7 @@ void add_session_command(CLI::App& app, int& status) {
   cmd->add_flag("--discover", a->discover,
                 "discovery session (stereo rig): sweep each joint of an unknown arm from --home, discover its model "
                 "(`kincal discover`), then identify it fully from there");
-  cmd->add_option("--joints", a->joints, "discovery: the arm's joint count")->check(CLI::Range(1, 16));
+  cmd->add_option("--joints", a->joints, "discovery: the arm's joint count")->check(whole_in(1, 16));
   cmd->add_option("--prismatic", a->prismatic, "discovery: joints (1-based) the controller moves in metres")
       ->delimiter(',');
   cmd->add_option("--sweep-deg", a->sweep_deg, "discovery: span of each revolute joint's sweep (deg)")
@@ -503,7 +503,7 @@ void add_session_command(CLI::App& app, int& status) {
   cmd->add_option("--can", a->can, "SocketCAN interface of a real platform (e.g. can0, vcan0)");
   cmd->add_flag("--fd", a->fd, "CAN FD");
   cmd->add_option("--squares", a->squares, "calibration squares on the strip (real platform)")
-      ->check(CLI::Range(1, 64))
+      ->check(whole_in(1, 64))
       ->capture_default_str();
   cmd->add_option("--journal", a->journal, "the session's measurement journal")->capture_default_str();
   cmd->add_flag("--resume", a->resume, "continue the journal of a stopped session");

@@ -719,6 +719,28 @@ std::string format_noise(const IdentifyResult& r) {
   return out.str();
 }
 
+IdentifyResult identify_registration(const RobotModel& nominal, const model::Dataset& data,
+                                     const IdentifyOptions& options, const IdentifyResult& calibrated) {
+  IdentifyOptions o = options;
+  o.method = Method::full;
+  o.start = Start::nominal;
+  o.fixed.clear();
+  o.requested.clear();
+  for (const core::ParameterId& id : calibrated.identifiability.identified)
+    if (!model::is_joint_map_parameter(id.kind) && id.kind >= core::ParameterKind::base_x)
+      o.requested.push_back(model::parameter_name(id));
+  RobotModel start = nominal;
+  std::vector<std::string> notes;
+  register_base(start, data, notes);
+  if (o.requested.empty()) {  // nothing of the registration free: the nominal as it is
+    IdentifyResult r;
+    r.model = r.start = start;
+    r.residuals = accuracy(start, data);
+    return r;
+  }
+  return identify(start, data, o);
+}
+
 std::string format_report(const IdentifyResult& r) {
   std::ostringstream out;
   out.setf(std::ios::fixed);
@@ -743,6 +765,12 @@ std::string format_report(const IdentifyResult& r) {
     for (const HeldFixed& h : r.identifiability.held_fixed)
       out << "  held fixed: " << model::parameter_name(h.id) << " (" << h.reason << ")\n";
     out << format_noise(r);
+    const auto is_registration = [](const core::ParameterId& id) {
+      return !model::is_joint_map_parameter(id.kind) && id.kind >= core::ParameterKind::base_x;
+    };
+    if (std::any_of(r.identifiability.identified.begin(), r.identifiability.identified.end(), is_registration))
+      out << "frames: base_* move frame 0 along and about its own axes (base_T_frame0 * [exp(r), t]); tool_* move "
+             "the tool along and about the tool's own axes (flange_T_tool * [exp(r), t])\n";
     out << "parameter        change          stddev\n";
     for (std::size_t k = 0; k < r.identifiability.identified.size(); ++k) {
       const core::ParameterId id = r.identifiability.identified[k];

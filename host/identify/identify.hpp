@@ -146,6 +146,13 @@ struct IdentifyResult {
 // Throws model::InputError for bad input (see above).
 IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options);
 
+// The baseline a calibration is judged against: the nominal geometry with only the registration
+// to the measuring device and the tool fitted (those of `calibrated`'s identified parameters that
+// are base_* or tool_*), registered first as above, by the same noise model and outlier rule. What
+// a user would get from the nominal model and a careful registration and tool measurement.
+IdentifyResult identify_registration(const RobotModel& nominal, const model::Dataset& data,
+                                     const IdentifyOptions& options, const IdentifyResult& calibrated);
+
 // Covariance (m^2, device frame) of the error of a new measurement's position at readings q,
 // less its instrument noise: the parameter covariance propagated to the tool point plus the
 // model-error variance s_p^2 I. Requires a full or first-order result.

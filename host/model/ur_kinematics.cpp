@@ -1,5 +1,7 @@
 #include "host/model/ur_kinematics.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <numbers>
@@ -29,6 +31,39 @@ std::string size_text(const Transform& t) {
   return buffer;
 }
 
+// The angle (deg) between two axis directions, as lines (0 to 90).
+double line_angle_deg(const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
+  return std::acos(std::min(1.0, std::abs(u.normalized().dot(v.normalized())))) * 180.0 / std::numbers::pi;
+}
+
+// A UR arm's axes at zero readings: 2 across 1, 2, 3 and 4 parallel, 5 across 4, 6 across 5.
+// A calibrated arm stays within a few degrees of that; another arm (a PUMA's wrist is spherical,
+// its axis 4 across 3) does not, and its joints have no place in UR's file.
+void require_ur_layout(const RobotModel& model, const std::array<Transform, 6>& joint_origins) {
+  constexpr double kToleranceDeg = 5.0;
+  std::array<Eigen::Vector3d, 6> axes;
+  Transform frame;
+  for (std::size_t i = 0; i < 6; ++i) {
+    frame = frame * joint_origins[i];
+    axes[i] = frame.rotation.col(2);
+  }
+  const struct {
+    std::size_t a, b;
+    bool parallel;
+  } rules[] = {{0, 1, false}, {1, 2, true}, {2, 3, true}, {3, 4, false}, {4, 5, false}};
+  for (const auto& r : rules) {
+    const double angle = line_angle_deg(axes[r.a], axes[r.b]);
+    const double off = r.parallel ? angle : 90.0 - angle;
+    if (off > kToleranceDeg) {
+      char text[200];
+      std::snprintf(text, sizeof text, "axes %zu and %zu are %.1f deg apart where a UR arm's are %s", r.a + 1, r.b + 1,
+                    angle, r.parallel ? "parallel" : "perpendicular");
+      throw InputError("ur-kinematics: '" + model.name + "' is not a Universal Robots arm: " + text +
+                       " (UR's file holds a UR arm's six joint origins; for another robot use `kincal urdf`)");
+    }
+  }
+}
+
 }  // namespace
 
 UrKinematics ur_kinematics(const RobotModel& model) {
@@ -46,6 +81,7 @@ UrKinematics ur_kinematics(const RobotModel& model) {
     previous_rest = head.inverse() * core::link_transform(link, 0.0);
   }
   k.wrist_3_T_flange = previous_rest;
+  require_ur_layout(model, k.joint_origins);
   const auto note = [&](const Transform& t, const std::string& what) {
     if (t.translation.norm() > 1e-12 || Eigen::AngleAxisd(t.rotation).angle() > 1e-12)
       k.notes.push_back(what + " (" + size_text(t) + ") is not in this file");

@@ -42,7 +42,9 @@ struct UrKinematics {
 inline constexpr std::array<const char*, 6> kUrKinematicsSections = {"shoulder", "upper_arm", "forearm",
                                                                      "wrist_1",  "wrist_2",   "wrist_3"};
 
-// Throws InputError unless the model has six revolute joints.
+// Throws InputError unless the model is a UR arm: six revolute joints in UR's layout (at zero
+// readings axis 2 across axis 1, axes 2, 3 and 4 parallel, 5 across 4, 6 across 5, each within
+// 5 degrees), naming the first pair that is not.
 UrKinematics ur_kinematics(const RobotModel& model);
 std::string write_ur_kinematics(const UrKinematics& kinematics);
 

@@ -190,7 +190,7 @@ with open("poses_shuffled.csv", "w") as f:  # the images' poses, one row late
 case("camera:hand-eye poses of other images", ["camera", "hand-eye"] + board + ["--camera", "cam.yaml", "--poses", "poses_shuffled.csv",
      "--images", bg, "-o", "he.yaml"], r"do not belong together: AX = XB residual [0-9.]+ degrees / [0-9.]+ mm RMS")
 case("camera:hand-eye consistent", ["camera", "hand-eye"] + board + ["--camera", "cam.yaml", "--poses", os.path.join(camera_dir, "poses.csv"),
-     "--images", bg, "-o", "he.yaml"], r"written: he\.yaml", rc_ok=True)
+     "--images", bg, "-o", "he.yaml"], r"wrote he\.yaml", rc_ok=True)
 
 big_png("tiny.png", 1, 1)
 case("camera:1x1 image", ["camera", "calibrate"] + board + ["tiny.png"] * 3 + ["-o", "t.yaml"], r"image 1x1 too small for the chessboard:9x6:0\.03 board")

@@ -387,6 +387,16 @@ TEST_CASE("ur-kinematics: the UR10 description's defaults come back, and the fil
   CHECK_THROWS_AS(ur_kinematics(load_model(std::string(KINCAL_ROBOTS_DIR) + "/stanford_rrp.yaml")), InputError);
 }
 
+TEST_CASE("ur-kinematics: a six-revolute arm that is not a UR arm is refused, saying which axes differ") {
+  CHECK_NOTHROW(ur_kinematics(load_model(std::string(KINCAL_ROBOTS_DIR) + "/ur10.yaml")));
+  CHECK_NOTHROW(ur_kinematics(load_model(std::string(KINCAL_ROBOTS_DIR) + "/ur5.yaml")));
+  // The PUMA 560's wrist is spherical: its axis 4 is across axis 3, where a UR arm's is parallel.
+  CHECK_THROWS_WITH_AS(ur_kinematics(load_model(std::string(KINCAL_ROBOTS_DIR) + "/puma560.yaml")),
+                       doctest::Contains("axes 3 and 4 are 90.0 deg apart where a UR arm's are parallel"), InputError);
+  CHECK_THROWS_WITH_AS(ur_kinematics(load_model(std::string(KINCAL_ROBOTS_DIR) + "/heavy6r.yaml")),
+                       doctest::Contains("is not a Universal Robots arm"), InputError);
+}
+
 TEST_CASE("urdf: bad input is refused naming the file, the line and what is wrong") {
   const auto error = [](const std::string& text, const UrdfChainEnds& ends = {}) {
     try {
