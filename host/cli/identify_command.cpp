@@ -103,9 +103,13 @@ std::string next_steps(const IdentifyArgs& a, const identify::IdentifyResult& re
   out.precision(3);
   out << "next:\n";
   if (a.urdf.empty()) {
-    out << "  kincal urdf --model " << a.out
-        << (model::is_urdf_path(a.model.path) ? " --original " + a.model.path : std::string()) << " -o "
-        << "calibrated.urdf    # for a ROS stack\n";
+    std::string original;  // the robot's own URDF, and the chain in it
+    if (model::is_urdf_path(a.model.path)) {
+      original = " --original " + a.model.path;
+      if (!a.model.ends.base_link.empty()) original += " --base-link " + a.model.ends.base_link;
+      if (!a.model.ends.tip_link.empty()) original += " --tip-link " + a.model.ends.tip_link;
+    }
+    out << "  kincal urdf --model " << a.out << original << " -o calibrated.urdf    # for a ROS stack\n";
   }
   try {
     model::ur_kinematics(result.model);  // refuses a model that is not a UR arm

@@ -11,6 +11,7 @@
 
 #include "host/files/input_limits.hpp"
 #include "host/model/csv_fields.hpp"
+#include "host/model/number_text.hpp"
 
 namespace kincal::model {
 
@@ -21,19 +22,15 @@ bool skipped(const std::string& line) {
   return t.empty() || t[0] == '#';
 }
 
-[[noreturn]] void fail(const std::string& source, int line, const std::string& what) {
-  throw InputError(source + ":" + std::to_string(line) + ": " + what);
-}
-
 double parse_number(const std::string& field, const std::string& column, const std::string& source, int line) {
   double v = 0.0;
   const char* first = field.data();
   const char* last = field.data() + field.size();
   if (first != last && *first == '+') ++first;
   const auto [end, ec] = std::from_chars(first, last, v);
-  if (field.empty()) fail(source, line, "column " + column + " is empty");
-  if (ec != std::errc() || end != last) fail(source, line, "column " + column + ": '" + field + "' is not a number");
-  if (!std::isfinite(v)) fail(source, line, "column " + column + " is not finite");
+  if (field.empty()) fail_at(source, line, "column " + column + " is empty");
+  if (ec != std::errc() || end != last) fail_at(source, line, "column " + column + ": '" + field + "' is not a number");
+  if (!std::isfinite(v)) fail_at(source, line, "column " + column + " is not finite");
   return v;
 }
 
@@ -50,11 +47,11 @@ Header parse_header(const std::string& line, const std::string& source, int numb
   h.fields = names.size();
   for (std::size_t i = 0; i < names.size(); ++i) {
     const std::string& n = names[i];
-    if (n.empty()) fail(source, number, "header: column " + std::to_string(i + 1) + " has no name");
-    if (!h.index.emplace(n, i).second) fail(source, number, "header: column '" + n + "' appears twice");
+    if (n.empty()) fail_at(source, number, "header: column " + std::to_string(i + 1) + " has no name");
+    if (!h.index.emplace(n, i).second) fail_at(source, number, "header: column '" + n + "' appears twice");
   }
   while (h.index.count("q" + std::to_string(h.joints + 1))) ++h.joints;
-  if (h.joints == 0) fail(source, number, "header: no joint columns (expected q1, q2, ...)");
+  if (h.joints == 0) fail_at(source, number, "header: no joint columns (expected q1, q2, ...)");
   if (joints_only) return h;
   static const char* const kKnown[] = {"x",   "y",   "z",   "qw",  "qx",  "qy",  "qz",
                                        "cxx", "cxy", "cxz", "cyy", "cyz", "czz", "sigma"};
@@ -65,13 +62,13 @@ Header parse_header(const std::string& line, const std::string& source, int numb
       // More digits than any joint count: out of range without overflowing stoi (a fuzzer find).
       const int j = name.size() <= 4 ? std::stoi(name.substr(1)) : 0;
       if (j < 1 || j > h.joints)
-        fail(source, number, "header: column '" + name + "' but no q" + std::to_string(h.joints + 1));
+        fail_at(source, number, "header: column '" + name + "' but no q" + std::to_string(h.joints + 1));
       known = true;
     }
-    if (!known) fail(source, number, "header: unknown column '" + name + "'");
+    if (!known) fail_at(source, number, "header: unknown column '" + name + "'");
   }
   for (const char* k : {"x", "y", "z"})
-    if (!h.index.count(k)) fail(source, number, std::string("header: missing column '") + k + "'");
+    if (!h.index.count(k)) fail_at(source, number, std::string("header: missing column '") + k + "'");
   return h;
 }
 
@@ -116,21 +113,14 @@ void read_table(std::istream& in, const std::string& source, bool joints_only, O
     }
     const std::vector<std::string> fields = split_fields(line, ',');
     if (fields.size() != h->fields)
-      fail(
+      fail_at(
           source, number,
           "expected " + std::to_string(h->fields) + " fields as in the header, found " + std::to_string(fields.size()));
     on_row(Row{*h, fields, source, number});
   }
   if (!h)
-    fail(source, number,
+    fail_at(source, number,
          joints_only ? "no header row (expected q1,...,qN)" : "no header row (expected q1,...,qN,x,y,z)");
-}
-
-std::string number_text(double v) {
-  if (v == 0.0) v = 0.0;
-  char buffer[64];
-  const auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, v);
-  return ec == std::errc() ? std::string(buffer, end) : std::string("nan");
 }
 
 }  // namespace
@@ -141,12 +131,12 @@ Dataset parse_dataset(std::istream& in, const std::string& source) {
   const auto on_header = [&](const Header& h, int number) {
     data.joint_count = h.joints;
     const int quaternion = count_of(h, {"qw", "qx", "qy", "qz"});
-    if (quaternion != 0 && quaternion != 4) fail(source, number, "header: an orientation needs all of qw, qx, qy, qz");
+    if (quaternion != 0 && quaternion != 4) fail_at(source, number, "header: an orientation needs all of qw, qx, qy, qz");
     data.has_orientation = quaternion == 4;
     const int covariance = count_of(h, {"cxx", "cxy", "cxz", "cyy", "cyz", "czz"});
     if (covariance != 0 && covariance != 6)
-      fail(source, number, "header: a covariance needs all of cxx, cxy, cxz, cyy, cyz, czz");
-    if (covariance == 6 && h.index.count("sigma")) fail(source, number, "header: give a covariance or sigma, not both");
+      fail_at(source, number, "header: a covariance needs all of cxx, cxy, cxz, cyy, cyz, czz");
+    if (covariance == 6 && h.index.count("sigma")) fail_at(source, number, "header: give a covariance or sigma, not both");
     data.noise = covariance == 6          ? NoiseColumns::covariance
                  : h.index.count("sigma") ? NoiseColumns::sigma
                                           : NoiseColumns::none;
@@ -160,8 +150,8 @@ Dataset parse_dataset(std::istream& in, const std::string& source) {
     if (data.has_orientation) {
       Eigen::Quaterniond q(value("qw"), value("qx"), value("qy"), value("qz"));
       if (std::abs(q.norm() - 1.0) > 1e-3)
-        fail(source, row.line,
-             "the quaternion (qw, qx, qy, qz) is not a unit quaternion (norm " + number_text(q.norm()) + ")");
+        fail_at(source, row.line,
+             "the quaternion (qw, qx, qy, qz) is not a unit quaternion (norm " + shortest_number_text(q.norm()) + ")");
       m.orientation = q.normalized();
     }
     if (data.noise == NoiseColumns::covariance) {
@@ -170,11 +160,11 @@ Dataset parse_dataset(std::istream& in, const std::string& source) {
           value("cyz"), value("czz");
       Eigen::LLT<Matrix3> llt(c);
       if (llt.info() != Eigen::Success || c.diagonal().minCoeff() <= 0.0)
-        fail(source, row.line, "the covariance (cxx..czz) is not positive definite");
+        fail_at(source, row.line, "the covariance (cxx..czz) is not positive definite");
       m.covariance = c;
     } else if (data.noise == NoiseColumns::sigma) {
       const double s = value("sigma");
-      if (!(s > 0.0)) fail(source, row.line, "sigma must be positive");
+      if (!(s > 0.0)) fail_at(source, row.line, "sigma must be positive");
       m.covariance = Matrix3::Identity() * (s * s);
     }
     data.rows.push_back(std::move(m));
@@ -231,17 +221,17 @@ void write_dataset(std::ostream& out, const Dataset& data) {
   if (covariance) out << ",cxx,cxy,cxz,cyy,cyz,czz";
   out << '\n';
   for (const Measurement& m : data.rows) {
-    for (double q : m.q) out << number_text(q) << ',';
-    out << number_text(m.position.x()) << ',' << number_text(m.position.y()) << ',' << number_text(m.position.z());
+    for (double q : m.q) out << shortest_number_text(q) << ',';
+    out << shortest_number_text(m.position.x()) << ',' << shortest_number_text(m.position.y()) << ',' << shortest_number_text(m.position.z());
     if (data.has_orientation) {
       const Eigen::Quaterniond q = m.orientation.value_or(Eigen::Quaterniond::Identity());
-      out << ',' << number_text(q.w()) << ',' << number_text(q.x()) << ',' << number_text(q.y()) << ','
-          << number_text(q.z());
+      out << ',' << shortest_number_text(q.w()) << ',' << shortest_number_text(q.x()) << ',' << shortest_number_text(q.y()) << ','
+          << shortest_number_text(q.z());
     }
     if (covariance) {
       const Matrix3& c = *m.covariance;
-      out << ',' << number_text(c(0, 0)) << ',' << number_text(c(0, 1)) << ',' << number_text(c(0, 2)) << ','
-          << number_text(c(1, 1)) << ',' << number_text(c(1, 2)) << ',' << number_text(c(2, 2));
+      out << ',' << shortest_number_text(c(0, 0)) << ',' << shortest_number_text(c(0, 1)) << ',' << shortest_number_text(c(0, 2)) << ','
+          << shortest_number_text(c(1, 1)) << ',' << shortest_number_text(c(1, 2)) << ',' << shortest_number_text(c(2, 2));
     }
     out << '\n';
   }

@@ -1,6 +1,7 @@
 #include "host/model/model_file.hpp"
 
 #include "host/files/output_file.hpp"
+#include "host/model/number_text.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -298,17 +299,10 @@ RobotModel read_model(const YAML::Node& root, const Reader& r) {
   return model;
 }
 
-std::string number_text(double v) {
-  if (v == 0.0) v = 0.0;  // no "-0"
-  char buffer[64];
-  const auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, v);
-  return ec == std::errc() ? std::string(buffer, end) : std::string("nan");
-}
-
 // Angles converted to degrees: 15 significant digits, so 30 deg does not come out as
 // 29.999999999999996 (the conversion's rounding); radians keep the exact shortest form.
 std::string angle_text(double v, double scale) {
-  if (scale == 1.0) return number_text(v);
+  if (scale == 1.0) return shortest_number_text(v);
   v *= scale;
   if (v == 0.0) v = 0.0;
   char buffer[64];
@@ -379,9 +373,9 @@ std::string write_model(const RobotModel& model) {
                              : j.convention == core::LinkConvention::modified_dh ? "mdh"
                                                                                  : "doty";
     out << YAML::Key << "convention" << YAML::Value << convention;
-    out << YAML::Key << "d" << YAML::Value << number_text(j.parameters.d_m);
+    out << YAML::Key << "d" << YAML::Value << shortest_number_text(j.parameters.d_m);
     out << YAML::Key << "theta" << YAML::Value << angle_text(j.parameters.theta_rad, a);
-    out << YAML::Key << "a" << YAML::Value << number_text(j.parameters.a_m);
+    out << YAML::Key << "a" << YAML::Value << shortest_number_text(j.parameters.a_m);
     out << YAML::Key << "alpha" << YAML::Value << angle_text(j.parameters.alpha_rad, a);
     if (j.convention == core::LinkConvention::doty)
       out << YAML::Key << "beta" << YAML::Value << angle_text(j.parameters.beta_rad, a);
@@ -393,12 +387,12 @@ std::string write_model(const RobotModel& model) {
     }
     if (!j.coupling.empty()) {
       out << YAML::Key << "coupling" << YAML::Value << YAML::Flow << YAML::BeginSeq;
-      for (const double c : j.coupling) out << number_text(c);
+      for (const double c : j.coupling) out << shortest_number_text(c);
       out << YAML::EndSeq;
     }
-    if (j.scale) out << YAML::Key << "scale" << YAML::Value << number_text(*j.scale);
-    if (j.compliance) out << YAML::Key << "compliance" << YAML::Value << number_text(*j.compliance);
-    if (j.mass_kg != 0.0) out << YAML::Key << "mass" << YAML::Value << number_text(j.mass_kg);
+    if (j.scale) out << YAML::Key << "scale" << YAML::Value << shortest_number_text(*j.scale);
+    if (j.compliance) out << YAML::Key << "compliance" << YAML::Value << shortest_number_text(*j.compliance);
+    if (j.mass_kg != 0.0) out << YAML::Key << "mass" << YAML::Value << shortest_number_text(j.mass_kg);
     if (!j.centre_of_mass_m.isZero(0.0)) {
       out << YAML::Key << "centre_of_mass" << YAML::Value;
       emit_vector(out, j.centre_of_mass_m);
@@ -420,7 +414,7 @@ std::string write_model(const RobotModel& model) {
   }
   if (model.payload.mass_kg != 0.0 || !model.payload.centre_of_mass_m.isZero(0.0)) {
     out << YAML::Key << "payload" << YAML::Value << YAML::BeginMap;
-    out << YAML::Key << "mass" << YAML::Value << number_text(model.payload.mass_kg);
+    out << YAML::Key << "mass" << YAML::Value << shortest_number_text(model.payload.mass_kg);
     out << YAML::Key << "centre_of_mass" << YAML::Value;
     emit_vector(out, model.payload.centre_of_mass_m);
     out << YAML::EndMap;
@@ -431,16 +425,16 @@ std::string write_model(const RobotModel& model) {
     out << YAML::Key << "method" << YAML::Value << c.method;
     out << YAML::Key << "data" << YAML::Value << c.data;
     out << YAML::Key << "measurements" << YAML::Value << c.measurements;
-    out << YAML::Key << "rms_residual_m" << YAML::Value << number_text(c.rms_residual_m);
-    if (c.validation_rms_m) out << YAML::Key << "validation_rms_m" << YAML::Value << number_text(*c.validation_rms_m);
+    out << YAML::Key << "rms_residual_m" << YAML::Value << shortest_number_text(c.rms_residual_m);
+    if (c.validation_rms_m) out << YAML::Key << "validation_rms_m" << YAML::Value << shortest_number_text(*c.validation_rms_m);
     out << YAML::Key << "held_fixed" << YAML::Value << YAML::Flow << YAML::BeginSeq;
     for (const std::string& name : c.held_fixed) out << name;
     out << YAML::EndSeq;
     out << YAML::Key << "parameters" << YAML::Value << YAML::BeginSeq;
     for (const ParameterReport& p : c.parameters) {
       out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << p.name;
-      out << YAML::Key << "change" << YAML::Value << number_text(p.value);
-      out << YAML::Key << "stddev" << YAML::Value << number_text(p.stddev) << YAML::EndMap;
+      out << YAML::Key << "change" << YAML::Value << shortest_number_text(p.value);
+      out << YAML::Key << "stddev" << YAML::Value << shortest_number_text(p.stddev) << YAML::EndMap;
     }
     out << YAML::EndSeq << YAML::EndMap;
   }

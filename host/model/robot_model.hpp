@@ -56,6 +56,11 @@ class InputError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Throws InputError("source:line: what"), the form every reader's message takes.
+[[noreturn]] inline void fail_at(const std::string& source, int line, const std::string& what) {
+  throw InputError(source + ":" + std::to_string(line) + ": " + what);
+}
+
 struct Joint {
   std::string name;
   core::JointType type = core::JointType::revolute;

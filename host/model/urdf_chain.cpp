@@ -17,10 +17,6 @@ namespace kincal::model {
 
 namespace {
 
-[[noreturn]] void fail(const std::string& source, int line, const std::string& what) {
-  throw InputError(source + ":" + std::to_string(line) + ": " + what);
-}
-
 // Three numbers separated by white space ("0 0.1 -2e-3").
 Vector3 parse_triple(const char* text, const std::string& source, int line, const std::string& what) {
   Vector3 v = Vector3::Zero();
@@ -32,12 +28,12 @@ Vector3 parse_triple(const char* text, const std::string& source, int line, cons
     double value = 0.0;
     const auto [next, ec] = std::from_chars(p, end, value);
     if (ec != std::errc() || !std::isfinite(value))
-      fail(source, line, what + " '" + text + "' is not three finite numbers");
+      fail_at(source, line, what + " '" + text + "' is not three finite numbers");
     v[i] = value;
     p = next;
   }
   while (p != end && std::isspace(static_cast<unsigned char>(*p))) ++p;
-  if (p != end) fail(source, line, what + " '" + text + "' is not three finite numbers");
+  if (p != end) fail_at(source, line, what + " '" + text + "' is not three finite numbers");
   return v;
 }
 
@@ -51,14 +47,14 @@ double parse_number(const char* text, const std::string& source, int line, const
   const char* rest = next;
   while (rest != end && std::isspace(static_cast<unsigned char>(*rest))) ++rest;
   if (ec != std::errc() || rest != end || !std::isfinite(value))
-    fail(source, line, what + " '" + text + "' is not a finite number");
+    fail_at(source, line, what + " '" + text + "' is not a finite number");
   return value;
 }
 
 std::string required_attribute(const tinyxml2::XMLElement& e, const char* name, const std::string& source) {
   const char* value = e.Attribute(name);
   if (value == nullptr || *value == '\0')
-    fail(source, e.GetLineNum(), std::string("<") + e.Name() + "> without a '" + name + "' attribute");
+    fail_at(source, e.GetLineNum(), std::string("<") + e.Name() + "> without a '" + name + "' attribute");
   return value;
 }
 
@@ -92,25 +88,25 @@ UrdfJoint parse_joint(const tinyxml2::XMLElement& e, const std::string& source) 
   }
   const tinyxml2::XMLElement* parent = e.FirstChildElement("parent");
   const tinyxml2::XMLElement* child = e.FirstChildElement("child");
-  if (parent == nullptr || child == nullptr) fail(source, j.line, where + " needs <parent> and <child>");
+  if (parent == nullptr || child == nullptr) fail_at(source, j.line, where + " needs <parent> and <child>");
   j.parent_link = required_attribute(*parent, "link", source);
   j.child_link = required_attribute(*child, "link", source);
   j.parent_T_joint = parse_origin(e.FirstChildElement("origin"), source);
   if (const tinyxml2::XMLElement* axis = e.FirstChildElement("axis")) {
     if (const char* xyz = axis->Attribute("xyz")) {
       const Vector3 v = parse_triple(xyz, source, axis->GetLineNum(), where + ": axis");
-      if (v.norm() < 1e-12 && j.type != UrdfJointType::fixed) fail(source, axis->GetLineNum(), where + ": zero axis");
+      if (v.norm() < 1e-12 && j.type != UrdfJointType::fixed) fail_at(source, axis->GetLineNum(), where + ": zero axis");
       if (v.norm() >= 1e-12) j.axis = v.normalized();
     }
   }
   if (j.type == UrdfJointType::revolute || j.type == UrdfJointType::prismatic) {
     const tinyxml2::XMLElement* limit = e.FirstChildElement("limit");
-    if (limit == nullptr) fail(source, j.line, where + " (" + type + ") needs a <limit>");
+    if (limit == nullptr) fail_at(source, j.line, where + " (" + type + ") needs a <limit>");
     j.lower = 0.0;
     j.upper = 0.0;
     if (const char* v = limit->Attribute("lower")) j.lower = parse_number(v, source, limit->GetLineNum(), "lower");
     if (const char* v = limit->Attribute("upper")) j.upper = parse_number(v, source, limit->GetLineNum(), "upper");
-    if (j.lower > j.upper) fail(source, limit->GetLineNum(), where + ": lower limit above upper");
+    if (j.lower > j.upper) fail_at(source, limit->GetLineNum(), where + ": lower limit above upper");
   }
   return j;
 }
@@ -126,32 +122,32 @@ struct Tree {
 Tree parse_tree(const std::string& text, const std::string& source) {
   tinyxml2::XMLDocument doc;
   if (doc.Parse(text.c_str(), text.size()) != tinyxml2::XML_SUCCESS)
-    fail(source, doc.ErrorLineNum(), std::string("XML: ") + doc.ErrorStr());
+    fail_at(source, doc.ErrorLineNum(), std::string("XML: ") + doc.ErrorStr());
   const tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
-  if (robot == nullptr) fail(source, 1, "no <robot> element: not a URDF");
+  if (robot == nullptr) fail_at(source, 1, "no <robot> element: not a URDF");
   Tree tree;
   tree.robot_name = robot->Attribute("name") != nullptr ? robot->Attribute("name") : "";
   for (const tinyxml2::XMLElement* l = robot->FirstChildElement("link"); l; l = l->NextSiblingElement("link")) {
     const std::string name = required_attribute(*l, "name", source);
     if (!tree.link_lines.emplace(name, l->GetLineNum()).second)
-      fail(source, l->GetLineNum(), "link '" + name + "' defined twice");
+      fail_at(source, l->GetLineNum(), "link '" + name + "' defined twice");
   }
   std::set<std::string> joint_names;
   for (const tinyxml2::XMLElement* e = robot->FirstChildElement("joint"); e; e = e->NextSiblingElement("joint")) {
     UrdfJoint j = parse_joint(*e, source);
-    if (!joint_names.insert(j.name).second) fail(source, j.line, "joint '" + j.name + "' defined twice");
+    if (!joint_names.insert(j.name).second) fail_at(source, j.line, "joint '" + j.name + "' defined twice");
     for (const std::string* link : {&j.parent_link, &j.child_link})
       if (!tree.link_lines.contains(*link))
-        fail(source, j.line, "joint '" + j.name + "' names link '" + *link + "', which is not defined");
+        fail_at(source, j.line, "joint '" + j.name + "' names link '" + *link + "', which is not defined");
     if (e->FirstChildElement("mimic") != nullptr)
       tree.mimic_lines[j.name] = e->FirstChildElement("mimic")->GetLineNum();
     tree.type_names[j.name] = e->Attribute("type");
     const std::string child = j.child_link;
     if (tree.joint_to_child.contains(child))
-      fail(source, j.line, "link '" + child + "' is the child of two joints: not a tree");
+      fail_at(source, j.line, "link '" + child + "' is the child of two joints: not a tree");
     tree.joint_to_child.emplace(child, std::move(j));
   }
-  if (tree.link_lines.empty()) fail(source, robot->GetLineNum(), "the robot has no links");
+  if (tree.link_lines.empty()) fail_at(source, robot->GetLineNum(), "the robot has no links");
   return tree;
 }
 
@@ -192,13 +188,13 @@ UrdfChain parse_urdf_chain(const std::string& text, const std::string& source, c
     if (!tree.joint_to_child.contains(name)) roots.push_back(name);
   if (!ends.base_link.empty()) {
     if (!tree.link_lines.contains(ends.base_link))
-      fail(source, 1, "no link named '" + ends.base_link + "' (--base-link)");
+      fail_at(source, 1, "no link named '" + ends.base_link + "' (--base-link)");
     chain.base_link = ends.base_link;
   } else {
     if (roots.size() != 1) {
       std::string list;
       for (const std::string& r : roots) list += (list.empty() ? "" : ", ") + r;
-      fail(source, 1,
+      fail_at(source, 1,
            "the links form no single tree (roots: " + list + "): choose the chain's first link with --base-link");
     }
     chain.base_link = roots.front();
@@ -206,9 +202,9 @@ UrdfChain parse_urdf_chain(const std::string& text, const std::string& source, c
 
   std::vector<UrdfJoint> path;
   if (!ends.tip_link.empty()) {
-    if (!tree.link_lines.contains(ends.tip_link)) fail(source, 1, "no link named '" + ends.tip_link + "' (--tip-link)");
+    if (!tree.link_lines.contains(ends.tip_link)) fail_at(source, 1, "no link named '" + ends.tip_link + "' (--tip-link)");
     if (!path_between(tree, chain.base_link, ends.tip_link, path))
-      fail(source, tree.link_lines.at(ends.tip_link),
+      fail_at(source, tree.link_lines.at(ends.tip_link),
            "link '" + ends.tip_link + "' is not below link '" + chain.base_link + "'");
     chain.tip_link = ends.tip_link;
   } else {
@@ -232,18 +228,18 @@ UrdfChain parse_urdf_chain(const std::string& text, const std::string& source, c
       std::string list;
       for (const Candidate& c : leaves)
         list += "\n  " + chain.base_link + " -> " + c.tip + " (" + std::to_string(c.joints) + " movable joints)";
-      fail(source, 1, "which chain? choose one with --tip-link (and --base-link):" + list);
+      fail_at(source, 1, "which chain? choose one with --tip-link (and --base-link):" + list);
     }
     chain.tip_link = best_tips.front();
     path_between(tree, chain.base_link, chain.tip_link, path);
   }
   for (const UrdfJoint& j : path) {
     if (std::isnan(j.lower))
-      fail(source, j.line,
+      fail_at(source, j.line,
            "joint '" + j.name + "' is of type '" + tree.type_names.at(j.name) +
                "': a serial chain has revolute, continuous, prismatic and fixed joints only");
     if (tree.mimic_lines.contains(j.name) && j.type != UrdfJointType::fixed)
-      fail(source, tree.mimic_lines.at(j.name),
+      fail_at(source, tree.mimic_lines.at(j.name),
            "joint '" + j.name +
                "' mimics another joint: chains with mimic joints are not supported "
                "(calibrate the chain without it, or make it fixed)");
