@@ -120,7 +120,7 @@ void read_table(std::istream& in, const std::string& source, bool joints_only, O
   }
   if (!h)
     fail_at(source, number,
-         joints_only ? "no header row (expected q1,...,qN)" : "no header row (expected q1,...,qN,x,y,z)");
+            joints_only ? "no header row (expected q1,...,qN)" : "no header row (expected q1,...,qN,x,y,z)");
 }
 
 }  // namespace
@@ -131,12 +131,14 @@ Dataset parse_dataset(std::istream& in, const std::string& source) {
   const auto on_header = [&](const Header& h, int number) {
     data.joint_count = h.joints;
     const int quaternion = count_of(h, {"qw", "qx", "qy", "qz"});
-    if (quaternion != 0 && quaternion != 4) fail_at(source, number, "header: an orientation needs all of qw, qx, qy, qz");
+    if (quaternion != 0 && quaternion != 4)
+      fail_at(source, number, "header: an orientation needs all of qw, qx, qy, qz");
     data.has_orientation = quaternion == 4;
     const int covariance = count_of(h, {"cxx", "cxy", "cxz", "cyy", "cyz", "czz"});
     if (covariance != 0 && covariance != 6)
       fail_at(source, number, "header: a covariance needs all of cxx, cxy, cxz, cyy, cyz, czz");
-    if (covariance == 6 && h.index.count("sigma")) fail_at(source, number, "header: give a covariance or sigma, not both");
+    if (covariance == 6 && h.index.count("sigma"))
+      fail_at(source, number, "header: give a covariance or sigma, not both");
     data.noise = covariance == 6          ? NoiseColumns::covariance
                  : h.index.count("sigma") ? NoiseColumns::sigma
                                           : NoiseColumns::none;
@@ -150,8 +152,9 @@ Dataset parse_dataset(std::istream& in, const std::string& source) {
     if (data.has_orientation) {
       Eigen::Quaterniond q(value("qw"), value("qx"), value("qy"), value("qz"));
       if (std::abs(q.norm() - 1.0) > 1e-3)
-        fail_at(source, row.line,
-             "the quaternion (qw, qx, qy, qz) is not a unit quaternion (norm " + shortest_number_text(q.norm()) + ")");
+        fail_at(
+            source, row.line,
+            "the quaternion (qw, qx, qy, qz) is not a unit quaternion (norm " + shortest_number_text(q.norm()) + ")");
       m.orientation = q.normalized();
     }
     if (data.noise == NoiseColumns::covariance) {
@@ -222,16 +225,18 @@ void write_dataset(std::ostream& out, const Dataset& data) {
   out << '\n';
   for (const Measurement& m : data.rows) {
     for (double q : m.q) out << shortest_number_text(q) << ',';
-    out << shortest_number_text(m.position.x()) << ',' << shortest_number_text(m.position.y()) << ',' << shortest_number_text(m.position.z());
+    out << shortest_number_text(m.position.x()) << ',' << shortest_number_text(m.position.y()) << ','
+        << shortest_number_text(m.position.z());
     if (data.has_orientation) {
       const Eigen::Quaterniond q = m.orientation.value_or(Eigen::Quaterniond::Identity());
-      out << ',' << shortest_number_text(q.w()) << ',' << shortest_number_text(q.x()) << ',' << shortest_number_text(q.y()) << ','
-          << shortest_number_text(q.z());
+      out << ',' << shortest_number_text(q.w()) << ',' << shortest_number_text(q.x()) << ','
+          << shortest_number_text(q.y()) << ',' << shortest_number_text(q.z());
     }
     if (covariance) {
       const Matrix3& c = *m.covariance;
-      out << ',' << shortest_number_text(c(0, 0)) << ',' << shortest_number_text(c(0, 1)) << ',' << shortest_number_text(c(0, 2)) << ','
-          << shortest_number_text(c(1, 1)) << ',' << shortest_number_text(c(1, 2)) << ',' << shortest_number_text(c(2, 2));
+      out << ',' << shortest_number_text(c(0, 0)) << ',' << shortest_number_text(c(0, 1)) << ','
+          << shortest_number_text(c(0, 2)) << ',' << shortest_number_text(c(1, 1)) << ','
+          << shortest_number_text(c(1, 2)) << ',' << shortest_number_text(c(2, 2));
     }
     out << '\n';
   }

@@ -426,7 +426,8 @@ std::string write_model(const RobotModel& model) {
     out << YAML::Key << "data" << YAML::Value << c.data;
     out << YAML::Key << "measurements" << YAML::Value << c.measurements;
     out << YAML::Key << "rms_residual_m" << YAML::Value << shortest_number_text(c.rms_residual_m);
-    if (c.validation_rms_m) out << YAML::Key << "validation_rms_m" << YAML::Value << shortest_number_text(*c.validation_rms_m);
+    if (c.validation_rms_m)
+      out << YAML::Key << "validation_rms_m" << YAML::Value << shortest_number_text(*c.validation_rms_m);
     out << YAML::Key << "held_fixed" << YAML::Value << YAML::Flow << YAML::BeginSeq;
     for (const std::string& name : c.held_fixed) out << name;
     out << YAML::EndSeq;

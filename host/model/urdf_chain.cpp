@@ -95,7 +95,8 @@ UrdfJoint parse_joint(const tinyxml2::XMLElement& e, const std::string& source) 
   if (const tinyxml2::XMLElement* axis = e.FirstChildElement("axis")) {
     if (const char* xyz = axis->Attribute("xyz")) {
       const Vector3 v = parse_triple(xyz, source, axis->GetLineNum(), where + ": axis");
-      if (v.norm() < 1e-12 && j.type != UrdfJointType::fixed) fail_at(source, axis->GetLineNum(), where + ": zero axis");
+      if (v.norm() < 1e-12 && j.type != UrdfJointType::fixed)
+        fail_at(source, axis->GetLineNum(), where + ": zero axis");
       if (v.norm() >= 1e-12) j.axis = v.normalized();
     }
   }
@@ -195,17 +196,18 @@ UrdfChain parse_urdf_chain(const std::string& text, const std::string& source, c
       std::string list;
       for (const std::string& r : roots) list += (list.empty() ? "" : ", ") + r;
       fail_at(source, 1,
-           "the links form no single tree (roots: " + list + "): choose the chain's first link with --base-link");
+              "the links form no single tree (roots: " + list + "): choose the chain's first link with --base-link");
     }
     chain.base_link = roots.front();
   }
 
   std::vector<UrdfJoint> path;
   if (!ends.tip_link.empty()) {
-    if (!tree.link_lines.contains(ends.tip_link)) fail_at(source, 1, "no link named '" + ends.tip_link + "' (--tip-link)");
+    if (!tree.link_lines.contains(ends.tip_link))
+      fail_at(source, 1, "no link named '" + ends.tip_link + "' (--tip-link)");
     if (!path_between(tree, chain.base_link, ends.tip_link, path))
       fail_at(source, tree.link_lines.at(ends.tip_link),
-           "link '" + ends.tip_link + "' is not below link '" + chain.base_link + "'");
+              "link '" + ends.tip_link + "' is not below link '" + chain.base_link + "'");
     chain.tip_link = ends.tip_link;
   } else {
     std::set<std::string> parents;
@@ -236,13 +238,13 @@ UrdfChain parse_urdf_chain(const std::string& text, const std::string& source, c
   for (const UrdfJoint& j : path) {
     if (std::isnan(j.lower))
       fail_at(source, j.line,
-           "joint '" + j.name + "' is of type '" + tree.type_names.at(j.name) +
-               "': a serial chain has revolute, continuous, prismatic and fixed joints only");
+              "joint '" + j.name + "' is of type '" + tree.type_names.at(j.name) +
+                  "': a serial chain has revolute, continuous, prismatic and fixed joints only");
     if (tree.mimic_lines.contains(j.name) && j.type != UrdfJointType::fixed)
       fail_at(source, tree.mimic_lines.at(j.name),
-           "joint '" + j.name +
-               "' mimics another joint: chains with mimic joints are not supported "
-               "(calibrate the chain without it, or make it fixed)");
+              "joint '" + j.name +
+                  "' mimics another joint: chains with mimic joints are not supported "
+                  "(calibrate the chain without it, or make it fixed)");
   }
   chain.joints = std::move(path);
   return chain;
