@@ -8,6 +8,17 @@
 
 namespace kincal::identify {
 
+namespace {
+
+// Jacobi's SVD, after the column-pivoting QR the rank test below already instantiates: as accurate
+// as an SVD gets, and on these tall Jacobians of a few dozen columns its cost is the QR's. (BDCSVD,
+// used before, took most of this file's compile time and gains only on wide matrices.)
+Eigen::VectorXd singular_values(const Eigen::MatrixXd& m) {
+  return Eigen::JacobiSVD<Eigen::MatrixXd>(m).singularValues();
+}
+
+}  // namespace
+
 Identifiability analyze_identifiability(const Eigen::MatrixXd& jacobian, const ParameterIds& candidates,
                                         double tolerance) {
   Identifiability out;
@@ -63,8 +74,7 @@ Identifiability analyze_identifiability(const Eigen::MatrixXd& jacobian, const P
         {candidates[k], "not separable from " + (names.empty() ? std::string("the others") : names)});
   }
   if (scaled.cols() > 0 && rows > 0) {
-    Eigen::BDCSVD<Eigen::MatrixXd> svd(scaled);
-    out.singular_values = svd.singularValues();
+    out.singular_values = singular_values(scaled);
     const double top = out.singular_values(0);
     for (Eigen::Index i = 0; i < out.singular_values.size(); ++i)
       out.rank += out.singular_values(i) > top * tolerance ? 1 : 0;
@@ -72,7 +82,7 @@ Identifiability analyze_identifiability(const Eigen::MatrixXd& jacobian, const P
   if (!kept.empty()) {
     Eigen::MatrixXd a(rows, static_cast<Eigen::Index>(kept.size()));
     for (std::size_t i = 0; i < kept.size(); ++i) a.col(static_cast<Eigen::Index>(i)) = scaled.col(kept[i]);
-    const Eigen::VectorXd s = Eigen::BDCSVD<Eigen::MatrixXd>(a).singularValues();
+    const Eigen::VectorXd s = singular_values(a);
     out.condition = s(0) / s(s.size() - 1);
   }
   return out;
