@@ -1,7 +1,10 @@
 #include "host/cli/discover_command.hpp"
 
+#include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include "host/cli/number_options.hpp"
 #include "host/files/output_file.hpp"
@@ -21,8 +24,29 @@ struct DiscoverArgs {
   double significance = 0.01, outlier_probability = 1e-3, still_tolerance = 0.0;
 };
 
-// The discovery as a report: each sweep's fit in 3-D and in its plane, the discovered link table
-// with standard deviations, and the discovery's notes.
+// Whether the data file says its measurements are simulated: a comment line "# measurements:
+// simulated ..." or "# measurements: measured ..." among the comments that open it (the dataset
+// reader skips '#' lines); absent: not recorded, and the report says so.
+std::optional<bool> simulated_by_comment(const std::string& path) {
+  std::ifstream in(path);
+  const std::string key = "# measurements: ";
+  for (std::string line; std::getline(in, line) && (line.empty() || line[0] == '#');) {
+    if (line.rfind(key, 0) != 0) continue;
+    const std::string value = line.substr(key.size());
+    if (value.rfind("simulated", 0) == 0) return true;
+    if (value.rfind("measured", 0) == 0) return false;
+  }
+  return std::nullopt;
+}
+
+std::string p_value_text(double p) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", p);
+  return text;
+}
+
+// The discovery as a report: each sweep's fit in 3-D and in its plane, the joint-type tests with
+// their p-values, the discovered link table with standard deviations, and the discovery's notes.
 report::Report discovery_report(const DiscoverArgs& a, const model::Dataset& data,
                                 const identify::DiscoverResult& result) {
   report::Run run;
@@ -30,6 +54,7 @@ report::Report discovery_report(const DiscoverArgs& a, const model::Dataset& dat
   run.robot = result.model.name;
   run.method = "manipulator-independent discovery (no model): joint-type tests, axis fits, link table";
   run.data = a.data;
+  run.simulated = simulated_by_comment(a.data);
   run.measurements = static_cast<int>(data.rows.size());
   for (const model::Joint& j : result.model.joints)
     run.joints.push_back({j.name, j.type == core::JointType::prismatic});
@@ -54,6 +79,21 @@ report::Report discovery_report(const DiscoverArgs& a, const model::Dataset& dat
     if (p.beta_rad != 0.0 || sd.beta_rad != 0.0) row("beta" + n, report::Quantity::angle_rad, p.beta_rad, sd.beta_rad);
   }
   run.comparisons.push_back(table);
+  report::TextTable tests;
+  tests.title = "Joint-type tests";
+  tests.columns = {"joint", "type taken", "p(line affine in q)", "p(circle at angle q)", "p(unit-speed line)"};
+  for (const identify::SweepFit& f : result.fits)
+    tests.rows.push_back(
+        {std::to_string(f.joint + 1),
+         std::string(f.curved ? "revolute" : "prismatic") + (!f.test.tested      ? " (by fit: too few points to test)"
+                                                             : f.test.conclusive ? ""
+                                                                                 : " (inconclusive)"),
+         p_value_text(f.test.p_line), p_value_text(f.test.p_circle), p_value_text(f.test.p_unit_speed)});
+  tests.note = "Each sweep tested at significance " + p_value_text(a.significance) +
+               ": a hypothesis with p below it is rejected. line affine in q: a prismatic joint; circle at angle "
+               "q: a revolute joint; unit-speed line: a prismatic joint read in metres. A type is conclusive when "
+               "exactly one of the first two is rejected.";
+  run.tables.push_back(tests);
   report::Report out;
   out.title = "kincal discover";
   out.date = report::utc_date_now();

@@ -320,7 +320,7 @@ DemoResult run_demo(const DemoOptions& options, std::ostream& out) {
   }
   result.report_path = (std::filesystem::path(options.output_dir) / "report.html").string();
   report::write_html(report, result.report_path);
-  out << "\nreport: " << result.report_path << "\n";
+  out << "\nwrote " << result.report_path << "\n";
   return result;
 }
 

@@ -36,8 +36,8 @@ tr.group th{background:#e0ebe8}td.off{color:#c00;font-weight:bold}td.fixed{color
 .plots{display:flex;flex-wrap:wrap;gap:8px}
 svg.plot{background:#fff;border:1px solid #ddd}
 svg.plot .frame{fill:none;stroke:#444}svg.plot .grid{stroke:#e4e4e4}
-svg.plot text{font-size:10px;fill:#333}svg.plot .title{font-size:12px;font-weight:bold}
-svg.plot .label{font-size:11px}svg.plot .legend{font-size:10px}svg.plot .note{font-size:10px;fill:#555}
+ul.legend{font-size:13px;color:#444;margin-top:0}span.off{color:#c00;font-weight:bold}
+span.fixed{color:#888;font-style:italic}span.absorbs{font-size:11px;color:#555}
 nav li{margin:2px 0}
 )";
 
@@ -51,12 +51,45 @@ std::string format(const char* pattern, ...) {
   return text;
 }
 
-// A parameter's value, and a change/sigma/error of it, as the reader expects them.
-std::string value_text(Quantity q, double v) {
-  return q == Quantity::length_m ? format("%.3f mm", v * kMm) : format("%.4f&deg;", v * kDeg);
+// The unit of one table row of a quantity, the same in every cell of the row: mm for lengths;
+// for angles mrad when every value of the row is below 0.1 rad (small angles read best so),
+// else deg. Values with `value_decimals`, changes, sigmas and errors with one more.
+struct RowUnit {
+  const char* suffix;  // HTML
+  double per_si;
+  int value_decimals;
+};
+
+RowUnit row_unit(Quantity q, const std::vector<double>& values) {
+  if (q == Quantity::length_m) return {" mm", kMm, 3};
+  const bool small = std::all_of(values.begin(), values.end(), [](double v) { return std::abs(v) < 0.1; });
+  return small ? RowUnit{" mrad", kMm, 3} : RowUnit{"&deg;", kDeg, 4};
 }
-std::string delta_text(Quantity q, double v) {
-  return q == Quantity::length_m ? format("%.4f mm", v * kMm) : format("%.4f mrad", v * kMm);
+std::string value_text(const RowUnit& u, double v) {
+  return format("%.*f%s", u.value_decimals, v * u.per_si, u.suffix);
+}
+std::string delta_text(const RowUnit& u, double v) {
+  return format("%.*f%s", u.value_decimals + 1, v * u.per_si, u.suffix);
+}
+
+// Lengths in plot notes and on plot axes: um below 1 mm, mm from there -- one rule for every
+// plot, so that a reader never meets "5255.1 um". A note or axis of several lengths takes the
+// unit of its largest.
+struct LengthUnit {
+  const char* name;
+  double per_m;
+};
+LengthUnit length_unit(double largest_m) {
+  return std::abs(largest_m) < 1e-3 ? LengthUnit{"\u00b5m", kUm} : LengthUnit{"mm", kMm};
+}
+std::string length_text(double m, const LengthUnit& u) {
+  return format(u.per_m == kUm ? "%.1f %s" : "%.3f %s", m * u.per_m, u.name);
+}
+std::string length_text(double m) { return length_text(m, length_unit(m)); }
+double largest_magnitude(const std::vector<double>& values) {
+  double m = 0.0;
+  for (const double v : values) m = std::max(m, std::abs(v));
+  return m;
 }
 
 std::string cell(const std::string& html, const char* cls = "n") {
@@ -105,6 +138,11 @@ void validate(const RunContext& c) {
       if (row.values.size() != t.columns.size())
         c.fail("comparison '" + t.title + "', row " + row.name + ": " + std::to_string(row.values.size()) +
                " values for " + std::to_string(t.columns.size()) + " columns");
+  for (const TextTable& t : run.tables)
+    for (std::size_t i = 0; i < t.rows.size(); ++i)
+      if (t.rows[i].size() != t.columns.size())
+        c.fail("table '" + t.title + "', row " + std::to_string(i + 1) + ": " + std::to_string(t.rows[i].size()) +
+               " cells for " + std::to_string(t.columns.size()) + " columns");
 }
 
 std::string facts(const Run& run) {
@@ -116,7 +154,11 @@ std::string facts(const Run& run) {
   row("method", run.method);
   row("data", run.data);
   if (run.measurements > 0) row("measurements", std::to_string(run.measurements));
-  row("measurements are", run.simulated ? "simulated (true values known)" : "measured");
+  const bool truth = std::any_of(run.parameters.begin(), run.parameters.end(),
+                                 [](const ParameterRow& p) { return p.truth.has_value(); });
+  row("measurements are", !run.simulated   ? "not recorded in the data (simulated or measured)"
+                          : *run.simulated ? (truth ? "simulated (true values known)" : "simulated")
+                                           : "measured");
   return html + "</table>";
 }
 
@@ -124,35 +166,72 @@ std::string model_table(const RunContext& c) {
   const Run& run = c.run();
   const bool truth = std::any_of(run.parameters.begin(), run.parameters.end(),
                                  [](const ParameterRow& p) { return p.truth.has_value(); });
+  const bool identifiable = std::any_of(run.parameters.begin(), run.parameters.end(),
+                                        [](const ParameterRow& p) { return p.identifiable_truth.has_value(); });
   std::string html = "<section class=\"model\" id=\"" + c.id("model") +
                      "\"><h3>Identified model</h3><table class=\"model\"><tr>" + heading("parameter") +
                      heading("nominal") + heading("identified") + heading("change") + heading("1-sigma");
-  if (truth) html += heading("true") + heading("error (identified - true)");
+  if (truth) {
+    html += heading("true");
+    if (identifiable) html += heading("true, as the data identify it");
+    html += heading(identifiable ? "error (identified \u2212 identifiable)" : "error (identified \u2212 true)");
+  }
   html += "</tr>";
-  const int columns = truth ? 7 : 5;
+  const int columns = 5 + (truth ? 2 : 0) + (truth && identifiable ? 1 : 0);
   std::string group;
-  bool first = true;
+  bool first = true, any_off = false, any_fixed = false, any_absorbed = false;
   for (const ParameterRow& p : run.parameters) {
     if (first || p.group != group)
       html +=
           "<tr class=\"group\"><th colspan=\"" + std::to_string(columns) + "\">" + escape_html(p.group) + "</th></tr>";
     first = false;
     group = p.group;
-    html += "<tr><td>" + escape_html(p.name) + "</td>" + cell(value_text(p.quantity, p.nominal)) +
-            cell(value_text(p.quantity, p.identified)) + cell(delta_text(p.quantity, p.identified - p.nominal)) +
-            (p.stddev ? cell(delta_text(p.quantity, *p.stddev)) : cell("held fixed", "fixed"));
+    std::vector<double> values = {p.nominal, p.identified};
+    for (const std::optional<double>& v : {p.truth, p.identifiable_truth})
+      if (v) values.push_back(*v);
+    const RowUnit u = row_unit(p.quantity, values);
+    html += "<tr><td>" + escape_html(p.name) + "</td>" + cell(value_text(u, p.nominal)) +
+            cell(value_text(u, p.identified)) + cell(delta_text(u, p.identified - p.nominal)) +
+            (p.stddev ? cell(delta_text(u, *p.stddev)) : cell("held fixed", "fixed"));
+    any_fixed = any_fixed || !p.stddev;
     if (truth) {
-      if (p.truth) {
-        const double error = p.identified - *p.truth;
+      html += cell(p.truth ? value_text(u, *p.truth) : "");
+      if (identifiable) {
+        std::string shown = p.identifiable_truth ? value_text(u, *p.identifiable_truth) : "";
+        if (!p.absorbs.empty()) shown += "<br><span class=\"absorbs\">absorbs " + escape_html(p.absorbs) + "</span>";
+        any_absorbed = any_absorbed || !p.absorbs.empty();
+        html += cell(shown);
+      }
+      const std::optional<double> reference = p.identifiable_truth ? p.identifiable_truth : p.truth;
+      if (reference) {
+        const double error = p.identified - *reference;
         const bool off = p.stddev && std::abs(error) > 3.0 * *p.stddev;
-        html += cell(value_text(p.quantity, *p.truth)) + cell(delta_text(p.quantity, error), off ? "n off" : "n");
+        any_off = any_off || off;
+        html += cell(delta_text(u, error), off ? "n off" : "n");
       } else {
-        html += cell("") + cell("");
+        html += cell("");
       }
     }
     html += "</tr>";
   }
-  return html + "</table></section>";
+  html +=
+      "</table><ul class=\"legend\"><li>lengths in mm; angles in degrees, or in mrad in a row whose values are "
+      "all below 0.1 rad; the change, the 1-sigma and the error in the row's unit</li>";
+  if (any_fixed)
+    html +=
+        "<li><span class=\"fixed\">held fixed</span>: not identified from these data (see Identifiability); "
+        "kept at its starting value</li>";
+  if (identifiable)
+    html +=
+        "<li>true, as the data identify it: the true model fitted in the identified parameters with the "
+        "held-fixed ones at their starting values, the answer a solve from noise-free data at these poses "
+        "would give; the error is measured from it" +
+        std::string(any_absorbed ? ", and &ldquo;absorbs&rdquo; names the held-fixed parameters whose true "
+                                   "errors it takes up"
+                                 : "") +
+        "</li>";
+  if (any_off) html += "<li><span class=\"off\">bold red</span>: the error is more than 3 sigma</li>";
+  return html + "</ul></section>";
 }
 
 std::string identifiability(const RunContext& c) {
@@ -167,7 +246,25 @@ std::string identifiability(const RunContext& c) {
   }
   if (!run.notes.empty()) {
     html += "<ul class=\"notes\">";
-    for (const std::string& note : run.notes) html += "<li>" + escape_html(note) + "</li>";
+    for (const std::string& note : run.notes) {
+      // The first line is the note; each further line an item under it.
+      std::vector<std::string> lines;
+      for (std::size_t start = 0; start <= note.size();) {
+        const std::size_t end = std::min(note.find('\n', start), note.size());
+        std::string line = note.substr(start, end - start);
+        line.erase(0, std::min(line.find_first_not_of(' '), line.size()));
+        if (!line.empty()) lines.push_back(line);
+        start = end + 1;
+      }
+      if (lines.empty()) continue;
+      html += "<li>" + escape_html(lines[0]);
+      if (lines.size() > 1) {
+        html += "<ul>";
+        for (std::size_t i = 1; i < lines.size(); ++i) html += "<li>" + escape_html(lines[i]) + "</li>";
+        html += "</ul>";
+      }
+      html += "</li>";
+    }
     html += "</ul>";
   }
   return html + "</section>";
@@ -336,7 +433,7 @@ std::string sweep_view_3d(const std::string& name, const SweepPlot& s, const Eig
   }
   for (std::size_t k = 0; k < feet.size(); ++k) {
     const Eigen::Vector3d shown = feet[k] + magnify * (s.points_m[k] - feet[k]);
-    PlotSeries offset{"", kPalette[1], {}, {}, true};
+    PlotSeries offset{k == 0 ? format("offsets x%g", magnify) : "", kPalette[1], {}, {}, true};
     add(offset, feet[k]);
     add(offset, shown);
     view.series.push_back(offset);
@@ -347,7 +444,8 @@ std::string sweep_view_3d(const std::string& name, const SweepPlot& s, const Eig
   view.notes = {
       s.circle ? "orthographic, 25 deg above the circle's plane, 30 deg beside mid-arc"
                : "orthographic, 25 deg above a plane through the line",
-      format("points: offsets from the fit drawn x%g (RMS %.1f um, max %.1f um)", magnify, rms * kUm, largest * kUm),
+      format("points: offsets from the fit drawn x%g (RMS %s, max %s)", magnify,
+             length_text(rms, length_unit(largest)).c_str(), length_text(largest, length_unit(largest)).c_str()),
       "device axes from the " + std::string(s.circle ? "circle's centre" : "line's middle") +
           format(", %.0f mm long", 0.3 * extent * kMm)};
   return svg_plot(view);
@@ -368,7 +466,7 @@ std::string sweep_plots(const RunContext& c, const SweepPlot& s) {
           ? std::pair<Eigen::Vector3d, Eigen::Vector3d>(towards_arc.normalized(), d.cross(towards_arc.normalized()))
           : plane_basis(d);
   const std::vector<std::string> notes = {
-      s.circle ? format("radius %.3f mm", s.radius_m * kMm) : std::string("line"), format("RMS %.1f um", s.rms_m * kUm),
+      s.circle ? "radius " + length_text(s.radius_m, {"mm", kMm}) : std::string("line"), "RMS " + length_text(s.rms_m),
       std::to_string(s.points_m.size()) + " points" +
           (s.rejected > 0 ? ", " + std::to_string(s.rejected) + " rejected" : std::string())};
   PlotSpec fit;
@@ -391,17 +489,16 @@ std::string sweep_plots(const RunContext& c, const SweepPlot& s) {
     residual.width_px = 300;
     residual.height_px = 320;
     residual.x = {"angle about the axis from mid-arc (deg)", false, {}, {}, {}};
-    residual.y = {"residual (um)", false, {}, {}, {}};
     PlotSeries radial{"radial", kPalette[1], {}, {}, false}, axial{"along the axis", kPalette[3], {}, {}, false};
-    for (const Eigen::Vector3d& p : s.points_m) {
+    for (const Eigen::Vector3d& p : s.points_m) {  // residuals in m, scaled to the axis's unit below
       const Eigen::Vector3d r = p - centre;
       const double x = u.dot(r), y = v.dot(r);
       points.x.push_back(x * kMm);
       points.y.push_back(y * kMm);
       radial.x.push_back(std::atan2(y, x) * kDeg);
-      radial.y.push_back((std::hypot(x, y) - s.radius_m) * kUm);
+      radial.y.push_back(std::hypot(x, y) - s.radius_m);
       axial.x.push_back(radial.x.back());
-      axial.y.push_back(d.dot(r) * kUm);
+      axial.y.push_back(d.dot(r));
     }
     double radial_ss = 0.0, axial_ss = 0.0;
     for (std::size_t k = 0; k < radial.y.size(); ++k) {
@@ -409,9 +506,15 @@ std::string sweep_plots(const RunContext& c, const SweepPlot& s) {
       axial_ss += axial.y[k] * axial.y[k];
     }
     const double n = static_cast<double>(radial.y.size());
+    const LengthUnit unit = length_unit(std::max(largest_magnitude(radial.y), largest_magnitude(axial.y)));
+    for (PlotSeries* series : {&radial, &axial})
+      for (double& value : series->y) value *= unit.per_m;
+    residual.y = {std::string("residual (") + unit.name + ")", false, {}, {}, {}};
+    const double radial_rms = std::sqrt(radial_ss / n), axial_rms = std::sqrt(axial_ss / n);
+    const LengthUnit rms_unit = length_unit(std::max(radial_rms, axial_rms));
     residual.notes = {
         "radial: distance from the axis - radius", "along the axis: distance from the circle's plane",
-        format("RMS radial %.1f um, along the axis %.1f um", std::sqrt(radial_ss / n), std::sqrt(axial_ss / n))};
+        "RMS radial " + length_text(radial_rms, rms_unit) + ", along the axis " + length_text(axial_rms, rms_unit)};
     fit.series = {circle, points};
     residual.series = {radial, axial};
     return sweep_view_3d(name, s, centre, u, v, d) + svg_plot(fit) + svg_plot(residual);
@@ -419,17 +522,20 @@ std::string sweep_plots(const RunContext& c, const SweepPlot& s) {
   fit.title = name + ": line fit";
   fit.width_px = 420;
   fit.x = {"travel along the line (mm)", false, {}, {}, {}};
-  fit.y = {"off the line (um)", false, {}, {}, {}};
   PlotSeries line{"fitted line", kAfter, {}, {}, true}, across_u{"across, x", kBefore, {}, {}, false},
       across_v{"across, y", kPalette[1], {}, {}, false};
-  for (const Eigen::Vector3d& p : s.points_m) {
+  for (const Eigen::Vector3d& p : s.points_m) {  // across in m, scaled to the axis's unit below
     const Eigen::Vector3d r = p - s.axis_point_m;
     const double travel = d.dot(r) * kMm;
     across_u.x.push_back(travel);
-    across_u.y.push_back(u.dot(r) * kUm);
+    across_u.y.push_back(u.dot(r));
     across_v.x.push_back(travel);
-    across_v.y.push_back(v.dot(r) * kUm);
+    across_v.y.push_back(v.dot(r));
   }
+  const LengthUnit unit = length_unit(std::max(largest_magnitude(across_u.y), largest_magnitude(across_v.y)));
+  for (PlotSeries* series : {&across_u, &across_v})
+    for (double& value : series->y) value *= unit.per_m;
+  fit.y = {std::string("off the line (") + unit.name + ")", false, {}, {}, {}};
   const auto [lo, hi] = std::minmax_element(across_u.x.begin(), across_u.x.end());
   line.x = {*lo, *hi};
   line.y = {0.0, 0.0};
@@ -469,7 +575,26 @@ std::string comparison(const RunContext& c, const Comparison& t, std::size_t ind
   html += "</tr>";
   for (const ComparisonRow& row : t.rows) {
     html += "<tr><td>" + escape_html(row.name) + "</td>";
-    for (const std::optional<double>& v : row.values) html += cell(v ? value_text(row.quantity, *v) : "&mdash;");
+    std::vector<double> given;
+    for (const std::optional<double>& v : row.values)
+      if (v) given.push_back(*v);
+    const RowUnit u = row_unit(row.quantity, given);
+    for (const std::optional<double>& v : row.values) html += cell(v ? value_text(u, *v) : "&mdash;");
+    html += "</tr>";
+  }
+  html += "</table>";
+  if (!t.note.empty()) html += "<p class=\"note\">" + escape_html(t.note) + "</p>";
+  return html + "</section>";
+}
+
+std::string text_table(const RunContext& c, const TextTable& t, std::size_t index) {
+  std::string html = "<section class=\"table\" id=\"" + c.id("table" + std::to_string(index + 1)) + "\"><h3>" +
+                     escape_html(t.title) + "</h3><table class=\"text\"><tr>";
+  for (const std::string& column : t.columns) html += heading(column);
+  html += "</tr>";
+  for (const std::vector<std::string>& row : t.rows) {
+    html += "<tr>";
+    for (const std::string& value : row) html += "<td>" + escape_html(value) + "</td>";
     html += "</tr>";
   }
   html += "</table>";
@@ -488,6 +613,7 @@ std::string run_section(const RunContext& c) {
   if (!run.sweeps.empty()) html += sweeps(c);
   if (run.bus) html += bus(c, *run.bus);
   for (std::size_t i = 0; i < run.comparisons.size(); ++i) html += comparison(c, run.comparisons[i], i);
+  for (std::size_t i = 0; i < run.tables.size(); ++i) html += text_table(c, run.tables[i], i);
   return html + "</section>";
 }
 
@@ -509,8 +635,8 @@ std::string render_html(const Report& report) {
     validate(runs.back());
   }
   std::string html = "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" +
-                     escape_html(report.title) + "</title><style>" + kStyle + "</style></head><body><header><h1>" +
-                     escape_html(report.title) + "</h1>";
+                     escape_html(report.title) + "</title><style>" + kStyle + plot_style() +
+                     "</style></head><body><header><h1>" + escape_html(report.title) + "</h1>";
   if (!report.date.empty()) html += "<p class=\"date\">" + escape_html(report.date) + "</p>";
   html += "</header>";
   if (runs.size() > 1) {

@@ -5,11 +5,16 @@
 //
 // A Report holds one or more runs (the demo calibrates two rigs); each run's section shows, when
 // its data are given (an empty vector / absent optional leaves the section out entirely):
-//   facts            robot, method, data source, measurement count, simulated or measured;
+//   facts            robot, method, data source, measurement count, simulated or measured (or
+//                    that the data do not say);
 //   model            per joint, base and tool: each parameter's nominal and identified value,
-//                    the change, its 1-sigma, and the true value and error when simulated
-//                    (errors beyond 3 sigma are marked);
-//   identifiability  the parameters held fixed and why, and free-text notes;
+//                    the change, its 1-sigma, and when simulated the true value and the error --
+//                    measured from the true value as the data can identify it when that is
+//                    given (the held-fixed parameters it absorbs named), so that a correct
+//                    result is never marked; errors beyond 3 sigma are marked, and a legend
+//                    under the table says what each mark means;
+//   identifiability  the parameters held fixed and why, and free-text notes (a note's further
+//                    lines, after '\n', are listed under it one by one);
 //   accuracy         per model (e.g. nominal, identified): mean, RMS, max position error on the
 //                    validation poses (and orientation when given), as a table and a dot plot;
 //   residuals        position error per validation pose before/after, and after vs each joint's
@@ -21,18 +26,21 @@
 //                    fitted circle (revolute) or line (prismatic), radius and RMS, and the
 //                    residual of every point;
 //   bus              CAN statistics (frames, bytes, errors, load);
-//   comparisons      tables of values side by side (e.g. Kapucu & Baysec's Table 1, ours, truth).
+//   comparisons      tables of values side by side (e.g. Kapucu & Baysec's Table 1, ours, truth);
+//   tables           tables of text (e.g. the joint-type tests' p-values).
 //
-// Units: every input is SI (m, rad, s). Shown as the reader expects: lengths in mm, angles in deg
-// and angle changes, sigmas and errors in mrad, joint readings in deg (revolute) or mm.
-// All text is HTML-escaped.
+// Units: every input is SI (m, rad, s). Shown as the reader expects, one unit per table row:
+// lengths in mm; angles in deg, or in mrad in a row whose values are all below 0.1 rad (small
+// angles: base and tool rotations, angle offsets); joint readings in deg (revolute) or mm.
+// Lengths in plot notes and axes are in um below 1 mm and in mm from there (one rule,
+// length_unit() in report.cpp, for every plot). All text is HTML-escaped.
 //
 // Cost: O(size of the data); a run with 200 validation poses and 6 joints renders in a few
 // milliseconds into about 200 kB. Thread safety: pure functions.
 //
 // Errors: ReportError, its message naming the run (index and title) and the item at fault --
-// a validation pose whose joint readings do not match the run's joints; a comparison row with
-// more or fewer values than columns; a sweep of a joint the run does not have, with fewer than
+// a validation pose whose joint readings do not match the run's joints; a comparison row or a
+// text table's row with more or fewer values than columns; a sweep of a joint the run does not have, with fewer than
 // 3 points or a zero axis direction; a non-finite number where a plot needs it; a negative
 // count or sigma. write_html() also throws ReportError when the file cannot be written.
 #pragma once
@@ -62,6 +70,13 @@ struct ParameterRow {
   double identified = 0.0;       // SI
   std::optional<double> stddev;  // 1-sigma, SI; absent for a parameter held fixed
   std::optional<double> truth;   // SI; simulated data only
+  // The true value as the data can identify it (simulated data only): the true model fitted in
+  // the identified parameters, the held-fixed ones at their starting values -- what a solve
+  // from noise-free data at the same poses gives. It differs from `truth` by what the
+  // held-fixed parameters' true errors put on this one; `absorbs` names them ("d1-d4, tool_z").
+  // The error is measured from it when given.
+  std::optional<double> identifiable_truth;
+  std::string absorbs;
 };
 
 struct HeldFixed {
@@ -122,12 +137,22 @@ struct Comparison {
   std::string note;
 };
 
+// A table of text: rows of cells, one per column.
+struct TextTable {
+  std::string title;
+  std::vector<std::string> columns;
+  std::vector<std::vector<std::string>> rows;
+  std::string note;
+};
+
 struct Run {
   std::string title;
   std::string robot;
   std::string method;
   std::string data;  // where the measurements came from
-  bool simulated = false;
+  // Simulated (true values known) or measured; absent: not known (e.g. a data file that does
+  // not say), and the report says so.
+  std::optional<bool> simulated = false;
   int measurements = 0;
   std::vector<JointInfo> joints;
   std::vector<ParameterRow> parameters;
@@ -138,6 +163,7 @@ struct Run {
   std::vector<SweepPlot> sweeps;
   std::optional<BusStatistics> bus;
   std::vector<Comparison> comparisons;
+  std::vector<TextTable> tables;
 };
 
 struct Report {

@@ -73,7 +73,11 @@ TEST_CASE("report: sections not given are left out") {
   CHECK_FALSE(has(html, "<svg"));
   CHECK_FALSE(has(html, "class=\"date\""));
   CHECK(has(html, "<h2>nothing measured</h2>"));
-  CHECK(has(html, "measured</td>"));
+  CHECK(has(html, "<td>measured</td>"));
+  run.simulated.reset();  // a data file that does not say
+  report.runs = {run};
+  CHECK(has(render_html(report), "<td>not recorded in the data (simulated or measured)</td>"));
+  run.simulated = false;
 
   // One section at a time: only it appears.
   const Report sample = testing::sample_report();
@@ -133,9 +137,11 @@ TEST_CASE("report: each sweep has a 3-D view of its points, its fit, its axis an
   CHECK(has(circle, ">circle</text>"));
   CHECK(has(circle, ">axis</text>"));
   CHECK(has(circle, "points: offsets from the fit drawn x50 ("));
+  CHECK(has(circle, ">offsets x50</text>"));  // the offsets' colour has its legend entry
   const std::size_t max_at = circle.find(", max ");
   REQUIRE(max_at != std::string::npos);
-  CHECK(std::stod(circle.substr(max_at + 6)) == doctest::Approx(1000.0).epsilon(0.002));  // um
+  CHECK(std::stod(circle.substr(max_at + 6)) == doctest::Approx(1.0).epsilon(0.002));
+  CHECK(circle.substr(max_at + 6).find(" mm)") != std::string::npos);  // 1 mm and more: in mm
   const std::string line = plot_titled(html, "Joint 3 (slide): 3-D view");
   REQUIRE_FALSE(line.empty());
   CHECK(count(line, "class=\"mark\"") == 24 + 24 + 1 + 1 + 3);
@@ -230,6 +236,25 @@ TEST_CASE("report: write_html writes what render_html returns") {
   CHECK(text == render_html(report));
 }
 
+namespace {
+
+// The number in attribute `name` of the first element of `svg` that starts with `tag`.
+double attribute(const std::string& svg, const std::string& tag, const std::string& name) {
+  const std::size_t element = svg.find(tag);
+  REQUIRE(element != std::string::npos);
+  const std::size_t at = svg.find(" " + name + "=\"", element);
+  REQUIRE(at != std::string::npos);
+  return std::stod(svg.substr(at + name.size() + 3));
+}
+
+std::string point(double x, double y) {
+  char text[64];
+  std::snprintf(text, sizeof text, "cx=\"%.1f\" cy=\"%.1f\"", x, y);
+  return text;
+}
+
+}  // namespace
+
 TEST_CASE("svg plot: points land inside the frame where the axes say; log axes take zero") {
   PlotSpec spec;
   spec.title = "t";
@@ -240,14 +265,120 @@ TEST_CASE("svg plot: points land inside the frame where the axes say; log axes t
   spec.series = {{"s", "#000", {0.0, 10.0, 5.0}, {0.01, 1.0, 0.0}, false}};
   const std::string svg = svg_plot(spec);
   CHECK(count(svg, "class=\"mark\"") == 3);
-  // Left margin 58, right 12: x = 0 -> 58, x = 10 -> 188. Log axis from 0.01 to 1: y = 1 at the top
-  // (40, under the legend row), y = 0.01 at the bottom (150 - 40).
-  CHECK(has(svg, "cx=\"58.0\" cy=\"110.0\""));  // (0, 0.01): bottom-left
-  CHECK(has(svg, "cx=\"188.0\" cy=\"40.0\""));
-  CHECK(has(svg, "cx=\"123.0\" cy=\"110.0\""));  // zero on a log axis: at the bottom
+  CHECK(has(svg, "width=\"200.0\" height=\"150.0\""));  // room enough: the size asked
+  // x from 0 to 10 across the frame; the log axis from 0.01 (bottom) to 1 (top).
+  const double left = attribute(svg, "<rect class=\"frame\"", "x"), top = attribute(svg, "<rect class=\"frame\"", "y");
+  const double width = attribute(svg, "<rect class=\"frame\"", "width"),
+               height = attribute(svg, "<rect class=\"frame\"", "height");
+  CHECK(left > 20.0);
+  CHECK(left + width < 200.0);
+  CHECK(top + height < 150.0);
+  CHECK(has(svg, point(left, top + height)));  // (0, 0.01): bottom-left
+  CHECK(has(svg, point(left + width, top)));
+  CHECK(has(svg, point(left + width / 2, top + height)));  // zero on a log axis: at the bottom
   CHECK(has(svg, ">0.01</text>"));
   CHECK(has(svg, ">0.1</text>"));
 
   spec.series[0].y.pop_back();
   CHECK_THROWS_WITH_AS(svg_plot(spec), doctest::Contains("series 's' has 3 x values and 2 y values"), ReportError);
+}
+
+TEST_CASE("svg plot: text too long for its room is wrapped, the left margin fits the categories, the plot grows") {
+  PlotSpec spec;
+  spec.title = "Position error on the validation poses, with a title long enough to need a second line";
+  spec.width_px = 400;
+  spec.height_px = 120;
+  spec.x = {"position error (mm)", true, {}, {}, {}};
+  spec.y.categories = {"nominal model", "online correction: corrected targets vs the simulated truth",
+                       "online correction: uncorrected targets vs the simulated truth"};
+  spec.series = {{"mean", "#d95f02", {1.0, 0.1, 2.0}, {0.0, 1.0, 2.0}, false},
+                 {"a series with a long name", "#7570b3", {1.5, 0.2, 2.5}, {0.0, 1.0, 2.0}, false},
+                 {"another series with a long name", "#1b9e77", {1.7, 0.3, 2.7}, {0.0, 1.0, 2.0}, false}};
+  spec.notes = {"points: offsets from the fit drawn x10 (RMS 4.530 mm, max 10.776 mm), and more words to wrap"};
+  const std::string svg = svg_plot(spec);
+  CHECK(has(svg, "width=\"400.0\""));
+  const double height = attribute(svg, "<svg", "height");
+  CHECK(height > 120.0);  // three categories of two lines each need more than 120 px
+  // No category's name is cut: each is drawn whole, over lines one after the other.
+  std::string names;
+  for (std::size_t at = svg.find("text-anchor=\"end\""); at != std::string::npos;
+       at = svg.find("text-anchor=\"end\"", at + 1)) {
+    const std::size_t begin = svg.find('>', at) + 1;
+    names += svg.substr(begin, svg.find("</text>", begin) - begin) + " ";
+  }
+  CHECK(names ==
+        "nominal model online correction: corrected targets vs the simulated truth online correction: "
+        "uncorrected targets vs the simulated truth ");
+  CHECK(count(svg, "text-anchor=\"end\"") > 3);  // wrapped
+  // Every text's estimated box lies inside the plot: left of its anchor by its width (end),
+  // half of it (middle) or none (start).
+  for (std::size_t at = svg.find("<text"); at != std::string::npos; at = svg.find("<text", at + 1)) {
+    const std::size_t open_end = svg.find('>', at), close = svg.find("</text>", at);
+    const std::string element = svg.substr(at, open_end - at), text = svg.substr(open_end + 1, close - open_end - 1);
+    if (has(element, "transform=")) continue;  // the rotated y label
+    const double x = attribute(element, "<text", "x");
+    const double size = has(element, "title") ? 12.0 : has(element, "label") ? 11.0 : 10.0;
+    const double w = text_width_px(text, size, has(element, "title"));
+    const double x0 = has(element, "\"end\"") ? x - w : has(element, "\"middle\"") ? x - w / 2 : x;
+    CHECK_MESSAGE(x0 >= 0.0, text);
+    CHECK_MESSAGE(x0 + w <= 400.0, text);
+    CHECK_MESSAGE(attribute(element, "<text", "y") <= height, text);
+  }
+}
+
+TEST_CASE("svg plot: widths are estimated on the wide side, per code point") {
+  CHECK(text_width_px("mmmm", 10.0) == doctest::Approx(40.0));
+  CHECK(text_width_px("0123456789", 10.0) == doctest::Approx(64.0));
+  CHECK(text_width_px("\u00b5m", 10.0) == doctest::Approx(20.0));  // two code points, three bytes
+  CHECK(text_width_px("ab", 10.0, true) > text_width_px("ab", 10.0));
+}
+
+TEST_CASE("report: the model table compares with what the data identify, one unit per row, with a legend") {
+  const std::string html = render_html(testing::sample_report());
+  // base_z: 1.4 mm from its true value, which takes up the held-fixed d1's error; 0.05 mm from
+  // the true value as the data identify it (under 3 sigma of 0.03 mm): not marked.
+  CHECK(has(html, "<th>true, as the data identify it</th>"));
+  CHECK(has(html,
+            "<td class=\"n\">500.650 mm</td><td class=\"n\">502.050 mm<br><span class=\"absorbs\">absorbs "
+            "d1</span></td><td class=\"n\">0.0500 mm</td>"));
+  // base_rx: every value below 0.1 rad, so the whole row in mrad.
+  CHECK(has(html,
+            "<tr><td>base_rx</td><td class=\"n\">0.000 mrad</td><td class=\"n\">1.200 mrad</td><td "
+            "class=\"n\">1.2000 mrad</td><td class=\"n\">0.1000 mrad</td><td class=\"n\">1.100 mrad</td>"));
+  // alpha1: in degrees throughout, its change and sigma too.
+  const std::size_t alpha1 = html.find("<tr><td>alpha1</td>");
+  REQUIRE(alpha1 != std::string::npos);
+  const std::string row = html.substr(alpha1, html.find("</tr>", alpha1) - alpha1);
+  CHECK(count(row, "&deg;") == 7);
+  CHECK_FALSE(has(row, "mrad"));
+  // A legend entry for each mark the table uses.
+  CHECK(has(html, "<li><span class=\"off\">bold red</span>: the error is more than 3 sigma</li>"));
+  CHECK(has(html, "<li><span class=\"fixed\">held fixed</span>"));
+  // Without any marked row, no red in the legend either.
+  Report report = testing::sample_report();
+  report.runs[0].parameters.pop_back();  // tool_x, the one 5 sigma off
+  const std::string clean = render_html(report);
+  CHECK_FALSE(has(clean, "class=\"n off\""));
+  CHECK_FALSE(has(clean, "<span class=\"off\">"));
+}
+
+TEST_CASE("report: a note's further lines are items of their own; text tables; lengths in um or mm by size") {
+  Report report = testing::sample_report();
+  std::string html = render_html(report);
+  CHECK(has(html,
+            "<li>noise: position: instrument sigma 0.0200 mm (given)<ul><li>rejected line 14: residual 0.412 "
+            "mm</li><li>rejected line 52: residual 0.388 mm</li></ul></li>"));
+  CHECK(has(html, "<h3>Joint-type tests</h3>"));
+  CHECK(has(html, "<th>p(circle at angle q)</th>"));
+  CHECK(has(html, "<td>0.0021</td>"));
+  CHECK(has(html, "RMS 50.0 \u00b5m"));  // the sweeps' fits: 0.05 mm
+  CHECK_FALSE(has(html, " um"));
+  report.runs[1].sweeps[0].rms_m = 5.2551;  // 5255.1 mm: in mm, never "5255100.0 um"
+  report.runs[1].sweeps[1].rms_m = 5.2551e-3;
+  html = render_html(report);
+  CHECK(has(html, "RMS 5255.100 mm"));
+  CHECK(has(html, "RMS 5.255 mm"));
+  report.runs[1].tables[0].rows[1].pop_back();
+  CHECK_THROWS_WITH_AS(render_html(report), doctest::Contains("table 'Joint-type tests', row 2: 4 cells for 5 columns"),
+                       ReportError);
 }
