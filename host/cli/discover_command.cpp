@@ -1,7 +1,6 @@
 #include "host/cli/discover_command.hpp"
 
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -24,21 +23,6 @@ struct DiscoverArgs {
   double significance = 0.01, outlier_probability = 1e-3, still_tolerance = 0.0;
 };
 
-// Whether the data file says its measurements are simulated: a comment line "# measurements:
-// simulated ..." or "# measurements: measured ..." among the comments that open it (the dataset
-// reader skips '#' lines); absent: not recorded, and the report says so.
-std::optional<bool> simulated_by_comment(const std::string& path) {
-  std::ifstream in(path);
-  const std::string key = "# measurements: ";
-  for (std::string line; std::getline(in, line) && (line.empty() || line[0] == '#');) {
-    if (line.rfind(key, 0) != 0) continue;
-    const std::string value = line.substr(key.size());
-    if (value.rfind("simulated", 0) == 0) return true;
-    if (value.rfind("measured", 0) == 0) return false;
-  }
-  return std::nullopt;
-}
-
 std::string p_value_text(double p) {
   char text[32];
   std::snprintf(text, sizeof text, "%.3g", p);
@@ -54,7 +38,7 @@ report::Report discovery_report(const DiscoverArgs& a, const model::Dataset& dat
   run.robot = result.model.name;
   run.method = "manipulator-independent discovery (no model): joint-type tests, axis fits, link table";
   run.data = a.data;
-  run.simulated = simulated_by_comment(a.data);
+  run.simulated = std::nullopt;  // a dataset does not say where its measurements came from
   run.measurements = static_cast<int>(data.rows.size());
   for (const model::Joint& j : result.model.joints)
     run.joints.push_back({j.name, j.type == core::JointType::prismatic});

@@ -381,8 +381,6 @@ int run(const SessionArgs& a) {
     std::ostringstream csv;
     model::Dataset all = data.calibration;
     all.rows.insert(all.rows.end(), data.validation.rows.begin(), data.validation.rows.end());
-    // Read back by `kincal discover --report`, which says where its data came from.
-    csv << "# measurements: " << (simulated ? "simulated" : "measured") << " (kincal session)\n";
     model::write_dataset(csv, all);
     files::write_file_atomically(a.dataset, csv.str());
   }
