@@ -150,8 +150,13 @@ int run_identify(const IdentifyArgs& a) {
     std::cout << "kincal identify: " << nominal.name << " from " << a.data << '\n' << identify::format_report(result);
     // The baseline: the nominal geometry registered to the device, its tool fitted.
     std::optional<identify::IdentifyResult> registered;
-    if (a.params.empty() && result.identifiability.identified.size() > 0)
-      registered = identify::identify_registration(nominal, data, options, result);
+    if (a.params.empty() && result.identifiability.identified.size() > 0) {
+      try {  // the baseline only informs: without it the calibration still stands
+        registered = identify::identify_registration(nominal, data, options, result);
+      } catch (const model::InputError& e) {
+        std::cout << "baseline: not available (" << e.what() << ")\n";
+      }
+    }
     std::optional<model::Dataset> held_out;
     if (!a.validate.empty()) {
       held_out = model::read_dataset(a.validate);
