@@ -48,8 +48,10 @@ std::string stats_line(const char* what, const identify::AccuracyStats& s) {
 
 // Where the user stands: the registered nominal beside the calibrated model, on the training
 // data and on held-out data, and a one-line verdict.
+// `calibrated_held_out`: the calibrated model's accuracy on `held_out` (both null without --validate).
 std::string summary(const IdentifyArgs& a, const identify::IdentifyResult& result,
-                    const std::optional<identify::IdentifyResult>& registered, const model::Dataset* held_out) {
+                    const std::optional<identify::IdentifyResult>& registered, const model::Dataset* held_out,
+                    const identify::AccuracyStats* calibrated_held_out) {
   std::ostringstream out;
   out.setf(std::ios::fixed);
   out.precision(3);
@@ -63,7 +65,7 @@ std::string summary(const IdentifyArgs& a, const identify::IdentifyResult& resul
   }
   double before = registered ? registered->residuals.rms_m : 0.0, after = result.residuals.rms_m;
   if (held_out != nullptr) {
-    const identify::AccuracyStats calibrated = identify::accuracy(result.model, *held_out);
+    const identify::AccuracyStats& calibrated = *calibrated_held_out;
     out << "validation (" << a.validate << ", " << calibrated.count << " held-out measurements):\n";
     if (registered) {
       const identify::AccuracyStats baseline = identify::accuracy(registered->model, *held_out);
@@ -162,8 +164,11 @@ int run_identify(const IdentifyArgs& a) {
       held_out = model::read_dataset(a.validate);
       model::check_joint_count(nominal, held_out->joint_count, held_out->source);
     }
-    std::cout << summary(a, result, registered, held_out ? &*held_out : nullptr);
-    if (held_out) result.model.calibration->validation_rms_m = identify::accuracy(result.model, *held_out).rms_m;
+    std::optional<identify::AccuracyStats> calibrated_held_out;
+    if (held_out) calibrated_held_out = identify::accuracy(result.model, *held_out);
+    std::cout << summary(a, result, registered, held_out ? &*held_out : nullptr,
+                         calibrated_held_out ? &*calibrated_held_out : nullptr);
+    if (calibrated_held_out) result.model.calibration->validation_rms_m = calibrated_held_out->rms_m;
     model::save_model(result.model, a.out);
     std::cout << "wrote " << a.out << '\n';
     if (!a.urdf.empty()) {

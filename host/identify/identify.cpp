@@ -719,15 +719,6 @@ std::string format_noise(const IdentifyResult& r) {
   return out.str();
 }
 
-namespace {
-
-// A motion of the base (registration to the measuring device) or of the tool.
-bool is_registration_parameter(const core::ParameterId& id) {
-  return !model::is_joint_map_parameter(id.kind) && id.kind >= core::ParameterKind::base_x;
-}
-
-}  // namespace
-
 IdentifyResult identify_registration(const RobotModel& nominal, const model::Dataset& data,
                                      const IdentifyOptions& options, const IdentifyResult& calibrated) {
   IdentifyOptions o = options;
@@ -736,7 +727,7 @@ IdentifyResult identify_registration(const RobotModel& nominal, const model::Dat
   o.fixed.clear();
   o.requested.clear();
   for (const core::ParameterId& id : calibrated.identifiability.identified)
-    if (is_registration_parameter(id)) o.requested.push_back(model::parameter_name(id));
+    if (model::is_motion_parameter(id.kind)) o.requested.push_back(model::parameter_name(id));
   RobotModel start = nominal;
   std::vector<std::string> notes;
   register_base(start, data, notes);
@@ -774,7 +765,7 @@ std::string format_report(const IdentifyResult& r) {
       out << "  held fixed: " << model::parameter_name(h.id) << " (" << h.reason << ")\n";
     out << format_noise(r);
     if (std::any_of(r.identifiability.identified.begin(), r.identifiability.identified.end(),
-                    is_registration_parameter))
+                    [](const core::ParameterId& id) { return model::is_motion_parameter(id.kind); }))
       out << "frames: base_* move frame 0 along and about its own axes (base_T_frame0 * [exp(r), t]); tool_* move "
              "the tool along and about the tool's own axes (flange_T_tool * [exp(r), t])\n";
     out << "parameter        change          stddev\n";

@@ -137,6 +137,10 @@ bool has_compliance(const RobotModel& model) {
 
 bool is_joint_map_parameter(core::ParameterKind kind) { return kind == kJointScale || kind == kJointCompliance; }
 
+bool is_motion_parameter(core::ParameterKind kind) {
+  return !is_joint_map_parameter(kind) && kind >= core::ParameterKind::base_x;
+}
+
 DisplayUnit display_unit(const RobotModel& model, core::ParameterId id) {
   using K = core::ParameterKind;
   if (id.kind == kJointScale) return {1e6, "ppm"};
@@ -248,8 +252,7 @@ Eigen::MatrixXd joint_jacobian(const RobotModel& model, std::span<const double> 
 
 std::string parameter_name(core::ParameterId id) {
   const int kind = static_cast<int>(id.kind);
-  if (!is_joint_map_parameter(id.kind) && kind >= static_cast<int>(core::ParameterKind::base_x))
-    return kMotionNames[kind - static_cast<int>(core::ParameterKind::base_x)];
+  if (is_motion_parameter(id.kind)) return kMotionNames[kind - static_cast<int>(core::ParameterKind::base_x)];
   for (const KindName& k : kIndexedNames)
     if (k.kind == id.kind) return std::string(k.name) + std::to_string(id.link + 1);
   return "?";

@@ -167,6 +167,8 @@ Eigen::MatrixXd joint_jacobian(const RobotModel& model, std::span<const double> 
 inline constexpr core::ParameterKind kJointScale{200};
 inline constexpr core::ParameterKind kJointCompliance{201};
 bool is_joint_map_parameter(core::ParameterKind kind);
+// base_* or tool_*: a small motion of frame 0 or of the tool, not a link's or the joint map's.
+bool is_motion_parameter(core::ParameterKind kind);
 
 // How reports print a parameter: value_in_unit = SI value * per_si. Angles in deg, lengths in
 // mm, scales in ppm, compliances in urad/(N m) (um/N for a prismatic joint).
