@@ -77,7 +77,9 @@ const char* to_string(shared::AckStatus status) {
     case shared::AckStatus::kBusy:
       return "busy";
     case shared::AckStatus::kNotIdle:
-      return "not idle";
+      // The ack alone says why: the platform takes parameters only in the idle state.
+      return "not idle (the platform is measuring or correcting: it takes parameters only when idle; stop the "
+             "session or the correction stream first)";
     case shared::AckStatus::kUnknownBlock:
       return "unknown block";
     case shared::AckStatus::kMissing:

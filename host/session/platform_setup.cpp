@@ -227,11 +227,7 @@ std::uint32_t upload_and_verify(can::PlatformClient& client, shared::ParameterBl
   try {
     sequence = client.upload(id, sent);
   } catch (const can::PlatformError& e) {
-    const bool running = client.last_heartbeat() && client.last_heartbeat()->state == shared::PlatformState::kRunning;
-    throw can::PlatformError(std::string(name) + " block: " + e.what() +
-                             (running ? " (the platform is measuring or correcting: it takes parameters only when "
-                                        "idle; stop the session or the correction stream first)"
-                                      : ""));
+    throw can::PlatformError(std::string(name) + " block: " + e.what());
   }
   const std::vector<std::uint8_t> back = client.download(id);
   if (back.size() != n)
