@@ -403,13 +403,18 @@ Matrix3 rotation_from_rpy(const Vector3& rpy) {
 }
 
 Vector3 rpy_from_rotation(const Matrix3& r) {
-  // R = Rz(y) Ry(p) Rx(r): r20 = -sin p, r21 = cos p sin r, r22 = cos p cos r, r10 = sin y cos p.
+  // R = Rz(y) Ry(p) Rx(r); its first column is (cos y cos p, sin y cos p, -sin p). Pitch and yaw
+  // come from that column, roll from the whole matrix once they are known:
+  // Rx(roll) = (Rz(y) Ry(p))^T R. Near p = +-pi/2 yaw is ill-determined (the column's xy part is
+  // tiny), but roll absorbs its error through entries of size 1, so R(rpy) equals R to rounding
+  // (no division by cos p; at p = +-pi/2 exactly, roll takes whatever turn the yaw leaves).
   const double pitch = std::atan2(-r(2, 0), std::hypot(r(0, 0), r(1, 0)));
-  if (std::hypot(r(0, 0), r(1, 0)) < 1e-12) {  // gimbal lock: put everything into yaw
-    const double yaw = std::atan2(-r(0, 1), r(1, 1));
-    return {0.0, pitch, yaw};
-  }
-  return {std::atan2(r(2, 1), r(2, 2)), pitch, std::atan2(r(1, 0), r(0, 0))};
+  const double yaw = std::atan2(r(1, 0), r(0, 0));
+  const Matrix3 roll_only = (Eigen::AngleAxisd(yaw, Vector3::UnitZ()) * Eigen::AngleAxisd(pitch, Vector3::UnitY()))
+                                .toRotationMatrix()
+                                .transpose() *
+                            r;
+  return {std::atan2(roll_only(2, 1) - roll_only(1, 2), roll_only(1, 1) + roll_only(2, 2)), pitch, yaw};
 }
 
 }  // namespace kincal::model

@@ -1,13 +1,16 @@
 #include "host/model/urdf.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 #include <utility>
 
 #include "host/model/axes.hpp"
 #include "host/model/number_text.hpp"
+#include "host/model/urdf_text.hpp"
 #include "host/model/xml_text.hpp"
 
 namespace kincal::model {
@@ -101,38 +104,71 @@ Transform onto_axis(const Transform& estimate, const Vector3& axis_in_link, cons
   return t;
 }
 
-// The next `tag` ("<origin") in text[from, until) outside comments; npos when none.
-std::size_t find_tag(const std::string& text, std::size_t from, std::size_t until, const std::string& tag) {
-  while (from < until) {
-    const std::size_t t = text.find(tag, from), c = text.find("<!--", from);
-    if (t == std::string::npos || t >= until) return std::string::npos;
-    if (c == std::string::npos || t < c) {
-      const char next = t + tag.size() < text.size() ? text[t + tag.size()] : '>';
-      if (next == ' ' || next == '\t' || next == '\n' || next == '\r' || next == '/' || next == '>') return t;
-      from = t + tag.size();
-    } else {
-      const std::size_t end = text.find("-->", c + 4);
-      if (end == std::string::npos) return std::string::npos;
-      from = end + 3;
-    }
+// Below these an origin counts as unchanged and keeps its text.
+constexpr double kUnchangedM = 1e-12;
+constexpr double kUnchangedRad = 1e-12;
+
+// The text for three numbers whose attribute held `old_text`: a number within `tolerance` of
+// the old one keeps its old spelling.
+std::string triple_text(const Vector3& value, std::string_view old_text, double tolerance) {
+  std::vector<std::string_view> old;
+  for (std::size_t p = old_text.find_first_not_of(" \t\r\n"); p != std::string_view::npos;) {
+    const std::size_t end = std::min(old_text.find_first_of(" \t\r\n", p), old_text.size());
+    old.push_back(old_text.substr(p, end - p));
+    p = old_text.find_first_not_of(" \t\r\n", end);
   }
-  return std::string::npos;
+  std::string out;
+  for (Eigen::Index i = 0; i < 3; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    double was = 0.0;
+    const bool keep = old.size() == 3 &&
+                      std::from_chars(old[k].data(), old[k].data() + old[k].size(), was).ec == std::errc() &&
+                      std::abs(was - value[i]) <= tolerance;
+    out += (i == 0 ? "" : " ") + (keep ? std::string(old[k]) : num(value[i]));
+  }
+  return out;
 }
 
-// Where the text of joint `name` starts (its "<joint" at or after line `line`) and where its
-// start tag ends (after the '>').
-std::pair<std::size_t, std::size_t> joint_start_tag(const std::string& text, int line, const std::string& name) {
-  std::size_t from = 0;
-  for (int l = 1; l < line && from != std::string::npos; ++l) from = text.find('\n', from) + 1;
-  for (std::size_t t = find_tag(text, from, text.size(), "<joint"); t != std::string::npos;
-       t = find_tag(text, t + 6, text.size(), "<joint")) {
-    const std::size_t end = text.find('>', t);
-    const std::string tag = text.substr(t, end - t);
-    if (tag.find("name=\"" + escape_xml_text(name) + "\"") != std::string::npos ||
-        tag.find("name='" + escape_xml_text(name) + "'") != std::string::npos)
-      return {t, end + 1};
+struct Edit {
+  std::size_t begin, end;
+  std::string text;
+};
+
+// The element the reader put at `index`, checked against the text's own map.
+const XmlElementSpan& element_at(const XmlTextMap& map, std::size_t index, std::string_view name, int line) {
+  if (index >= map.elements.size() || map.elements[index].name != name || map.elements[index].line != line)
+    throw std::logic_error("write_calibrated_urdf: the text's element " + std::to_string(index) + " is not the <" +
+                           std::string(name) + "> tinyxml2 read on line " + std::to_string(line));
+  return map.elements[index];
+}
+
+// The edits that give joint `j` the origin `o`: only what changed (an attribute value, a missing
+// attribute or a missing <origin>), nothing when nothing did.
+void edit_origin(const std::string& text, const XmlTextMap& map, const UrdfJoint& j, const Transform& o,
+                 std::vector<Edit>& edits) {
+  const bool move = (o.translation - j.parent_T_joint.translation).norm() > kUnchangedM;
+  const bool turn = Eigen::AngleAxisd(j.parent_T_joint.rotation.transpose() * o.rotation).angle() > kUnchangedRad;
+  if (!move && !turn) return;
+  const XmlElementSpan& joint = element_at(map, j.element, "joint", j.line);
+  if (j.origin_element == UrdfJoint::kNoElement) {
+    const std::string q(1, joint.quote);
+    edits.push_back({joint.start_tag_end, joint.start_tag_end,
+                     "<origin xyz=" + q + triple(o.translation) + q + " rpy=" + q +
+                         triple(rpy_from_rotation(o.rotation)) + q + "/>"});
+    return;
   }
-  throw std::logic_error("joint '" + name + "' not found in the text tinyxml2 parsed");
+  const XmlElementSpan& origin = element_at(map, j.origin_element, "origin", j.origin_line);
+  const auto set = [&](std::string_view name, const Vector3& value, double tolerance) {
+    if (const XmlAttributeSpan* a = origin.attribute(name)) {
+      const std::string_view old(text.data() + a->value_begin, a->value_end - a->value_begin);
+      edits.push_back({a->value_begin, a->value_end, triple_text(value, old, tolerance)});
+    } else {
+      edits.push_back({origin.name_end, origin.name_end,
+                       " " + std::string(name) + "=" + origin.quote + triple(value) + origin.quote});
+    }
+  };
+  if (move) set("xyz", o.translation, kUnchangedM);
+  if (turn) set("rpy", rpy_from_rotation(o.rotation), kUnchangedRad);
 }
 
 std::string millimetres(double m) {
@@ -216,31 +252,15 @@ CalibratedUrdf write_calibrated_urdf(const std::string& original_text, const std
     }
   }
 
-  // Edit the text itself, so that everything but the chain's <origin> elements stays byte for
-  // byte (formatting, comments, attribute order); the reader gave each joint's line.
-  struct Edit {
-    std::size_t begin, end;
-    std::string text;
-  };
+  // Edit the text itself, so that everything but the chain's changed <origin> attributes stays
+  // byte for byte (formatting, comments, quotes, attribute order, line ends, a byte-order mark).
+  const XmlTextMap map = map_xml_text(original_text);
   std::vector<Edit> edits;
   for (std::size_t k = 0; k < chain.joints.size(); ++k) {
     if (!rewrite[k]) continue;
     const UrdfJoint& j = chain.joints[k];
     const Transform parent = k == 0 ? Transform{} : poses[k - 1];
-    const Transform o = parent.inverse() * poses[k];
-    const std::string element =
-        "<origin xyz=\"" + triple(o.translation) + "\" rpy=\"" + triple(rpy_from_rotation(o.rotation)) + "\"/>";
-    const auto [tag_begin, tag_end] = joint_start_tag(original_text, j.line, j.name);
-    const std::size_t close = original_text.find("</joint>", tag_end);
-    const std::size_t at = find_tag(original_text, tag_end, close, "<origin");
-    if (at == std::string::npos) {
-      edits.push_back({tag_end, tag_end, element});
-    } else {
-      const std::size_t gt = original_text.find('>', at);
-      const std::size_t end =
-          original_text[gt - 1] == '/' ? gt + 1 : original_text.find("</origin>", gt) + std::string("</origin>").size();
-      edits.push_back({at, end, element});
-    }
+    edit_origin(original_text, map, j, parent.inverse() * poses[k], edits);
   }
   const Transform& r = result.device_T_base_link;
   std::string comment = " kincal: calibrated joint origins of the chain " + chain.base_link + " -> " + chain.tip_link +
@@ -249,11 +269,11 @@ CalibratedUrdf write_calibrated_urdf(const std::string& original_text, const std
                         "\" rpy=\"" + triple(rpy_from_rotation(r.rotation)) + "\" ";
   for (const std::string& note : result.notes) comment += "Note: " + note + " ";
   for (std::size_t p = comment.find("--"); p != std::string::npos; p = comment.find("--")) comment.replace(p, 2, "- ");
-  const std::size_t declaration = original_text.find("?>");
-  const bool has_declaration = original_text.find_first_not_of(" \t\r\n") == original_text.find("<?xml");
-  const std::size_t top = has_declaration ? declaration + 2 : 0;
-  edits.push_back(
-      {top, top, std::string(has_declaration ? "\n" : "") + "<!--" + comment + "-->" + (has_declaration ? "" : "\n")});
+  const std::size_t first_end = original_text.find('\n');
+  const std::string eol =
+      first_end != std::string::npos && first_end > 0 && original_text[first_end - 1] == '\r' ? "\r\n" : "\n";
+  edits.push_back({map.prolog_end, map.prolog_end,
+                   (map.has_declaration ? eol : "") + "<!--" + comment + "-->" + (map.has_declaration ? "" : eol)});
   std::sort(edits.begin(), edits.end(), [](const Edit& a, const Edit& b) { return a.begin > b.begin; });
   result.text = original_text;
   for (const Edit& e : edits) result.text.replace(e.begin, e.end - e.begin, e.text);

@@ -10,8 +10,10 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <unordered_map>
 
 #include "host/model/axes.hpp"
+#include "host/model/number_text.hpp"
 
 namespace kincal::model {
 
@@ -68,9 +70,25 @@ Transform parse_origin(const tinyxml2::XMLElement* origin, const std::string& so
   return t;
 }
 
-UrdfJoint parse_joint(const tinyxml2::XMLElement& e, const std::string& source) {
+// Each element's place in document order (urdf_text.hpp): a pre-order walk of the tree.
+using ElementIndex = std::unordered_map<const tinyxml2::XMLElement*, std::size_t>;
+ElementIndex index_elements(const tinyxml2::XMLDocument& doc) {
+  ElementIndex index;
+  for (const tinyxml2::XMLElement* e = doc.FirstChildElement(); e != nullptr;) {
+    index.emplace(e, index.size());
+    const tinyxml2::XMLElement* next = e->FirstChildElement();
+    for (const tinyxml2::XMLElement* up = e; next == nullptr && up != nullptr;
+         up = up->Parent() != nullptr ? up->Parent()->ToElement() : nullptr)
+      next = up->NextSiblingElement();
+    e = next;
+  }
+  return index;
+}
+
+UrdfJoint parse_joint(const tinyxml2::XMLElement& e, const ElementIndex& index, const std::string& source) {
   UrdfJoint j;
   j.line = e.GetLineNum();
+  j.element = index.at(&e);
   j.name = required_attribute(e, "name", source);
   const std::string type = required_attribute(e, "type", source);
   const std::string where = "joint '" + j.name + "'";
@@ -91,7 +109,12 @@ UrdfJoint parse_joint(const tinyxml2::XMLElement& e, const std::string& source) 
   if (parent == nullptr || child == nullptr) fail_at(source, j.line, where + " needs <parent> and <child>");
   j.parent_link = required_attribute(*parent, "link", source);
   j.child_link = required_attribute(*child, "link", source);
-  j.parent_T_joint = parse_origin(e.FirstChildElement("origin"), source);
+  const tinyxml2::XMLElement* origin = e.FirstChildElement("origin");
+  j.parent_T_joint = parse_origin(origin, source);
+  if (origin != nullptr) {
+    j.origin_element = index.at(origin);
+    j.origin_line = origin->GetLineNum();
+  }
   if (const tinyxml2::XMLElement* axis = e.FirstChildElement("axis")) {
     if (const char* xyz = axis->Attribute("xyz")) {
       const Vector3 v = parse_triple(xyz, source, axis->GetLineNum(), where + ": axis");
@@ -103,11 +126,17 @@ UrdfJoint parse_joint(const tinyxml2::XMLElement& e, const std::string& source) 
   if (j.type == UrdfJointType::revolute || j.type == UrdfJointType::prismatic) {
     const tinyxml2::XMLElement* limit = e.FirstChildElement("limit");
     if (limit == nullptr) fail_at(source, j.line, where + " (" + type + ") needs a <limit>");
-    j.lower = 0.0;
-    j.upper = 0.0;
-    if (const char* v = limit->Attribute("lower")) j.lower = parse_number(v, source, limit->GetLineNum(), "lower");
-    if (const char* v = limit->Attribute("upper")) j.upper = parse_number(v, source, limit->GetLineNum(), "upper");
+    const char* lower = limit->Attribute("lower");
+    const char* upper = limit->Attribute("upper");
+    if (lower != nullptr || upper != nullptr) {  // neither: no limits (urdf_chain.hpp)
+      j.lower = lower != nullptr ? parse_number(lower, source, limit->GetLineNum(), "lower") : 0.0;
+      j.upper = upper != nullptr ? parse_number(upper, source, limit->GetLineNum(), "upper") : 0.0;
+    }
     if (j.lower > j.upper) fail_at(source, limit->GetLineNum(), where + ": lower limit above upper");
+    if (j.lower == j.upper)
+      fail_at(source, limit->GetLineNum(),
+              where + ": lower and upper limits are equal (" + shortest_number_text(j.lower) +
+                  "), so the joint cannot move: make it fixed, or give its range");
   }
   return j;
 }
@@ -121,6 +150,10 @@ struct Tree {
 };
 
 Tree parse_tree(const std::string& text, const std::string& source) {
+  if (const std::size_t nul = text.find('\0'); nul != std::string::npos)
+    fail_at(source,
+            1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(nul), '\n')),
+            "a NUL byte: not XML text (UTF-16?)");
   tinyxml2::XMLDocument doc;
   if (doc.Parse(text.c_str(), text.size()) != tinyxml2::XML_SUCCESS)
     fail_at(source, doc.ErrorLineNum(), std::string("XML: ") + doc.ErrorStr());
@@ -133,9 +166,10 @@ Tree parse_tree(const std::string& text, const std::string& source) {
     if (!tree.link_lines.emplace(name, l->GetLineNum()).second)
       fail_at(source, l->GetLineNum(), "link '" + name + "' defined twice");
   }
+  const ElementIndex index = index_elements(doc);
   std::set<std::string> joint_names;
   for (const tinyxml2::XMLElement* e = robot->FirstChildElement("joint"); e; e = e->NextSiblingElement("joint")) {
-    UrdfJoint j = parse_joint(*e, source);
+    UrdfJoint j = parse_joint(*e, index, source);
     if (!joint_names.insert(j.name).second) fail_at(source, j.line, "joint '" + j.name + "' defined twice");
     for (const std::string* link : {&j.parent_link, &j.child_link})
       if (!tree.link_lines.contains(*link))
@@ -210,17 +244,29 @@ UrdfChain parse_urdf_chain(const std::string& text, const std::string& source, c
               "link '" + ends.tip_link + "' is not below link '" + chain.base_link + "'");
     chain.tip_link = ends.tip_link;
   } else {
-    std::set<std::string> parents;
-    for (const auto& [child, j] : tree.joint_to_child) parents.insert(j.parent_link);
+    // Down the tree from the base, counting movable joints: each link once.
+    std::map<std::string, std::vector<const UrdfJoint*>> children;  // by parent link
+    for (const auto& [child, j] : tree.joint_to_child) children[j.parent_link].push_back(&j);
+    std::map<std::string, int> joints_to;  // movable joints from the base to the link
+    std::vector<std::string> todo{chain.base_link};
+    joints_to[chain.base_link] = 0;
     struct Candidate {
       std::string tip;
       int joints;
     };
     std::vector<Candidate> leaves;
-    for (const auto& [name, line] : tree.link_lines) {
-      if (parents.contains(name)) continue;
-      if (path_between(tree, chain.base_link, name, path)) leaves.push_back({name, movable(path)});
+    while (!todo.empty()) {
+      const std::string link = std::move(todo.back());
+      todo.pop_back();
+      const int here = joints_to.at(link);
+      const auto below = children.find(link);
+      if (below == children.end()) leaves.push_back({link, here});
+      if (below != children.end())
+        for (const UrdfJoint* j : below->second)
+          if (joints_to.emplace(j->child_link, here + (j->type == UrdfJointType::fixed ? 0 : 1)).second)
+            todo.push_back(j->child_link);
     }
+    std::sort(leaves.begin(), leaves.end(), [](const Candidate& a, const Candidate& b) { return a.tip < b.tip; });
     int best = -1;
     for (const Candidate& c : leaves) best = std::max(best, c.joints);
     std::vector<std::string> best_tips;
@@ -228,13 +274,17 @@ UrdfChain parse_urdf_chain(const std::string& text, const std::string& source, c
       if (c.joints == best) best_tips.push_back(c.tip);
     if (best_tips.size() != 1) {
       std::string list;
-      for (const Candidate& c : leaves)
-        list += "\n  " + chain.base_link + " -> " + c.tip + " (" + std::to_string(c.joints) + " movable joints)";
+      for (std::size_t i = 0; i < leaves.size() && i < kMaxListedChains; ++i)
+        list += "\n  " + chain.base_link + " -> " + leaves[i].tip + " (" + std::to_string(leaves[i].joints) +
+                " movable joints)";
+      if (leaves.size() > kMaxListedChains)
+        list += "\n  and " + std::to_string(leaves.size() - kMaxListedChains) + " more";
       fail_at(source, 1, "which chain? choose one with --tip-link (and --base-link):" + list);
     }
     chain.tip_link = best_tips.front();
     path_between(tree, chain.base_link, chain.tip_link, path);
   }
+  chain.tip_line = tree.link_lines.at(chain.tip_link);
   for (const UrdfJoint& j : path) {
     if (std::isnan(j.lower))
       fail_at(source, j.line,
@@ -282,11 +332,12 @@ std::vector<Transform> urdf_link_poses(const UrdfChain& chain, std::span<const d
 RobotModel model_from_urdf(const UrdfChain& chain) {
   const int n = chain.movable_count();
   if (n == 0)
-    throw InputError(chain.source + ": no movable joint between '" + chain.base_link + "' and '" + chain.tip_link +
-                     "'");
+    fail_at(chain.source, chain.tip_line,
+            "no movable joint between '" + chain.base_link + "' and '" + chain.tip_link + "'");
   if (n > core::kMaxJoints)
-    throw InputError(chain.source + ": " + std::to_string(n) + " movable joints between '" + chain.base_link +
-                     "' and '" + chain.tip_link + "'; at most " + std::to_string(core::kMaxJoints));
+    fail_at(chain.source, chain.tip_line,
+            std::to_string(n) + " movable joints between '" + chain.base_link + "' and '" + chain.tip_link +
+                "'; at most " + std::to_string(core::kMaxJoints));
   const std::vector<double> zero(static_cast<std::size_t>(n), 0.0);
   const std::vector<Transform> poses = urdf_link_poses(chain, zero);
 

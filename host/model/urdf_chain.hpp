@@ -4,11 +4,28 @@
 // Reading (tinyxml2, so every error names the file and the line): links and joints form a tree;
 // the chain is the path from `base_link` to `tip_link`. Defaults: the base is the tree's root;
 // the tip is the leaf below the base with the most movable joints on its way, when that leaf is
-// unique -- otherwise InputError lists every candidate chain ("base_link -> tool0 (6 joints)")
-// and asks for --tip-link. Joint types: revolute, continuous (no limits), prismatic (movable);
-// fixed (folded into the neighbours); floating and planar are refused, and so is a <mimic> joint
-// on the chain (its value is not a reading of its own). A missing <origin> is the identity, a
-// missing <axis> is (1, 0, 0) as URDF says; the axis is normalized (a zero axis is an error).
+// unique -- otherwise InputError lists the candidate chains ("base_link -> tool0 (6 joints)";
+// the first kMaxListedChains of them, then how many more) and asks for --tip-link. Choosing the
+// default costs O(links log links), however many leaves there are.
+//
+// Accepted: any XML spelling tinyxml2 reads (either quote, spaces around '=', attributes in any
+// order, comments, CDATA, CRLF line ends, a UTF-8 byte-order mark). Joint types: revolute,
+// continuous (no limits), prismatic (movable); fixed (folded into the neighbours). A missing
+// <origin> is the identity, a missing <axis> is (1, 0, 0) as URDF says; the axis is normalized.
+// Limits of a revolute or prismatic joint: a <limit> without lower and upper (effort and
+// velocity only) means no limits -- not [0, 0], URDF's default for the two, which would hold
+// the joint at 0 (issue #25: `plan` did); with one of them, the other is URDF's default 0.
+//
+// Refused, with InputError "FILE:LINE: reason" (LINE: the offending element's line, or 1 for
+// whole-document problems and unknown --base-link/--tip-link names): XML errors and NUL bytes;
+// no <robot>, no links, a link or joint defined twice, a joint naming an undefined link, a link
+// that is the child of two joints; a joint without name, type, <parent> or <child>; numbers that
+// are not finite (decimal commas included); a zero axis on a movable joint; a revolute or
+// prismatic joint without <limit>, with lower above upper, or with equal limits (it cannot move:
+// make it fixed); on the chain: floating and planar joints and <mimic> joints (their values are
+// not readings of their own), no movable joint at all, more than core::kMaxJoints of them.
+// Names are taken as the bytes they are: the text is expected to be UTF-8, which the input layer
+// (host/files) checks for every file read by path.
 //
 // URDF's kinematics (what urdf_link_poses computes, as robot_state_publisher does): the child
 // link of joint k sits at parent * origin_k * M_k(q_k), M_k a rotation by q_k about axis_k
@@ -21,10 +38,13 @@
 // base); links by chain_from_axes (axes.hpp: standard DH, Doty's convention where consecutive
 // axes are within 0.1 rad of parallel), joint offsets folded into theta/d so that a reading of 0
 // is the URDF's 0; the tool is a frame: the tip link. Forward kinematics of the model equal the
-// URDF's to rounding (tests/host/model/urdf_test.cpp: 1e-9 m against urdfdom over random
-// readings).
+// URDF's to rounding (tests/host/model/urdf_test.cpp: 1e-9 m and 1e-9 rad against urdfdom over
+// random readings, for the robots of host/model/robots and every chain of the real URDFs in
+// ../shared/realdata/urdf-corpus).
 #pragma once
 
+#include <cstddef>
+#include <limits>
 #include <span>
 #include <string>
 #include <vector>
@@ -50,6 +70,13 @@ struct UrdfJoint {
   double lower = -std::numeric_limits<double>::infinity();  // rad or m
   double upper = std::numeric_limits<double>::infinity();
   int line = 0;  // of the <joint> element
+  // The <joint> element and its <origin> (the first, as URDF reads it; kNoElement without one)
+  // among the document's elements in document order: the index into XmlTextMap::elements
+  // (urdf_text.hpp) by which the writer finds their text.
+  static constexpr std::size_t kNoElement = static_cast<std::size_t>(-1);
+  std::size_t element = 0;
+  std::size_t origin_element = kNoElement;
+  int origin_line = 0;
 };
 
 // The joints from the base link to the tip link, in order (fixed ones included).
@@ -57,13 +84,16 @@ struct UrdfChain {
   std::string source;
   std::string robot_name;
   std::string base_link, tip_link;
+  int tip_line = 0;  // of the tip's <link> element
   std::vector<UrdfJoint> joints;
 
   int movable_count() const;
 };
 
-// Throws InputError ("FILE:LINE: what") for XML errors, a broken tree, bad numbers, an
-// unsupported joint type, a mimic joint on the chain, unknown or unconnected base/tip links.
+// How many chains the "which chain?" refusal lists.
+inline constexpr std::size_t kMaxListedChains = 20;
+
+// Throws InputError ("FILE:LINE: what") for everything the top lists as refused.
 UrdfChain parse_urdf_chain(const std::string& text, const std::string& source, const UrdfChainEnds& ends = {});
 UrdfChain read_urdf_chain(const std::string& path, const UrdfChainEnds& ends = {});
 
@@ -71,8 +101,8 @@ UrdfChain read_urdf_chain(const std::string& path, const UrdfChainEnds& ends = {
 // values q (q.size() == movable_count()).
 std::vector<Transform> urdf_link_poses(const UrdfChain& chain, std::span<const double> q);
 
-// The chain as a model (see the top). Throws InputError for a chain without movable joints or
-// with more than core::kMaxJoints.
+// The chain as a model (see the top). Throws InputError ("FILE:LINE:", the tip link's line) for
+// a chain without movable joints or with more than core::kMaxJoints.
 RobotModel model_from_urdf(const UrdfChain& chain);
 
 // True when `path` names a URDF file (extension .urdf, any case).
