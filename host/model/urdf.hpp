@@ -16,9 +16,17 @@
 //
 // write_calibrated_urdf: the robot's own URDF with the calibrated geometry in its joint origins
 // and everything else kept (link and joint names, meshes, inertias, limits, axes, other
-// branches, comments): the text is edited in place, only the chain's <origin> elements are
-// replaced (one is added to a joint that had none) and a comment goes after the XML
-// declaration. Which frames move and why:
+// branches, comments). The text is edited in place, found by the parser's own element order
+// (urdf_text.hpp), so any spelling the reader accepts works: of the chain's <origin> elements
+// only the xyz or rpy values that changed by more than 1e-12 m or 1e-12 rad are rewritten (in
+// the element's own quotes; a number of three within that of its old value keeps its old
+// spelling; a missing attribute is added after the element's name, a missing <origin> after
+// the joint's start tag). So a joint whose origin did not change keeps its text byte for byte,
+// and the same model written back gives the original text plus the comment. The comment goes
+// after the XML declaration (or after a byte-order mark, which stays first, when there is no
+// declaration) with the file's own line end (CRLF when its first line ends so). Every other byte
+// is kept: the encoding, line ends, white space, comments and what follows the root element.
+// Which frames move and why:
 //   - The calibrated model (any conventions) is registered to the URDF: device_T_base_link =
 //     calibrated base_T_frame0 * (nominal base_T_frame0)^-1, nominal = model_from_urdf of the
 //     same chain. So the base link keeps its nominal place relative to the first joint axis;

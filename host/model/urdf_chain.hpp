@@ -17,7 +17,8 @@
 // the joint at 0 (issue #25: `plan` did); with one of them, the other is URDF's default 0.
 //
 // Refused, with InputError "FILE:LINE: reason" (LINE: the offending element's line, or 1 for
-// whole-document problems and unknown --base-link/--tip-link names): XML errors and NUL bytes;
+// whole-document problems and unknown --base-link/--tip-link names): XML errors and NUL bytes,
+// an end tag that closes no element (tinyxml2 would ignore the rest of the file silently);
 // no <robot>, no links, a link or joint defined twice, a joint naming an undefined link, a link
 // that is the child of two joints; a joint without name, type, <parent> or <child>; numbers that
 // are not finite (decimal commas included); a zero axis on a movable joint; a revolute or

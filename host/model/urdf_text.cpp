@@ -23,6 +23,7 @@ class Scanner {
 
   XmlTextMap run() {
     XmlTextMap map;
+    map.end = text_.size();
     skip_space();
     if (text_.substr(p_).starts_with("\xEF\xBB\xBF")) {
       p_ += 3;
@@ -44,8 +45,10 @@ class Scanner {
         p_ = after("]]>", p_ + 9);
       } else if (rest.starts_with("<!")) {
         p_ = after(">", p_ + 2);
-      } else {
-        tag(map);
+      } else if (const std::size_t at = p_; !tag(map)) {
+        map.end = at;
+        map.end_line = line_at(at);
+        break;
       }
     }
     return map;
@@ -72,8 +75,9 @@ class Scanner {
     return line_;
   }
 
-  // A start or end tag at p_ ('<'); a start tag goes into the map.
-  void tag(XmlTextMap& map) {
+  // A start or end tag at p_ ('<'); a start tag goes into the map. False at an end tag that
+  // closes nothing: tinyxml2 ends the document there (what follows is not parsed).
+  bool tag(XmlTextMap& map) {
     XmlElementSpan e;
     e.line = line_at(p_);
     ++p_;
@@ -98,15 +102,20 @@ class Scanner {
       p_ = std::min(a.value_end + 1, text_.size());
       e.attributes.push_back(a);
     }
+    const bool empty = p_ < text_.size() && text_[p_] == '/';
     p_ = after(">", p_);  // at '>' or "/>"
     e.start_tag_end = p_;
-    if (!closing) map.elements.push_back(std::move(e));
+    if (closing) return depth_-- > 0;
+    if (!empty) ++depth_;
+    map.elements.push_back(std::move(e));
+    return true;
   }
 
   std::string_view text_;
   std::size_t p_ = 0;
   std::size_t counted_ = 0;  // line_ is the line of byte counted_
   int line_ = 1;
+  int depth_ = 0;  // elements open at p_
 };
 
 }  // namespace

@@ -5,7 +5,8 @@
 // Identify and XMLElement::ParseAttributes): "<?" up to "?>", "<!--" up to "-->", "<![CDATA[" up
 // to "]]>", any other "<!" up to ">", end tags "</" up to ">", and start tags with their
 // attributes (name, white space, '=', white space, a value in '"' or '\'' up to the same quote;
-// white space between attributes optional). So the elements come out in document order, the
+// white space between attributes optional); the document ends at an end tag that closes nothing,
+// as tinyxml2's does (it ignores the rest). So the elements come out in document order, the
 // order in which a pre-order walk of tinyxml2's tree meets them, and element k of the map is
 // the k-th element of that walk. The reader records that index for each joint and its <origin>
 // (UrdfJoint::element, origin_element); the writer checks the name and line of every element it
@@ -47,6 +48,10 @@ struct XmlTextMap {
   std::size_t prolog_end = 0;
   bool has_declaration = false;
   std::vector<XmlElementSpan> elements;  // in document order
+  // Where the document ends: the text's size, or the '<' of an end tag that closes nothing
+  // (tinyxml2 stops there without an error; the URDF reader refuses such a text).
+  std::size_t end = 0;
+  int end_line = 0;
 };
 
 XmlTextMap map_xml_text(std::string_view text);

@@ -473,6 +473,9 @@ TEST_CASE("urdf: bad input is refused naming the file, the line and what is wron
   CHECK(error(head + j1 + "</robot>") ==
         "bad.urdf:1: the links form no single tree (roots: a, c): choose the chain's first link with --base-link");
   CHECK(error(head + j1 + "</robot>", {"a", "nope"}) == "bad.urdf:1: no link named 'nope' (--tip-link)");
+  // tinyxml2 stops at an end tag that closes nothing and ignores the rest: refused.
+  CHECK(error(head + j1 + "</robot>\n</robot>\n<robot name=\"other\"/>") ==
+        "bad.urdf:7: an end tag that closes no element: the rest of the file would be ignored");
   CHECK_THROWS_WITH_AS(load_model("robot.yaml", {"", "tool0"}), doctest::Contains("for URDF models"), InputError);
 }
 
@@ -604,7 +607,7 @@ TEST_CASE("urdf: 7,000 leaves are listed in well under a second, the message at 
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   MESSAGE(seconds << " s");
-  CHECK(seconds < 3.0);  // under ASan on a loaded machine; 17 s before (a walk to the root per leaf)
+  CHECK(seconds < 10.0);  // 2-3 s in a Debug ASan build on a loaded 2-core machine; linear in the file
   CHECK(message.find("which chain?") != std::string::npos);
   CHECK(std::count(message.begin(), message.end(), '\n') == 21);
   CHECK(message.ends_with("\n  and 6980 more"));
