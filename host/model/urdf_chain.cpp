@@ -158,8 +158,11 @@ Tree parse_tree(const std::string& text, const std::string& source) {
   tinyxml2::XMLDocument doc;
   if (doc.Parse(text.c_str(), text.size()) != tinyxml2::XML_SUCCESS)
     fail_at(source, doc.ErrorLineNum(), std::string("XML: ") + doc.ErrorStr());
-  if (const XmlTextMap map = map_xml_text(text); map.end < text.size())
+  const XmlTextMap map = map_xml_text(text);
+  if (map.end < text.size())
     fail_at(source, map.end_line, "an end tag that closes no element: the rest of the file would be ignored");
+  if (map.sealed_end_tag_line != 0)
+    fail_at(source, map.sealed_end_tag_line, "'</' and '/>' around one tag: not XML (an end tag or an empty element?)");
   const tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
   if (robot == nullptr) fail_at(source, 1, "no <robot> element: not a URDF");
   Tree tree;

@@ -18,7 +18,8 @@
 //
 // Refused, with InputError "FILE:LINE: reason" (LINE: the offending element's line, or 1 for
 // whole-document problems and unknown --base-link/--tip-link names): XML errors and NUL bytes,
-// an end tag that closes no element (tinyxml2 would ignore the rest of the file silently);
+// an end tag that closes no element (tinyxml2 would ignore the rest of the file silently), a
+// tag written "</a .../>" (tinyxml2 would read an element a);
 // no <robot>, no links, a link or joint defined twice, a joint naming an undefined link, a link
 // that is the child of two joints; a joint without name, type, <parent> or <child>; numbers that
 // are not finite (decimal commas included); a zero axis on a movable joint; a revolute or

@@ -30,7 +30,8 @@ class Scanner {
       map.prolog_end = p_;
     }
     skip_space();
-    if (text_.substr(p_).starts_with("<?xml") && p_ + 5 < text_.size() && is_space(text_[p_ + 5])) {
+    // tinyxml2 takes every "<?...?>" for a declaration and refuses one after anything else.
+    for (; text_.substr(p_).starts_with("<?"); skip_space()) {
       p_ = after("?>", p_ + 2);
       map.prolog_end = p_;
       map.has_declaration = true;
@@ -105,7 +106,8 @@ class Scanner {
     const bool empty = p_ < text_.size() && text_[p_] == '/';
     p_ = after(">", p_);  // at '>' or "/>"
     e.start_tag_end = p_;
-    if (closing) return depth_-- > 0;
+    if (closing && !empty) return depth_-- > 0;
+    if (closing && map.sealed_end_tag_line == 0) map.sealed_end_tag_line = e.line;  // "</a/>": an element a
     if (!empty) ++depth_;
     map.elements.push_back(std::move(e));
     return true;

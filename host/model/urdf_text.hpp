@@ -3,7 +3,8 @@
 //
 // map_xml_text() scans the text with the rules tinyxml2 parses it by (tinyxml2 9, XMLDocument::
 // Identify and XMLElement::ParseAttributes): "<?" up to "?>", "<!--" up to "-->", "<![CDATA[" up
-// to "]]>", any other "<!" up to ">", end tags "</" up to ">", and start tags with their
+// to "]]>", any other "<!" up to ">", end tags "</" up to ">" ("</a/>" is an empty element a,
+// as tinyxml2 reads it), and start tags with their
 // attributes (name, white space, '=', white space, a value in '"' or '\'' up to the same quote;
 // white space between attributes optional); the document ends at an end tag that closes nothing,
 // as tinyxml2's does (it ignores the rest). So the elements come out in document order, the
@@ -43,8 +44,9 @@ struct XmlElementSpan {
 
 struct XmlTextMap {
   // Where text may go before the root element without changing what precedes it: after the
-  // XML declaration when the text starts with one (after white space and a UTF-8 byte-order
-  // mark), else after the byte-order mark, else 0. So a byte-order mark stays first.
+  // XML declaration (every "<?...?>" that starts the text after white space and a UTF-8
+  // byte-order mark: tinyxml2 takes each for a declaration and refuses one after anything
+  // else), else after the byte-order mark, else 0. So a byte-order mark stays first.
   std::size_t prolog_end = 0;
   bool has_declaration = false;
   std::vector<XmlElementSpan> elements;  // in document order
@@ -52,6 +54,9 @@ struct XmlTextMap {
   // (tinyxml2 stops there without an error; the URDF reader refuses such a text).
   std::size_t end = 0;
   int end_line = 0;
+  // The line of the first "</a .../>", which tinyxml2 reads as an empty element a and XML does
+  // not allow (the URDF reader refuses it); 0 without one.
+  int sealed_end_tag_line = 0;
 };
 
 XmlTextMap map_xml_text(std::string_view text);

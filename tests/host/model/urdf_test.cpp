@@ -476,6 +476,9 @@ TEST_CASE("urdf: bad input is refused naming the file, the line and what is wron
   // tinyxml2 stops at an end tag that closes nothing and ignores the rest: refused.
   CHECK(error(head + j1 + "</robot>\n</robot>\n<robot name=\"other\"/>") ==
         "bad.urdf:7: an end tag that closes no element: the rest of the file would be ignored");
+  CHECK(error(head + j1 +
+              "<joint name=\"j2\" type=\"fixed\"><parent link=\"b\"/>\n</child link=\"c\"/></joint></robot>") ==
+        "bad.urdf:7: '</' and '/>' around one tag: not XML (an end tag or an empty element?)");
   CHECK_THROWS_WITH_AS(load_model("robot.yaml", {"", "tool0"}), doctest::Contains("for URDF models"), InputError);
 }
 
