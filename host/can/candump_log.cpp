@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cstdio>
 
+#include "host/files/input_file.hpp"
+
 namespace kincal::can {
 
 namespace {
@@ -19,7 +21,8 @@ std::uint64_t parse_unsigned(const std::string& text, int base, const char* what
   std::uint64_t value = 0;
   const char* end = text.data() + text.size();
   const auto [ptr, ec] = std::from_chars(text.data(), end, value, base);
-  if (text.empty() || ec != std::errc() || ptr != end) throw CanError(std::string("bad ") + what + " '" + text + "'");
+  if (text.empty() || ec != std::errc() || ptr != end)
+    throw CanError(std::string("bad ") + what + " '" + files::excerpt(text) + "'");
   return value;
 }
 
@@ -64,7 +67,7 @@ LoggedFrame parse_candump_line(const std::string& line) {
   const std::string stamp = line.substr(1, close - 1);
   const auto dot = stamp.find('.');
   if (dot == std::string::npos || stamp.size() - dot - 1 != 6)
-    throw CanError("timestamp '" + stamp + "' is not SECONDS.MICROSECONDS with 6 digits");
+    throw CanError("timestamp '" + files::excerpt(stamp) + "' is not SECONDS.MICROSECONDS with 6 digits");
   out.time_us = parse_unsigned(stamp.substr(0, dot), 10, "timestamp seconds") * 1000000 +
                 parse_unsigned(stamp.substr(dot + 1), 10, "timestamp microseconds");
   if (close + 1 >= line.size() || line[close + 1] != ' ') throw CanError("expected a space after the timestamp");
@@ -75,7 +78,7 @@ LoggedFrame parse_candump_line(const std::string& line) {
   std::string frame = line.substr(space + 1);
   while (!frame.empty() && (frame.back() == '\r' || frame.back() == ' ')) frame.pop_back();
   const auto hash = frame.find('#');
-  if (hash == std::string::npos) throw CanError("frame '" + frame + "' has no '#'");
+  if (hash == std::string::npos) throw CanError("frame '" + files::excerpt(frame) + "' has no '#'");
   const std::string id = frame.substr(0, hash);
   CanFrame& f = out.frame;
   if (id.size() == 3) {
@@ -87,7 +90,7 @@ LoggedFrame parse_candump_line(const std::string& line) {
     f.id = static_cast<std::uint32_t>(v);
     f.extended = true;
   } else {
-    throw CanError("CAN ID '" + id + "' must have 3 (standard) or 8 (extended) hex digits");
+    throw CanError("CAN ID '" + files::excerpt(id) + "' must have 3 (standard) or 8 (extended) hex digits");
   }
   std::string data = frame.substr(hash + 1);
   if (!data.empty() && data[0] == 'R') {
@@ -95,21 +98,21 @@ LoggedFrame parse_candump_line(const std::string& line) {
     return out;
   }
   if (!data.empty() && data[0] == '#') {
-    if (data.size() < 2) throw CanError("CAN FD frame '" + frame + "' has no flags nibble after '##'");
+    if (data.size() < 2) throw CanError("CAN FD frame '" + files::excerpt(frame) + "' has no flags nibble after '##'");
     const int flags = hex_value(data[1]);
     if (flags < 0) throw CanError("CAN FD flags '" + data.substr(1, 1) + "' is not a hex digit");
     f.fd = true;
     f.brs = (flags & 1) != 0;
     data = data.substr(2);
   }
-  if (data.size() % 2 != 0) throw CanError("data '" + data + "' has an odd number of hex digits");
+  if (data.size() % 2 != 0) throw CanError("data '" + files::excerpt(data) + "' has an odd number of hex digits");
   const std::size_t length = data.size() / 2;
   if (!shared::is_valid_length(f.fd, length))
     throw CanError(std::to_string(length) + " data bytes is not a valid " + (f.fd ? "CAN FD" : "classic CAN") +
                    " length");
   for (std::size_t i = 0; i < length; ++i) {
     const int hi = hex_value(data[2 * i]), lo = hex_value(data[2 * i + 1]);
-    if (hi < 0 || lo < 0) throw CanError("data '" + data + "' is not hex");
+    if (hi < 0 || lo < 0) throw CanError("data '" + files::excerpt(data) + "' is not hex");
     f.data[i] = static_cast<std::uint8_t>(hi * 16 + lo);
   }
   f.length = static_cast<std::uint8_t>(length);
@@ -129,9 +132,8 @@ void CandumpWriter::write(const std::string& interface, const CanFrame& frame) {
   write(LoggedFrame{now_unix_us(), interface, frame, false});
 }
 
-CandumpReader::CandumpReader(const std::string& path) : path_(path), in_(path) {
-  if (!in_) throw CanError("cannot open log file " + path);
-}
+CandumpReader::CandumpReader(const std::string& path)
+    : path_(path), in_(files::read_text_or_throw<CanError>(path, files::kCandumpFile)) {}
 
 std::optional<LoggedFrame> CandumpReader::next() {
   std::string line;

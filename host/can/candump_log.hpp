@@ -6,12 +6,18 @@
 // can-utils' canplayer replays what CandumpWriter writes; CandumpReader reads what candump -L
 // writes. No Debian library exposes this format to C++ (can-utils' lib.c is not packaged as a
 // library), so the reader is strict instead: anything else is an error naming file and line.
+//
+// CandumpReader reads the log through files::read_text() (files/input_file.hpp): a regular file
+// of at most files::kCandumpFile.max_bytes, UTF-8 (ASCII in practice), LF or CRLF; anything else
+// (a directory, a device, a pipe, binary data) is refused by name before any frame is decoded.
+// Fields quoted in messages are cut to 80 bytes.
 #pragma once
 
 #include <cstdint>
 #include <fstream>
 #include <istream>
 #include <optional>
+#include <sstream>
 #include <string>
 
 #include "host/can/transport.hpp"
@@ -45,14 +51,14 @@ class CandumpWriter {
 
 class CandumpReader {
  public:
-  // Throws CanError if the file cannot be opened.
+  // Reads the whole log; throws CanError naming the path when it is refused (see above).
   explicit CandumpReader(const std::string& path);
   // The next frame, or nullopt at the end; throws CanError("PATH:LINE: ...") on a bad line.
   std::optional<LoggedFrame> next();
 
  private:
   std::string path_;
-  std::ifstream in_;
+  std::istringstream in_;
   std::size_t line_number_ = 0;
 };
 

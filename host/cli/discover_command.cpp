@@ -4,6 +4,8 @@
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <utility>
+#include <vector>
 
 #include "host/cli/number_options.hpp"
 #include "host/files/output_file.hpp"
@@ -98,15 +100,15 @@ int run_discover(const DiscoverArgs& a) {
     std::cout << "kincal discover: " << a.data << " (" << data.rows.size() << " rows; joint types tested at "
               << a.significance << ")\n"
               << identify::format_discovery(result);
-    model::save_model(result.model, a.out);
-    std::cout << "wrote " << a.out << '\n';
-    if (!a.urdf.empty()) {
-      files::write_file_atomically(a.urdf, model::write_urdf(result.model));
-      std::cout << "wrote " << a.urdf << '\n';
-    }
-    if (!a.report.empty()) {
-      report::write_html(discovery_report(a, data, result), a.report);
-      std::cout << "wrote " << a.report << '\n';
+    // Every output is made before the first is written, so that a failure leaves none behind.
+    const std::vector<std::pair<std::string, std::string>> outputs = {
+        {a.out, model::write_model(result.model)},
+        {a.urdf, a.urdf.empty() ? std::string() : model::write_urdf(result.model)},
+        {a.report, a.report.empty() ? std::string() : report::render_html(discovery_report(a, data, result))}};
+    for (const auto& [path, text] : outputs) {
+      if (path.empty()) continue;
+      files::write_file_atomically(path, text);
+      std::cout << "wrote " << path << '\n';
     }
     return 0;
   } catch (const std::exception& e) {

@@ -18,13 +18,10 @@ struct ExportArgs {
 
 int run_export(const ExportArgs& a) {
   try {
-    files::refuse_overwriting({{"-o", a.out}}, {{"--model", a.model.path}});
+    files::refuse_overwriting({{"-o", a.out, true}}, {{"--model", a.model.path}});
     const model::UrKinematics k = model::ur_kinematics(a.model.load());
-    const std::string text = model::write_ur_kinematics(k);
-    if (a.out.empty()) {
-      std::cout << text;
-    } else {
-      files::write_file_atomically(a.out, text);
+    files::write_output(a.out, model::write_ur_kinematics(k));
+    if (!a.out.empty() && a.out != "-") {
       std::cout << "wrote " << a.out << '\n';
       for (const std::string& note : k.notes) std::cout << "note: " << note << '\n';
     }
@@ -45,7 +42,7 @@ void add_export_command(CLI::App& app, int& status) {
       ->required()
       ->check(CLI::IsMember({"ur-kinematics"}));
   add_model_option(*cmd, a->model, "the calibrated model");
-  cmd->add_option("-o,--out", a->out, "output file (default: standard output)");
+  cmd->add_option("-o,--out", a->out, "output file (default or '-': standard output)");
   cmd->callback([a, &status] { status = run_export(*a); });
 }
 

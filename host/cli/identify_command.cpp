@@ -1,7 +1,6 @@
 #include "host/cli/identify_command.hpp"
 
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <numbers>
@@ -11,6 +10,7 @@
 #include "host/cli/model_option.hpp"
 #include "host/cli/number_options.hpp"
 #include "host/cli/urdf_command.hpp"
+#include "host/files/input_file.hpp"
 #include "host/files/input_limits.hpp"
 #include "host/files/output_file.hpp"
 #include "host/identify/identify.hpp"
@@ -169,22 +169,27 @@ int run_identify(const IdentifyArgs& a) {
     std::cout << summary(a, result, registered, held_out ? &*held_out : nullptr,
                          calibrated_held_out ? &*calibrated_held_out : nullptr);
     if (calibrated_held_out) result.model.calibration->validation_rms_m = calibrated_held_out->rms_m;
-    model::save_model(result.model, a.out);
+    // Every output is made before the first is written: a URDF that cannot be written leaves no --out.
+    const std::string model_text = model::write_model(result.model);
+    std::optional<model::CalibratedUrdf> calibrated_urdf;
+    std::string urdf_text;
+    if (!a.urdf.empty() && model::is_urdf_path(a.model.path)) {  // the robot's own URDF, calibrated
+      calibrated_urdf = model::write_calibrated_urdf(files::read_text(a.model.path, files::kUrdfFile), a.model.path,
+                                                     a.model.ends, result.model);
+      urdf_text = calibrated_urdf->text;
+    } else if (!a.urdf.empty()) {
+      urdf_text = model::write_urdf(result.model);
+    }
+    files::write_file_atomically(a.out, model_text);
     std::cout << "wrote " << a.out << '\n';
     if (!a.urdf.empty()) {
-      if (model::is_urdf_path(a.model.path)) {  // the robot's own URDF, calibrated
-        std::ifstream in(a.model.path);
-        std::ostringstream original;
-        original << in.rdbuf();
-        const model::CalibratedUrdf c =
-            model::write_calibrated_urdf(original.str(), a.model.path, a.model.ends, result.model);
-        files::write_file_atomically(a.urdf, c.text);
-        std::cout << "wrote " << a.urdf << " (" << a.model.path << " with the calibrated joint origins)\n"
-                  << print_registration(c);
-      } else {
-        files::write_file_atomically(a.urdf, model::write_urdf(result.model));
-        std::cout << "wrote " << a.urdf << '\n';
-      }
+      files::write_file_atomically(a.urdf, urdf_text);
+      std::cout << "wrote " << a.urdf;
+      if (calibrated_urdf)
+        std::cout << " (" << a.model.path << " with the calibrated joint origins)\n"
+                  << print_registration(*calibrated_urdf);
+      else
+        std::cout << '\n';
     }
     std::cout << next_steps(a, result);
     return 0;

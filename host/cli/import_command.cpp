@@ -3,6 +3,7 @@
 #include <iostream>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 #include "host/cli/model_option.hpp"
@@ -16,8 +17,8 @@ namespace kincal::cli {
 namespace {
 
 struct ImportArgs {
-  std::string in, out, separator, joint_unit, position_unit, angle_unit = "deg", euler;
-  std::vector<std::string> joints, position, position_std, orientation, orientation_std;
+  std::string in, out, separator, position_unit, angle_unit = "deg", euler;
+  std::vector<std::string> joints, joint_units, position, position_std, orientation, orientation_std;
   ModelOption model;
 };
 
@@ -41,7 +42,8 @@ int run_import(const ImportArgs& a) {
       }
     }
     o.joints = a.joints;
-    o.joint_unit = model::parse_angle_unit(a.joint_unit);
+    o.joint_units.clear();
+    for (const std::string& u : a.joint_units) o.joint_units.push_back(model::parse_joint_unit(u));
     o.position = three(a.position, "--position");
     o.position_unit = model::parse_length_unit(a.position_unit);
     if (!a.position_std.empty()) o.position_std = three(a.position_std, "--position-std");
@@ -53,11 +55,20 @@ int run_import(const ImportArgs& a) {
     }
     if (!a.orientation_std.empty()) o.angle_std = three(a.orientation_std, "--orientation-std");
     files::refuse_overwriting({{"--out", a.out}}, {{"export", a.in}, {"--model", a.model.path}});
+    // Everything is read and checked before the dataset is written: a failed run leaves no file.
+    std::optional<model::RobotModel> nominal;
+    if (!a.model.path.empty()) {
+      nominal = a.model.load();
+      model::check_joint_units(o.joint_units, *nominal);
+      model::check_joint_count(*nominal, static_cast<int>(o.joints.size()), "--joints");
+    }
     const model::ImportResult r = model::import_measurements_file(a.in, o);
+    const std::vector<std::string> findings =
+        nominal ? identify::implausibilities(*nominal, r.data) : std::vector<std::string>{};
     std::ostringstream text;
     model::write_dataset(text, r.data);
     files::write_file_atomically(a.out, text.str());
-    std::cout << "kincal import: " << r.data.rows.size() << " rows from " << a.in << " (separator '"
+    std::cout << "kincal import: " << r.data.rows.size() << " rows from " << r.data.source << " (separator '"
               << (r.separator == '\t' ? std::string("tab") : std::string(1, r.separator)) << "', decimal "
               << (r.decimal_comma ? "comma" : "point") << "), " << r.data.joint_count << " joints"
               << (r.data.has_orientation ? ", position and orientation" : ", positions");
@@ -67,18 +78,10 @@ int run_import(const ImportArgs& a) {
                 << " deg (not written: the dataset format has no orientation covariance; identify estimates the "
                    "orientation noise)";
     std::cout << "\nwrote " << a.out << '\n';
-    if (!a.model.path.empty()) {
-      const model::RobotModel nominal = a.model.load();
-      model::check_joint_count(nominal, r.data.joint_count, a.out);
-      const std::vector<std::string> findings = identify::implausibilities(nominal, r.data);
-      for (const std::string& f : findings) std::cerr << "kincal import: warning: " << f << '\n';
-      if (findings.empty()) std::cout << "plausible for " << nominal.name << " (units, limits, distances)\n";
-    }
+    for (const std::string& f : findings) std::cerr << "kincal import: warning: " << f << '\n';
+    if (nominal && findings.empty()) std::cout << "plausible for " << nominal->name << " (units, limits, distances)\n";
     return 0;
-  } catch (const files::OutputError& e) {
-    std::cerr << "kincal import: " << e.what() << '\n';
-    return 1;
-  } catch (const model::InputError& e) {
+  } catch (const std::exception& e) {
     std::cerr << "kincal import: " << e.what() << '\n';
     return 1;
   }
@@ -89,14 +92,17 @@ int run_import(const ImportArgs& a) {
 void add_import_command(CLI::App& app, int& status) {
   auto a = std::make_shared<ImportArgs>();
   auto* cmd = app.add_subcommand("import", "Turn a measurement export (CSV) into a kincal dataset");
-  cmd->add_option("export", a->in, "the measurement export (CSV with one header row)")->required();
+  cmd->add_option("export", a->in, "the measurement export (CSV with one header row; '-': standard input)")->required();
   cmd->add_option("--out,-o", a->out, "the dataset to write (kincal CSV, SI units)")->required();
   cmd->add_option("--separator", a->separator, "field separator: one character or 'tab' (default: detected)");
   cmd->add_option("--joints", a->joints, "header names of the joint readings, in the model's order")
       ->delimiter(',')
       ->required();
-  cmd->add_option("--joint-unit", a->joint_unit, "unit of the joint readings")
-      ->check(CLI::IsMember({"rad", "deg"}))
+  cmd->add_option("--joint-unit", a->joint_units,
+                  "unit of the joint readings: one for all joints or one per joint (rad, deg; m, mm for prismatic "
+                  "joints), e.g. deg,deg,m,deg")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"rad", "deg", "m", "mm"}))
       ->required();
   cmd->add_option("--position", a->position, "header names of x, y, z")->delimiter(',')->required();
   cmd->add_option("--position-unit", a->position_unit, "unit of the positions and their std")

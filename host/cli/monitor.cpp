@@ -8,6 +8,7 @@
 #include "host/can/monitor.hpp"
 #include "host/can/socketcan.hpp"
 #include "host/cli/number_options.hpp"
+#include "host/files/output_file.hpp"
 
 namespace kincal::cli {
 
@@ -57,8 +58,7 @@ void add_monitor_command(CLI::App& app, int& status) {
   auto options = std::make_shared<MonitorOptions>();
   auto* cmd = app.add_subcommand("monitor", "Decode the platform's CAN traffic, live or from a candump -L log");
   auto* can_opt = cmd->add_option("--can", options->interface, "SocketCAN interface to listen on (e.g. vcan0)");
-  auto* replay_opt =
-      cmd->add_option("--replay", options->replay, "decode this candump -L log instead")->check(CLI::ExistingFile);
+  auto* replay_opt = cmd->add_option("--replay", options->replay, "decode this candump -L log instead");
   can_opt->excludes(replay_opt);
   cmd->add_flag("--fd", options->fd, "also receive CAN FD frames");
   cmd->add_option("--log", options->log, "also write what is received as a candump -L log");
@@ -68,8 +68,9 @@ void add_monitor_command(CLI::App& app, int& status) {
     if (can_opt->count() == 0 && replay_opt->count() == 0)
       throw CLI::ValidationError("--can/--replay", "monitor needs --can IFACE or --replay FILE");
     try {
+      files::refuse_overwriting({{"--log", options->log}}, {{"--replay", options->replay}});
       status = options->replay.empty() ? live(*options) : replay(*options);
-    } catch (const can::CanError& e) {
+    } catch (const std::exception& e) {
       std::cerr << "kincal monitor: " << e.what() << "\n";
       status = 1;
     }

@@ -1,6 +1,8 @@
 #include "host/cli/plan_command.hpp"
 
 #include <charconv>
+#include <cmath>
+#include <cstdio>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -23,9 +25,41 @@ struct PlanArgs {
   bool orientation = false;
 };
 
+// A figure of the summary: "%.<digits>g", or "n/a" for NaN and infinities (a ratio of zeros, a
+// comparison that has no random plan), so that no NaN is ever printed.
+std::string figure(double value, int digits) {
+  if (!std::isfinite(value)) return "n/a";
+  char text[64];
+  std::snprintf(text, sizeof text, "%.*g", digits, value);
+  return text;
+}
+
+// The summary as comment lines, which the dataset reader skips.
+std::string summary(const PlanArgs& a, const model::RobotModel& m, const identify::PlanResult& r) {
+  const identify::PlanOptions defaults;
+  std::ostringstream out;
+  out << "# kincal plan: " << a.count << " configurations of " << m.name << " for " << r.identified.size()
+      << " identifiable parameters (" << r.held_fixed.size() << " held fixed)\n";
+  if (r.random_full_rank == 0) {
+    out << "# observability index O1: planned " << figure(r.index, 6) << "; none of " << defaults.random_sets
+        << " random plans of " << a.count << " of the " << a.pool
+        << " candidates identifies every parameter (no comparison; a larger --pool gives one)\n"
+        << "# predicted position rms over the workspace per unit sigma: planned " << figure(r.prediction_rms, 4)
+        << '\n';
+    return out.str();
+  }
+  out << "# observability index O1: planned " << figure(r.index, 6) << ", random plans mean "
+      << figure(r.random_index_mean, 6) << " (best of " << r.random_full_rank << ": " << figure(r.random_index_best, 6)
+      << "): " << figure(r.index / r.random_index_mean, 3) << "x\n"
+      << "# predicted position rms over the workspace per unit sigma: planned " << figure(r.prediction_rms, 4)
+      << ", random " << figure(r.random_prediction_rms, 4) << ": "
+      << figure(r.random_prediction_rms / r.prediction_rms, 3) << "x smaller\n";
+  return out.str();
+}
+
 int run_plan(const PlanArgs& a) {
   try {
-    files::refuse_overwriting({{"-o", a.out}}, {{"--model", a.model.path}});
+    files::refuse_overwriting({{"-o", a.out, true}}, {{"--model", a.model.path}});
     const model::RobotModel m = a.model.load();
     identify::PlanOptions options;
     options.count = a.count;
@@ -37,18 +71,10 @@ int run_plan(const PlanArgs& a) {
     };
     const identify::PlanResult r = identify::plan_configurations(m, options);
     std::ostringstream out;
-    // The summary as comment lines, which the dataset reader skips.
-    char line[1024];
-    std::snprintf(line, sizeof line,
-                  "# kincal plan: %d configurations of %s for %zu identifiable parameters (%zu held fixed)\n"
-                  "# observability index O1: planned %.6g, random plans mean %.6g (best of %d: %.6g): %.2fx\n"
-                  "# predicted position rms over the workspace per unit sigma: planned %.4g, random %.4g: %.2fx "
-                  "smaller\n",
-                  a.count, m.name.c_str(), r.identified.size(), r.held_fixed.size(), r.index, r.random_index_mean, 50,
-                  r.random_index_best, r.index / r.random_index_mean, r.prediction_rms, r.random_prediction_rms,
-                  r.random_prediction_rms / r.prediction_rms);
-    out << line;
-    if (!a.out.empty()) std::cout << line;
+    const std::string lines = summary(a, m, r);
+    const bool to_file = !a.out.empty() && a.out != "-";
+    out << lines;
+    if (to_file) std::cout << lines;
     for (int j = 1; j <= m.joint_count(); ++j) out << 'q' << j << (j < m.joint_count() ? "," : "\n");
     for (const auto& q : r.configurations) {
       for (std::size_t j = 0; j < q.size(); ++j) {
@@ -57,11 +83,8 @@ int run_plan(const PlanArgs& a) {
         out << std::string(buffer, ec == std::errc() ? end : buffer) << (j + 1 < q.size() ? "," : "\n");
       }
     }
-    if (a.out.empty())
-      std::cout << out.str();
-    else
-      files::write_file_atomically(a.out, out.str());
-    return std::cout ? 0 : 1;
+    files::write_output(a.out, out.str());
+    return 0;
   } catch (const std::exception& e) {
     std::cerr << "kincal plan: " << e.what() << '\n';
     return 1;
@@ -79,7 +102,7 @@ void add_plan_command(CLI::App& app, int& status) {
       ->check(whole_in(1, 1000000));
   cmd->add_option("--seed", a->seed, "random seed (default 1)");
   cmd->add_flag("--orientation", a->orientation, "plan for pose measurements (tool frame) instead of points");
-  cmd->add_option("-o,--out", a->out, "output CSV q1..qN (default: standard output)");
+  cmd->add_option("-o,--out", a->out, "output CSV q1..qN (default or '-': standard output)");
   cmd->callback([a, &status] { status = run_plan(*a); });
 }
 

@@ -1,7 +1,6 @@
 #include "host/cli/predict_command.hpp"
 
 #include <charconv>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -26,11 +25,9 @@ std::string number_text(double v) {
 
 int run_predict(const ModelOption& model_option, const std::string& joints_path, const std::string& out_path) {
   try {
-    files::refuse_overwriting({{"-o", out_path}}, {{"--model", model_option.path}, {"--joints", joints_path}});
+    files::refuse_overwriting({{"-o", out_path, true}}, {{"--model", model_option.path}, {"--joints", joints_path}});
     const model::RobotModel m = model_option.load();
-    std::ifstream in(joints_path);
-    if (!in) throw model::InputError(joints_path + ": cannot open the joints file");
-    const std::vector<std::vector<double>> rows = model::parse_joints(in, joints_path);
+    const std::vector<std::vector<double>> rows = model::read_joints(joints_path);
     if (!rows.empty()) model::check_joint_count(m, static_cast<int>(rows.front().size()), joints_path);
     std::ostringstream out;
     const bool pose = m.tool == model::ToolKind::frame;
@@ -49,11 +46,8 @@ int run_predict(const ModelOption& model_option, const std::string& joints_path,
       }
       out << '\n';
     }
-    if (out_path.empty())
-      std::cout << out.str();
-    else
-      files::write_file_atomically(out_path, out.str());
-    return std::cout ? 0 : 1;
+    files::write_output(out_path, out.str());
+    return 0;
   } catch (const std::exception& e) {
     std::cerr << "kincal predict: " << e.what() << '\n';
     return 1;
@@ -70,7 +64,7 @@ void add_predict_command(CLI::App& app, int& status) {
   add_model_option(*cmd, *model_option, "model");
   cmd->add_option("--joints", *joints_path, "joint readings (CSV with header q1..qN; other columns ignored)")
       ->required();
-  cmd->add_option("-o,--out", *out_path, "output CSV (default: standard output)");
+  cmd->add_option("-o,--out", *out_path, "output CSV (default or '-': standard output)");
   cmd->callback([=, &status] { status = run_predict(*model_option, *joints_path, *out_path); });
 }
 

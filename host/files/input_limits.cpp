@@ -1,7 +1,6 @@
 #include "host/files/input_limits.hpp"
 
 #include <array>
-#include <filesystem>
 #include <fstream>
 #include <optional>
 #include <utility>
@@ -89,14 +88,6 @@ void check_image_header(const std::string& path) {
     size = pnm_size(in);
   }
   if (size) check_image_size(path, size->first, size->second);
-}
-
-void check_text_file_size(const std::string& path) {
-  std::error_code ec;
-  const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
-  if (!ec && bytes > kMaxTextFileBytes)
-    throw InputLimitError(path + ": " + std::to_string(bytes >> 20) + " MiB is over the limit of " +
-                          std::to_string(kMaxTextFileBytes >> 20) + " MiB for a text input");
 }
 
 }  // namespace kincal::files

@@ -5,7 +5,7 @@
 //   images      at most kMaxImageSide pixels a side and kMaxImagePixels pixels, read from the
 //               file's header (PNG IHDR, JPEG SOFn, PNM) before decoding; other formats are
 //               checked after decoding.
-//   text files  datasets, models, plans: at most kMaxTextFileBytes.
+//   text files  input_file.hpp: a limit per kind, checked by read_text().
 //
 // Why read image headers here: OpenCV 4.6 (Debian 12) has no call that reports an image's size
 // without decoding it, and its decoders allocate the whole image first.
@@ -19,7 +19,6 @@ namespace kincal::files {
 
 inline constexpr std::int64_t kMaxImageSide = 16384;
 inline constexpr std::int64_t kMaxImagePixels = std::int64_t{64} << 20;  // 64 Mpx: 8192 x 8192
-inline constexpr std::uintmax_t kMaxTextFileBytes = std::uintmax_t{256} << 20;
 
 // An input over a limit; the message names the file, its size and the limit.
 class InputLimitError : public std::runtime_error {
@@ -27,7 +26,8 @@ class InputLimitError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// The limits as the commands' --help states them (in step with the numbers above).
+// The limits as the commands' --help states them (in step with the numbers above and with
+// input_file.hpp's kDatasetFile).
 inline constexpr const char* kImageLimitText = "at most 16384 px a side and 64 Mpx";
 inline constexpr const char* kTextLimitText = "at most 256 MiB";
 
@@ -36,8 +36,5 @@ inline constexpr const char* kTextLimitText = "at most 256 MiB";
 // check_image_size() then checks the decoded size.
 void check_image_header(const std::string& path);
 void check_image_size(const std::string& path, std::int64_t width_px, std::int64_t height_px);
-
-// Throws InputLimitError when a text input is larger than kMaxTextFileBytes.
-void check_text_file_size(const std::string& path);
 
 }  // namespace kincal::files

@@ -7,8 +7,11 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <iostream>
 #include <system_error>
 #include <vector>
+
+#include "host/files/file_type.hpp"
 
 namespace kincal::files {
 
@@ -29,6 +32,33 @@ bool same_file(const std::string& a, const std::string& b) {
 }
 
 std::string describe(const NamedPath& p) { return p.option + " " + p.path; }
+
+// Why an existing output is not replaced, or "" for a regular file.
+std::string not_replaceable(mode_t mode) {
+  const std::string why = not_a_regular_file(mode);
+  return why.empty() || S_ISDIR(mode) ? why : why + ": refusing to replace it";
+}
+
+// An output that cannot be written where it is named: refused before any work.
+void check_output(const NamedPath& p) {
+  if (p.path.empty()) return;
+  if (p.path == "-") {
+    if (!p.standard_output)
+      throw OutputError(describe(p) +
+                        ": this command does not write to standard output (name a file; ./- for a "
+                        "file named '-')");
+    return;
+  }
+  struct stat st {};
+  if (::stat(p.path.c_str(), &st) == 0) {
+    if (const std::string why = not_replaceable(st.st_mode); !why.empty()) throw OutputError(describe(p) + ": " + why);
+    return;
+  }
+  const fs::path dir = fs::path(p.path).parent_path();
+  std::error_code ec;
+  if (!dir.empty() && !fs::is_directory(dir, ec))
+    throw OutputError(describe(p) + ": the directory " + dir.string() + " does not exist");
+}
 
 [[noreturn]] void fail(const std::string& path, const std::string& what) {
   throw OutputError(path + ": " + what + " (" + std::strerror(errno) + ")");
@@ -71,6 +101,7 @@ void refuse_overwriting(const std::vector<NamedPath>& outputs, const std::vector
     throw OutputError(describe(out) + " is the same file as " + describe(other) + ": refusing to overwrite " + kind +
                       " (choose another path for " + out.option + ")");
   };
+  for (const NamedPath& o : outputs) check_output(o);
   for (auto o = outputs.begin(); o != outputs.end(); ++o) {
     if (!takes_part(*o)) continue;
     for (const NamedPath& in : inputs)
@@ -83,19 +114,18 @@ void refuse_overwriting(const std::vector<NamedPath>& outputs, const std::vector
 void write_file_atomically(const std::string& path, std::string_view content) {
   const fs::path target(path);
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  Temporary tmp((dir / ("." + target.filename().string() + ".kincal-XXXXXX")).string());
-  if (tmp.fd() < 0) fail(path, "cannot create a temporary file beside it");
-
   struct stat existing {};
   mode_t mode = 0;
   if (::stat(path.c_str(), &existing) == 0) {
-    if (S_ISDIR(existing.st_mode)) throw OutputError(path + ": is a directory, not a file");
+    if (const std::string why = not_replaceable(existing.st_mode); !why.empty()) throw OutputError(path + ": " + why);
     mode = existing.st_mode & 07777;
   } else {
     const mode_t mask = ::umask(0);
     ::umask(mask);
     mode = 0666 & ~mask;
   }
+  Temporary tmp((dir / ("." + target.filename().string() + ".kincal-XXXXXX")).string());
+  if (tmp.fd() < 0) fail(path, "cannot create a temporary file beside it");
   if (::fchmod(tmp.fd(), mode) != 0) fail(path, "cannot set the permissions of its temporary file");
 
   const char* data = content.data();
@@ -117,6 +147,16 @@ void write_file_atomically(const std::string& path, std::string_view content) {
     ::fsync(dir_fd);
     ::close(dir_fd);
   }
+}
+
+void write_output(const std::string& path, std::string_view content) {
+  if (!path.empty() && path != "-") {
+    write_file_atomically(path, content);
+    return;
+  }
+  std::cout.write(content.data(), static_cast<std::streamsize>(content.size()));
+  std::cout.flush();
+  if (!std::cout) throw OutputError("standard output: cannot write");
 }
 
 }  // namespace kincal::files

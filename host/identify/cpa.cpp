@@ -472,6 +472,34 @@ std::vector<model::AxisLine> axes_at_zero(std::span<const model::AxisLine> measu
   return zero;
 }
 
+namespace {
+
+// A sweep whose measured points (and orientations, when used) do not move shows no axis: a fit
+// to it returns a radius of roundoff (found: "beacon radius 7.5e-14 mm" from a constant column).
+// 1 um and 1 urad are far below any instrument's noise and far above the arithmetic's.
+void require_motion(const model::Dataset& data, const Sweep& s, bool use_orientation, const std::string& lines) {
+  constexpr double kStillM = 1e-6, kStillRad = 1e-6;
+  const model::Measurement& first = data.rows[static_cast<std::size_t>(s.rows.front())];
+  double moved_m = 0.0, turned_rad = 0.0;
+  for (int r : s.rows) {
+    const model::Measurement& m = data.rows[static_cast<std::size_t>(r)];
+    moved_m = std::max(moved_m, (m.position - first.position).norm());
+    if (use_orientation && m.orientation && first.orientation)
+      turned_rad = std::max(turned_rad, m.orientation->angularDistance(*first.orientation));
+  }
+  if (moved_m >= kStillM || turned_rad >= kStillRad) return;
+  const double reading_span =
+      std::abs(data.rows[static_cast<std::size_t>(s.rows.back())].q[static_cast<std::size_t>(s.joint)] -
+               first.q[static_cast<std::size_t>(s.joint)]);
+  std::ostringstream msg;
+  msg << data.source << ": joint " << s.joint + 1 << " (" << lines << "): its reading changes by " << reading_span
+      << " but the measured points do not move (all within " << moved_m * 1e6
+      << " um of the first): the sweep shows no axis; are the position columns the right ones?";
+  throw InputError(msg.str());
+}
+
+}  // namespace
+
 SweepAnalysis analyse_sweeps(const model::Dataset& data, std::span<const std::optional<core::JointType>> declared,
                              bool use_orientation, const CpaOptions& options) {
   const int n = data.joint_count;
@@ -505,6 +533,7 @@ SweepAnalysis analyse_sweeps(const model::Dataset& data, std::span<const std::op
   for (int j = 0; j < n; ++j) {
     const Sweep& s = *chosen[static_cast<std::size_t>(j)];
     const std::optional<core::JointType> d = declared.empty() ? std::nullopt : declared[static_cast<std::size_t>(j)];
+    require_motion(data, s, use_orientation, lines(s));
     SweepFit fit = fit_sweep(data, s, d, options);
     if (fit.contradicts_model) {
       std::ostringstream msg;

@@ -112,7 +112,8 @@ struct SweepAnalysis {
   std::vector<std::string> notes;
 };
 
-// Throws model::InputError naming the joint without a sweep.
+// Throws model::InputError naming the joint without a sweep, or whose sweep's measured points (and
+// orientations, when used) move by less than 1 um (1 urad): such a sweep shows no axis.
 SweepAnalysis analyse_sweeps(const model::Dataset& data, std::span<const std::optional<core::JointType>> declared,
                              bool use_orientation, const CpaOptions& options);
 

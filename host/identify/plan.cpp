@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -111,13 +112,18 @@ PlanResult plan_configurations(const model::RobotModel& m, const PlanOptions& op
     for (int k = 0; k < options.count; ++k)
       set.push_back(std::uniform_int_distribution<std::size_t>(0, pool.size() - 1)(rng));
     const Eigen::MatrixXd info = information(set);
+    // A singular plan (repeated configurations of a small pool) predicts nothing: its LDLT solve
+    // is garbage and its rms NaN. It is left out of the comparison.
+    if (Eigen::LLT<Eigen::MatrixXd>(info).info() != Eigen::Success) continue;
     const double index = o1(info, m_rows);
+    ++result.random_full_rank;
     random_sum += index;
     result.random_index_best = std::max(result.random_index_best, index);
     random_pred += prediction_rms(info, pool, options.count);
   }
-  result.random_index_mean = random_sum / std::max(1, options.random_sets);
-  result.random_prediction_rms = random_pred / std::max(1, options.random_sets);
+  const double none = std::numeric_limits<double>::quiet_NaN();
+  result.random_index_mean = result.random_full_rank > 0 ? random_sum / result.random_full_rank : none;
+  result.random_prediction_rms = result.random_full_rank > 0 ? random_pred / result.random_full_rank : none;
   // Fedorov exchange from a random start.
   std::vector<std::size_t> set;
   for (int k = 0; k < options.count; ++k) set.push_back(static_cast<std::size_t>(k));

@@ -46,11 +46,15 @@ struct PlanResult {
   std::vector<std::vector<double>> configurations;
   ParameterIds identified;
   std::vector<HeldFixed> held_fixed;
-  double index = 0.0;              // O1 of the plan
-  double random_index_mean = 0.0;  // over random_sets random plans of the same size
+  double index = 0.0;  // O1 of the plan
+  // Over the random plans of the same size (random_sets drawn) whose information matrix is
+  // positive definite: a plan that cannot identify every parameter has no prediction rms. NaN
+  // when none of them is (a small pool drawn with repetition); random_full_rank counts them.
+  double random_index_mean = 0.0;
   double random_index_best = 0.0;
   double prediction_rms = 0.0;         // per unit sigma, mean over the pool
-  double random_prediction_rms = 0.0;  // mean over the random plans
+  double random_prediction_rms = 0.0;  // mean over the random plans (as random_index_mean)
+  int random_full_rank = 0;
 };
 
 // Throws model::InputError (prismatic joint without limits, count too small for the parameters).

@@ -2,14 +2,13 @@
 
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <istream>
 #include <map>
 #include <optional>
 #include <ostream>
 #include <sstream>
 
-#include "host/files/input_limits.hpp"
+#include "host/files/input_file.hpp"
 #include "host/model/csv_fields.hpp"
 #include "host/model/number_text.hpp"
 
@@ -29,7 +28,8 @@ double parse_number(const std::string& field, const std::string& column, const s
   if (first != last && *first == '+') ++first;
   const auto [end, ec] = std::from_chars(first, last, v);
   if (field.empty()) fail_at(source, line, "column " + column + " is empty");
-  if (ec != std::errc() || end != last) fail_at(source, line, "column " + column + ": '" + field + "' is not a number");
+  if (ec != std::errc() || end != last)
+    fail_at(source, line, "column " + column + ": '" + files::excerpt(field) + "' is not a number");
   if (!std::isfinite(v)) fail_at(source, line, "column " + column + " is not finite");
   return v;
 }
@@ -48,7 +48,8 @@ Header parse_header(const std::string& line, const std::string& source, int numb
   for (std::size_t i = 0; i < names.size(); ++i) {
     const std::string& n = names[i];
     if (n.empty()) fail_at(source, number, "header: column " + std::to_string(i + 1) + " has no name");
-    if (!h.index.emplace(n, i).second) fail_at(source, number, "header: column '" + n + "' appears twice");
+    if (!h.index.emplace(n, i).second)
+      fail_at(source, number, "header: column '" + files::excerpt(n) + "' appears twice");
   }
   while (h.index.count("q" + std::to_string(h.joints + 1))) ++h.joints;
   if (h.joints == 0) fail_at(source, number, "header: no joint columns (expected q1, q2, ...)");
@@ -62,10 +63,11 @@ Header parse_header(const std::string& line, const std::string& source, int numb
       // More digits than any joint count: out of range without overflowing stoi (a fuzzer find).
       const int j = name.size() <= 4 ? std::stoi(name.substr(1)) : 0;
       if (j < 1 || j > h.joints)
-        fail_at(source, number, "header: column '" + name + "' but no q" + std::to_string(h.joints + 1));
+        fail_at(source, number,
+                "header: column '" + files::excerpt(name) + "' but no q" + std::to_string(h.joints + 1));
       known = true;
     }
-    if (!known) fail_at(source, number, "header: unknown column '" + name + "'");
+    if (!known) fail_at(source, number, "header: unknown column '" + files::excerpt(name) + "'");
   }
   for (const char* k : {"x", "y", "z"})
     if (!h.index.count(k)) fail_at(source, number, std::string("header: missing column '") + k + "'");
@@ -176,22 +178,8 @@ Dataset parse_dataset(std::istream& in, const std::string& source) {
   return data;
 }
 
-namespace {
-
-void within_size_limit(const std::string& path) {
-  try {
-    files::check_text_file_size(path);
-  } catch (const files::InputLimitError& e) {
-    throw InputError(e.what());
-  }
-}
-
-}  // namespace
-
 Dataset read_dataset(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open the data file");
-  within_size_limit(path);
+  std::istringstream in(files::read_text_or_throw<InputError>(path, files::kDatasetFile));
   return parse_dataset(in, path);
 }
 
@@ -203,9 +191,7 @@ std::vector<std::vector<double>> parse_joints(std::istream& in, const std::strin
 }
 
 std::vector<std::vector<double>> read_joints(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open the joints file");
-  within_size_limit(path);
+  std::istringstream in(files::read_text_or_throw<InputError>(path, files::kDatasetFile));
   return parse_joints(in, path);
 }
 

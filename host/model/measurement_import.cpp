@@ -3,11 +3,12 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <istream>
 #include <map>
 #include <numbers>
+#include <sstream>
 
+#include "host/files/input_file.hpp"
 #include "host/model/csv_fields.hpp"
 
 namespace kincal::model {
@@ -43,9 +44,13 @@ struct Table {
   std::size_t column(const std::string& name) const {
     const auto it = index.find(name);
     if (it == index.end()) {
+      constexpr std::size_t kListed = 20;  // a header of 100,000 names is not listed whole
       std::string known;
-      for (const std::string& n : names) known += (known.empty() ? "'" : ", '") + n + "'";
-      fail(source, header_line, names.size(), "no column named '" + name + "' in the header (it has " + known + ")");
+      for (std::size_t i = 0; i < names.size() && i < kListed; ++i)
+        known += (known.empty() ? "'" : ", '") + files::excerpt(names[i]) + "'";
+      if (names.size() > kListed) known += " and " + std::to_string(names.size() - kListed) + " more";
+      fail(source, header_line, names.size(),
+           "no column named '" + files::excerpt(name) + "' in the header (it has " + known + ")");
     }
     return it->second;
   }
@@ -60,7 +65,8 @@ struct Table {
     const auto [end, ec] = std::from_chars(first, last, v);
     if (text.empty()) fail(source, line, c, "column '" + names[c] + "' is empty");
     if (ec != std::errc() || end != last)
-      fail(source, line, c, "column '" + names[c] + "': '" + fields[c] + "' is not a number");
+      fail(source, line, c,
+           "column '" + files::excerpt(names[c]) + "': '" + files::excerpt(fields[c]) + "' is not a number");
     if (!std::isfinite(v)) fail(source, line, c, "column '" + names[c] + "' is not finite");
     return v;
   }
@@ -112,6 +118,34 @@ AngleUnit parse_angle_unit(const std::string& text) {
   throw InputError("angle unit '" + text + "': expected rad or deg");
 }
 
+JointUnit parse_joint_unit(const std::string& text) {
+  for (const auto& [name, unit] : {std::pair{"rad", JointUnit::rad}, std::pair{"deg", JointUnit::deg},
+                                   std::pair{"m", JointUnit::m}, std::pair{"mm", JointUnit::mm}})
+    if (text == name) return unit;
+  throw InputError("joint unit '" + files::excerpt(text) + "': expected rad or deg (revolute), m or mm (prismatic)");
+}
+
+void check_joint_units(const std::vector<JointUnit>& units, const RobotModel& model) {
+  if (units.size() != 1 && units.size() != model.joints.size())
+    throw InputError("--joint-unit: " + std::to_string(units.size()) + " units for the " +
+                     std::to_string(model.joints.size()) + " joints of '" + model.name +
+                     "' (give one for all joints or one per joint)");
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    const JointUnit u = units[units.size() == 1 ? 0 : j];
+    const bool angle = u == JointUnit::rad || u == JointUnit::deg;
+    const bool revolute = model.joints[j].type == core::JointType::revolute;
+    if (angle != revolute)
+      throw InputError("--joint-unit: joint " + std::to_string(j + 1) + " '" + model.joints[j].name + "' of '" +
+                       model.name + "' is " + (revolute ? "revolute" : "prismatic") + " but its unit is " +
+                       (u == JointUnit::rad   ? "rad"
+                        : u == JointUnit::deg ? "deg"
+                        : u == JointUnit::m   ? "m"
+                                              : "mm") +
+                       (revolute ? " (a revolute joint reads rad or deg" : " (a prismatic joint reads m or mm") +
+                       "; give one unit per joint, e.g. --joint-unit deg,deg,m,...)");
+  }
+}
+
 Eigen::Matrix3d rotation_from_euler(const EulerConvention& c, const Eigen::Vector3d& angles_rad) {
   Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
   for (int k = 0; k < 3; ++k) {
@@ -130,7 +164,14 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   result.data.has_orientation = o.angles.has_value();
   result.data.noise = o.position_std ? NoiseColumns::covariance : NoiseColumns::none;
   const double length = o.position_unit == LengthUnit::mm ? 1e-3 : 1.0;
-  const double joint_angle = o.joint_unit == AngleUnit::deg ? kRadPerDeg : 1.0;
+  if (o.joint_units.size() != 1 && o.joint_units.size() != o.joints.size())
+    throw InputError("--joint-unit: " + std::to_string(o.joint_units.size()) + " units for " +
+                     std::to_string(o.joints.size()) + " joint columns (give one for all joints or one per joint)");
+  std::vector<double> joint_scale;
+  for (std::size_t j = 0; j < o.joints.size(); ++j) {
+    const JointUnit u = o.joint_units[o.joint_units.size() == 1 ? 0 : j];
+    joint_scale.push_back(u == JointUnit::deg ? kRadPerDeg : u == JointUnit::mm ? 1e-3 : 1.0);
+  }
   const double angle = o.angle_unit == AngleUnit::deg ? kRadPerDeg : 1.0;
 
   Table t{source, {}, {}, 0, '.'};
@@ -146,7 +187,7 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   t.names = split_fields(line, result.separator, true);
   for (std::size_t i = 0; i < t.names.size(); ++i)
     if (!t.names[i].empty() && !t.index.emplace(t.names[i], i).second)
-      fail(source, number, i, "header: column '" + t.names[i] + "' appears twice");
+      fail(source, number, i, "header: column '" + files::excerpt(t.names[i]) + "' appears twice");
   std::vector<std::size_t> joint_columns;
   for (const std::string& j : o.joints) joint_columns.push_back(t.column(j));
   const auto position = columns(t, o.position);
@@ -154,6 +195,24 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   const auto angles = o.angles ? std::optional(columns(t, *o.angles)) : std::nullopt;
   const auto angle_std = o.angle_std ? std::optional(columns(t, *o.angle_std)) : std::nullopt;
   if (angle_std && !angles) throw InputError(source + ": orientation standard deviations without orientation columns");
+  // Every header column feeds one value: a column named for two roles is a typing slip.
+  std::map<std::size_t, std::string> role_of;
+  const auto use = [&](std::size_t column, const std::string& role) {
+    const auto [it, fresh] = role_of.emplace(column, role);
+    if (!fresh)
+      fail(source, t.header_line, column,
+           "column '" + files::excerpt(t.names[column]) + "' is named twice: as " + it->second + " and as " + role +
+               " (every column feeds one value)");
+  };
+  for (std::size_t j = 0; j < joint_columns.size(); ++j)
+    use(joint_columns[j], "joint " + std::to_string(j + 1) + " (--joints)");
+  const auto use_three = [&](const std::optional<std::array<std::size_t, 3>>& c, const char* option) {
+    for (std::size_t k = 0; c && k < 3; ++k) use((*c)[k], "value " + std::to_string(k + 1) + " of " + option);
+  };
+  use_three(std::optional(position), "--position");
+  use_three(position_std, "--position-std");
+  use_three(angles, "--orientation");
+  use_three(angle_std, "--orientation-std");
 
   std::vector<double> position_stds, angle_stds;
   while (std::getline(in, line)) {
@@ -169,7 +228,8 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
         if (f.find(',') != std::string::npos) t.decimal = ',';
     Measurement m;
     m.line = number;
-    for (std::size_t c : joint_columns) m.q.push_back(t.number(fields, c, number) * joint_angle);
+    for (std::size_t j = 0; j < joint_columns.size(); ++j)
+      m.q.push_back(t.number(fields, joint_columns[j], number) * joint_scale[j]);
     for (int k = 0; k < 3; ++k)
       m.position(k) = t.number(fields, position[static_cast<std::size_t>(k)], number) * length;
     if (position_std) {
@@ -205,9 +265,8 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
 }
 
 ImportResult import_measurements_file(const std::string& path, const ImportOptions& options) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open the measurement export");
-  return import_measurements(in, path, options);
+  std::istringstream in(files::read_text_or_throw<InputError>(path, files::kExportFile, files::StandardInput::allowed));
+  return import_measurements(in, path == "-" ? "standard input" : path, options);
 }
 
 }  // namespace kincal::model

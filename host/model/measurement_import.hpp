@@ -18,9 +18,19 @@
 // dataset format carries no orientation covariance, so orientation standard deviations are read,
 // checked and summarized (ImportResult) but not written; identify estimates the orientation noise.
 //
+// Joint units: one for every joint, or one per joint (a mixed arm: deg,deg,m,deg,...); rad or deg
+// for a revolute joint, m or mm for a prismatic one (check_joint_units() holds them against a
+// model).
+//
+// Reads: import_measurements_file() reads through files::read_text() (files/input_file.hpp: a
+// regular file or "-" for standard input, at most files::kExportFile.max_bytes, UTF-8 with or
+// without a byte-order mark, CRLF or LF); fields quoted in messages are cut to 80 bytes.
+//
 // Errors (InputError "FILE:LINE:COLUMN: what", COLUMN 1-based, the header name in the message):
-// a named column missing or named twice in the header, a row with the wrong number of fields, a
-// field that is not a finite number, a standard deviation <= 0, a bad unit or convention name.
+// a named column missing or named twice in the header, one header column named for two roles
+// (twice in --joints, or as a joint and a coordinate), a row with the wrong number of fields, a
+// field that is not a finite number, a standard deviation <= 0, a bad unit or convention name, a
+// unit count that is neither 1 nor the joint count.
 #pragma once
 
 #include <array>
@@ -36,6 +46,7 @@
 namespace kincal::model {
 
 enum class LengthUnit { m, mm };
+enum class JointUnit { rad, deg, m, mm };
 
 struct EulerConvention {
   bool intrinsic = true;
@@ -46,16 +57,17 @@ struct EulerConvention {
 EulerConvention parse_euler_convention(const std::string& text);
 LengthUnit parse_length_unit(const std::string& text);  // "m" or "mm"
 AngleUnit parse_angle_unit(const std::string& text);    // "rad" or "deg"
+JointUnit parse_joint_unit(const std::string& text);    // "rad", "deg", "m" or "mm"
 
 // device_R_tool from three angles (rad) in the convention's order.
 Eigen::Matrix3d rotation_from_euler(const EulerConvention& convention, const Eigen::Vector3d& angles_rad);
 
 struct ImportOptions {
-  char separator = 0;                        // 0: detect from the header line
-  std::vector<std::string> joints;           // header names, in the model's joint order
-  AngleUnit joint_unit = AngleUnit::rad;     // revolute joints (all joints treated alike)
-  std::array<std::string, 3> position;       // x, y, z
-  LengthUnit position_unit = LengthUnit::m;  // also the unit of position_std
+  char separator = 0;                                  // 0: detect from the header line
+  std::vector<std::string> joints;                     // header names, in the model's joint order
+  std::vector<JointUnit> joint_units{JointUnit::rad};  // one for all joints, or one per joint
+  std::array<std::string, 3> position;                 // x, y, z
+  LengthUnit position_unit = LengthUnit::m;            // also the unit of position_std
   std::optional<std::array<std::string, 3>> position_std;
   std::optional<std::array<std::string, 3>> angles;  // in the convention's order
   EulerConvention convention;
@@ -72,6 +84,12 @@ struct ImportResult {
 };
 
 ImportResult import_measurements(std::istream& in, const std::string& source, const ImportOptions& options);
+// `path` "-": standard input.
 ImportResult import_measurements_file(const std::string& path, const ImportOptions& options);
+
+// Throws InputError naming the joint when the units do not fit the model: their count is neither
+// 1 nor the model's joint count, an angle unit for a prismatic joint, a length unit for a
+// revolute one.
+void check_joint_units(const std::vector<JointUnit>& units, const RobotModel& model);
 
 }  // namespace kincal::model

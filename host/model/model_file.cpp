@@ -1,5 +1,6 @@
 #include "host/model/model_file.hpp"
 
+#include "host/files/input_file.hpp"
 #include "host/files/output_file.hpp"
 #include "host/model/number_text.hpp"
 
@@ -7,7 +8,6 @@
 
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <initializer_list>
 #include <numbers>
 #include <sstream>
@@ -19,41 +19,6 @@ namespace kincal::model {
 namespace {
 
 constexpr double kDegPerRad = 180.0 / std::numbers::pi;
-
-// Well-formed UTF-8 (RFC 3629: no overlong forms, no surrogates, at most U+10FFFF). YAML text is
-// UTF-8; yaml-cpp reads other bytes as they are but writes them as U+FFFD, so a name that is not
-// UTF-8 would not survive being written back (found by fuzz.model_input).
-bool valid_utf8(const std::string& text) {
-  std::size_t i = 0;
-  while (i < text.size()) {
-    const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(text[k]); };
-    const unsigned char b = byte(i);
-    std::size_t length = 0;
-    unsigned char low = 0x80, high = 0xBF;  // the allowed range of the second byte
-    if (b < 0x80) {
-      length = 1;
-    } else if (b >= 0xC2 && b <= 0xDF) {
-      length = 2;
-    } else if (b >= 0xE0 && b <= 0xEF) {
-      length = 3;
-      if (b == 0xE0) low = 0xA0;
-      if (b == 0xED) high = 0x9F;
-    } else if (b >= 0xF0 && b <= 0xF4) {
-      length = 4;
-      if (b == 0xF0) low = 0x90;
-      if (b == 0xF4) high = 0x8F;
-    } else {
-      return false;
-    }
-    if (i + length > text.size()) return false;
-    for (std::size_t k = 1; k < length; ++k) {
-      const unsigned char c = byte(i + k);
-      if (k == 1 ? (c < low || c > high) : (c < 0x80 || c > 0xBF)) return false;
-    }
-    i += length;
-  }
-  return true;
-}
 
 class Reader {
  public:
@@ -77,7 +42,7 @@ class Reader {
       if (!known) {
         std::string list;
         for (const char* k : keys) list += std::string(list.empty() ? "" : ", ") + k;
-        fail(entry.first, "unknown key '" + key + "' in " + what + " (expected " + list + ")");
+        fail(entry.first, "unknown key '" + files::excerpt(key) + "' in " + what + " (expected " + list + ")");
       }
     }
   }
@@ -90,7 +55,7 @@ class Reader {
     const char* last = text.data() + text.size();
     if (first != last && *first == '+') ++first;
     const auto [end, ec] = std::from_chars(first, last, value);
-    if (ec != std::errc() || end != last) fail(node, what + ": '" + text + "' is not a number");
+    if (ec != std::errc() || end != last) fail(node, what + ": '" + files::excerpt(text) + "' is not a number");
     if (!std::isfinite(value)) fail(node, what + " must be finite");
     return value;
   }
@@ -113,7 +78,9 @@ class Reader {
 
   std::string text(const YAML::Node& node, const std::string& what) const {
     if (!node.IsScalar()) fail(node, what + " must be a string");
-    if (!valid_utf8(node.Scalar())) fail(node, what + " is not UTF-8 text");
+    // yaml-cpp reads escapes ("\xE9") as bytes that it would write back as U+FFFD: a name that is
+    // not UTF-8 would not survive being written (found by fuzz.model_input).
+    if (files::first_invalid_utf8(node.Scalar()) != std::string::npos) fail(node, what + " is not UTF-8 text");
     return node.Scalar();
   }
 
@@ -196,7 +163,7 @@ RobotModel read_model(const YAML::Node& root, const Reader& r) {
     if (unit == "deg" || unit == "degrees") {
       model.file_angles = AngleUnit::deg;
     } else if (unit != "rad" && unit != "radians") {
-      r.fail(root["angles"], "angles: unknown unit '" + unit + "' (expected rad or deg)");
+      r.fail(root["angles"], "angles: unknown unit '" + files::excerpt(unit) + "' (expected rad or deg)");
     }
   }
   const AngleUnit unit = model.file_angles;
@@ -226,7 +193,7 @@ RobotModel read_model(const YAML::Node& root, const Reader& r) {
     } else if (type == "prismatic") {
       j.type = core::JointType::prismatic;
     } else {
-      r.fail(jn["type"], what + ": unknown joint type '" + type + "' (expected revolute or prismatic)");
+      r.fail(jn["type"], what + ": unknown joint type '" + files::excerpt(type) + "' (expected revolute or prismatic)");
     }
     if (!jn["convention"]) r.fail(jn, what + ": missing 'convention' (dh, mdh or doty)");
     const std::string convention = r.text(jn["convention"], what + " convention");
@@ -237,7 +204,8 @@ RobotModel read_model(const YAML::Node& root, const Reader& r) {
     } else if (convention == "doty") {
       j.convention = core::LinkConvention::doty;
     } else {
-      r.fail(jn["convention"], what + ": unknown convention '" + convention + "' (expected dh, mdh or doty)");
+      r.fail(jn["convention"],
+             what + ": unknown convention '" + files::excerpt(convention) + "' (expected dh, mdh or doty)");
     }
     for (const char* key : {"d", "theta", "a", "alpha"})
       if (!jn[key]) r.fail(jn, what + ": missing parameter '" + key + "'");
@@ -256,7 +224,8 @@ RobotModel read_model(const YAML::Node& root, const Reader& r) {
       if (!l.IsSequence() || l.size() != 2) r.fail(l, what + ": limits must be [lower, upper]");
       j.lower = revolute ? r.angle(l[0], what + " lower limit", unit) : r.number(l[0], what + " lower limit");
       j.upper = revolute ? r.angle(l[1], what + " upper limit", unit) : r.number(l[1], what + " upper limit");
-      if (!(j.lower < j.upper)) r.fail(l, what + ": lower limit must be below the upper limit");
+      if (!(j.lower < j.upper))
+        r.fail(l, what + ": lower limit must be below the upper limit (equal limits leave the joint no motion)");
     }
     if (jn["coupling"]) {
       const YAML::Node& c = jn["coupling"];
@@ -269,7 +238,13 @@ RobotModel read_model(const YAML::Node& root, const Reader& r) {
       j.scale = r.number(jn["scale"], what + " scale");
       if (!(*j.scale > 0.0)) r.fail(jn["scale"], what + ": scale must be positive");
     }
-    if (jn["compliance"]) j.compliance = r.number(jn["compliance"], what + " compliance");
+    if (jn["compliance"]) {
+      j.compliance = r.number(jn["compliance"], what + " compliance");
+      if (*j.compliance < 0.0)
+        r.fail(jn["compliance"], what +
+                                     ": compliance must not be negative (a joint yields with its load, "
+                                     "rad/(N m) or m/N)");
+    }
     if (jn["mass"]) j.mass_kg = r.mass(jn["mass"], what + " mass");
     if (jn["centre_of_mass"]) j.centre_of_mass_m = r.vector3(jn["centre_of_mass"], what + " centre_of_mass");
     model.joints.push_back(j);
@@ -344,14 +319,11 @@ RobotModel parse_model(const std::string& text, const std::string& source) {
 }
 
 RobotModel load_model(const std::string& path, const UrdfChainEnds& ends) {
-  if (is_urdf_path(path)) return model_from_urdf(read_urdf_chain(path, ends));
+  if (is_urdf_path(path))
+    return model_from_urdf(parse_urdf_chain(files::read_text_or_throw<InputError>(path, files::kUrdfFile), path, ends));
   if (!ends.base_link.empty() || !ends.tip_link.empty())
     throw InputError(path + ": --base-link and --tip-link are for URDF models (*.urdf)");
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open the model file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_model(text.str(), path);
+  return parse_model(files::read_text_or_throw<InputError>(path, files::kModelFile), path);
 }
 
 std::string write_model(const RobotModel& model) {

@@ -38,10 +38,13 @@
 //   calibration: ...             # written by `kincal identify`; read back as a record, not used
 //
 // Reading is strict: unknown keys, missing parameters, wrong types, an unknown convention or
-// joint type, more than core::kMaxJoints joints, non-finite numbers, lower > upper, a coupling
-// list of the wrong length or coupling rows that are linearly dependent, a scale that is not
-// positive, a negative mass: InputError
-// with "FILE:LINE:COLUMN: what". Writing keeps the file's angle unit and prints numbers in their
+// joint type, more than core::kMaxJoints joints, non-finite numbers, lower >= upper (equal limits
+// leave a joint no motion), a coupling list of the wrong length or coupling rows that are
+// linearly dependent, a scale that is not positive, a negative mass or compliance, text that is
+// not UTF-8: InputError with "FILE:LINE:COLUMN: what" (quoted values cut to 80 bytes). The file
+// is read through files::read_text() (files/input_file.hpp): a regular file of at most
+// files::kModelFile.max_bytes (a URDF: files::kUrdfFile.max_bytes), UTF-8 (a byte-order mark is
+// accepted), LF or CRLF. Writing keeps the file's angle unit and prints numbers in their
 // shortest exact form, so a model written in radians reads back bit for bit.
 #pragma once
 

@@ -19,6 +19,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "host/files/input_file.hpp"
 #include "shared/crc32.hpp"
 
 namespace kincal::session {
@@ -403,17 +404,21 @@ Journal Journal::create(const std::string& path, const JournalIdentity& identity
 
 Journal Journal::resume(const std::string& path, const JournalIdentity& identity) {
   if (!std::filesystem::exists(path)) fail(path, 0, "no journal to resume");
+  try {  // before open(): a directory, a device or a named pipe is refused by name
+    files::check_input_file(path, files::kJournalFile);
+  } catch (const files::InputFileError& e) {
+    throw JournalError(e.what());
+  }
   const int fd = open_locked(path, O_RDWR | O_APPEND);
   Journal journal(path, identity, fd);
   std::string text;
-  char buffer[1 << 16];
-  while (true) {
-    const ssize_t n = ::read(fd, buffer, sizeof buffer);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) fail_os(path, "cannot read the journal");
-    if (n == 0) break;
-    text.append(buffer, static_cast<std::size_t>(n));
+  try {
+    text = files::read_text_from(fd, path, files::kJournalFile);
+  } catch (const files::InputFileError& e) {
+    throw JournalError(e.what());
   }
+  // A byte-order mark that read_text_from() removed still counts in the file's offsets.
+  const off_t removed = ::lseek(fd, 0, SEEK_CUR) - static_cast<off_t>(text.size());
 
   std::size_t start = 0;
   int line = 0;
@@ -430,7 +435,7 @@ Journal Journal::resume(const std::string& path, const JournalIdentity& identity
     if (bad && line == 1) fail(path, 1, "the journal header is damaged: " + *bad);
     if (bad && !last) fail(path, line, "damaged record before the end of the journal: " + *bad);
     if (bad) {
-      if (::ftruncate(fd, static_cast<off_t>(start)) != 0 || ::fsync(fd) != 0)
+      if (::ftruncate(fd, static_cast<off_t>(start) + removed) != 0 || ::fsync(fd) != 0)
         fail_os(path, "cannot cut off the torn last line");
       journal.notes_.push_back(path + ":" + std::to_string(line) + ": the last line was torn (" + *bad + "); cut off " +
                                std::to_string(text.size() - start) + " bytes");

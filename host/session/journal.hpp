@@ -27,6 +27,10 @@
 // note says so. Anything wrong on an earlier line is an error naming the line: data is never
 // dropped silently. A pose index recorded twice is an error naming both lines.
 //
+// Reading: resume() reads through files::read_text_from() (files/input_file.hpp): a regular file
+// (a directory, a device, a named pipe are refused by name before they are opened) of at most
+// files::kJournalFile.max_bytes, UTF-8.
+//
 // Cost: append() is one write() and one fsync() (milliseconds on a disk, dominated by the
 // fsync); resume() reads the whole file, O(bytes). Memory: every record is kept in memory.
 // Not thread-safe: one Journal object per thread.

@@ -5,7 +5,6 @@
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <filesystem>
 #include <initializer_list>
 #include <sstream>
 #include <utility>
@@ -14,6 +13,7 @@
 #include "firmware/app/platform_measurement.hpp"
 #include "firmware/core/range_plane.hpp"
 #include "host/camera/calibration_file.hpp"
+#include "host/files/input_file.hpp"
 #include "host/target/doty_square.hpp"
 
 namespace kincal::session {
@@ -132,8 +132,8 @@ void check_rangers(const std::string& path, const YAML::Node& rangers, const sha
 }  // namespace
 
 shared::CameraIntrinsics read_camera_block(const std::string& camera_yaml) {
-  if (!std::filesystem::is_regular_file(camera_yaml)) throw PlatformSetupError(camera_yaml + ": no such file");
   try {
+    files::check_input_file(camera_yaml, files::kSettingsFile);  // a directory or a device: refused by name
     return camera::to_platform(camera::load_camera(camera_yaml));
   } catch (const PlatformSetupError&) {
     throw;
@@ -145,12 +145,13 @@ shared::CameraIntrinsics read_camera_block(const std::string& camera_yaml) {
 }
 
 shared::PlatformGeometry read_geometry_block(const std::string& path) {
-  if (!std::filesystem::is_regular_file(path)) throw PlatformSetupError(path + ": no such file");
+  const std::string text = files::read_text_or_throw<PlatformSetupError>(path, files::kSettingsFile);
   YAML::Node root;
   try {
-    root = YAML::LoadFile(path);
+    root = YAML::Load(text);
   } catch (const YAML::ParserException& e) {
-    throw PlatformSetupError(path + ":" + std::to_string(e.mark.line + 1) + ": not valid YAML: " + e.msg);
+    throw PlatformSetupError(path + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) +
+                             ": not valid YAML: " + e.msg);
   } catch (const YAML::Exception& e) {
     throw PlatformSetupError(path + ": cannot read: " + e.what());
   }

@@ -25,7 +25,9 @@
 // 15 s (the squares' fiducials would overlap).
 //
 // Errors: PlatformSetupError, its message naming the file and, for a bad value, the line and the
-// key ("platform.yaml:4: rangers[1].direction: ..."): a missing file, YAML that does not parse,
+// key ("platform.yaml:4: rangers[1].direction: ..."): a missing file, a path that is not a regular
+// file or is over files::kSettingsFile.max_bytes, text that is not UTF-8 (files/input_file.hpp),
+// YAML that does not parse (with line:column),
 // an unknown or missing key, a value that is not a number, not finite or out of range; for a
 // camera file the loader's and to_platform's messages behind the file's name. load_block also
 // throws PlatformSetupError when the block read back differs from the one uploaded, and passes on

@@ -79,5 +79,5 @@ TEST_CASE("the reader names file and line of a bad line") {
   CHECK(reader.next().has_value());
   CHECK_THROWS_WITH_AS(reader.next(), doctest::Contains(doctest::String((path + ":3: ").c_str())), can::CanError);
   std::filesystem::remove(path);
-  CHECK_THROWS_WITH_AS(can::CandumpReader("/nonexistent/x.log"), doctest::Contains("cannot open"), can::CanError);
+  CHECK_THROWS_WITH_AS(can::CandumpReader("/nonexistent/x.log"), doctest::Contains("no such file"), can::CanError);
 }

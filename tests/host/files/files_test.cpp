@@ -60,7 +60,7 @@ TEST_CASE("an output that resolves to an input is refused, naming both options")
   }
   CHECK_THROWS_AS(kincal::files::refuse_overwriting({{"--out", s.path("x")}, {"--urdf", s.path("sub/../x")}}, {}),
                   kincal::files::OutputError);
-  CHECK_NOTHROW(kincal::files::refuse_overwriting({{"--out", s.path("o.yaml")}, {"--urdf", ""}, {"-o", "-"}},
+  CHECK_NOTHROW(kincal::files::refuse_overwriting({{"--out", s.path("o.yaml")}, {"--urdf", ""}, {"-o", "-", true}},
                                                   {{"--data", s.path("d.csv")}, {"--validate", ""}}));
   CHECK(contents(s.path("d.csv")) == "data\n");
 }

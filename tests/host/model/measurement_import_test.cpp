@@ -29,7 +29,7 @@ std::string error_of(const std::string& text, const model::ImportOptions& o) {
 model::ImportOptions two_joint_options() {
   model::ImportOptions o;
   o.joints = {"J 1", "J 2"};
-  o.joint_unit = model::AngleUnit::deg;
+  o.joint_units = {model::JointUnit::deg};
   o.position = {"X", "Y", "Z"};
   o.position_unit = model::LengthUnit::mm;
   return o;
@@ -100,9 +100,14 @@ TEST_CASE("tabs and points; errors name file, line and column") {
   CHECK(error_of("J 1,J 2,X,Y\n1,2,3,4\n", o).starts_with("x.csv:1:5: no column named 'Z' in the header"));
   CHECK(error_of("J 1,J 2,X,Y,Z,X\n", o) == "x.csv:1:6: header: column 'X' appears twice");
   CHECK(error_of("J 1,J 2,X,Y,Z\n1,2,3,4,inf\n", o) == "x.csv:2:5: column 'Z' is not finite");
-  o.position_std = {"X", "Y", "J 1"};
-  CHECK(error_of("J 1,J 2,X,Y,Z\n0,2,3,4,5\n", o) == "x.csv:2:1: column 'J 1': a standard deviation must be > 0");
-  CHECK(error_of("J 1,J 2,X,Y,Z\n", o) == "x.csv: no data rows after the header");
+  o.position_std = {"X", "Y", "J 1"};  // one column for two values: a typing slip, refused (issue #25)
+  CHECK(error_of("J 1,J 2,X,Y,Z\n0,2,3,4,5\n", o) ==
+        "x.csv:1:3: column 'X' is named twice: as value 1 of --position and as value 1 of --position-std (every "
+        "column feeds one value)");
+  o.position_std = {"SX", "SY", "SZ"};
+  CHECK(error_of("J 1,J 2,X,Y,Z,SX,SY,SZ\n0,2,3,4,5,0,1,1\n", o) ==
+        "x.csv:2:6: column 'SX': a standard deviation must be > 0");
+  CHECK(error_of("J 1,J 2,X,Y,Z,SX,SY,SZ\n", o) == "x.csv: no data rows after the header");
 }
 
 TEST_CASE("the real UR10 laser-tracker export, read as it is") {

@@ -16,7 +16,7 @@ inline model::ImportOptions ur10_import_options() {
   model::ImportOptions o;
   o.joints = {"shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
               "wrist_1_joint",      "wrist_2_joint",       "wrist_3_joint"};
-  o.joint_unit = model::AngleUnit::rad;
+  o.joint_units = {model::JointUnit::rad};
   o.position = {"measurement_x", "measurement_y", "measurement_z"};
   o.position_unit = model::LengthUnit::mm;
   o.position_std = {"measurement_std_x", "measurement_std_y", "measurement_std_z"};
