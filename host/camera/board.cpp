@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
@@ -105,6 +107,119 @@ void orient_chessboard(const Board& board, const cv::Mat& grey, std::vector<cv::
   }
 }
 
+// The smallest distance (px) between two neighbouring corners of the grid, diagonal neighbours
+// included: the scale of the smallest square in this view.
+double smallest_spacing_px(const std::vector<cv::Point2f>& corners, int cols, int rows) {
+  double smallest = std::numeric_limits<double>::infinity();
+  const auto at = [&](int i, int j) { return corners[static_cast<std::size_t>(j * cols + i)]; };
+  for (int j = 0; j < rows; ++j) {
+    for (int i = 0; i < cols; ++i) {
+      for (const auto& [di, dj] : {std::pair{1, 0}, std::pair{0, 1}, std::pair{1, 1}, std::pair{-1, 1}}) {
+        if (i + di < 0 || i + di >= cols || j + dj >= rows) continue;
+        smallest = std::min(smallest, static_cast<double>(cv::norm(at(i + di, j + dj) - at(i, j))));
+      }
+    }
+  }
+  return smallest;
+}
+
+// Grid coordinates (u, v): inner corner (i, j) at (i, j); square (a, b) spans [a, a+1] x [b, b+1]
+// and is of parity (a + b) mod 2 (the same parity is the same colour on a chessboard).
+int parity(int a, int b) { return ((a + b) % 2 + 2) % 2; }
+
+// The contrast of a set of squares: mean grey level of the parity-0 squares minus that of the
+// parity-1 squares, each sampled in a window of radius_px around centre_px.
+// Squares whose window leaves the image are skipped; nullopt when fewer than two of either
+// parity remain.
+struct SquareSample {
+  cv::Point2f centre_px;
+  float radius_px;
+  int parity;
+};
+std::optional<double> contrast(const cv::Mat& grey, const std::vector<SquareSample>& squares) {
+  std::array<double, 2> sum{}, count{};
+  for (const SquareSample& s : squares) {
+    const int r = std::max(1, static_cast<int>(s.radius_px));
+    const cv::Rect window(static_cast<int>(std::lround(s.centre_px.x)) - r,
+                          static_cast<int>(std::lround(s.centre_px.y)) - r, 2 * r + 1, 2 * r + 1);
+    if ((window & cv::Rect(0, 0, grey.cols, grey.rows)) != window) continue;
+    sum[static_cast<std::size_t>(s.parity)] += cv::mean(grey(window))[0];
+    count[static_cast<std::size_t>(s.parity)] += 1;
+  }
+  if (count[0] < 2 || count[1] < 2) return std::nullopt;
+  return sum[0] / count[0] - sum[1] / count[1];
+}
+
+// How many more rings of squares of the chessboard's pattern lie beyond one side of the
+// detected grid (see the header): 0 when the squares next to the outermost ones (ring 2) do not
+// alternate like the board's own, or when that cannot be told (out of the image). The rings
+// are placed by a homography fitted to the three lines of corners nearest that side, which
+// follows the lens's distortion locally.
+int rings_beyond(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, int cols, int rows, int side,
+                 double interior_contrast) {
+  // side: 0 left (u < 0), 1 right (u > cols - 1), 2 top (v < 0), 3 bottom (v > rows - 1).
+  const bool along_u = side < 2;
+  const int lines = along_u ? cols : rows, across = along_u ? rows : cols;
+  const bool low = side % 2 == 0;
+  std::vector<cv::Point2f> grid, image;
+  for (int l = 0; l < 3; ++l) {
+    const int line = low ? l : lines - 1 - l;
+    for (int k = 0; k < across; ++k) {
+      const int i = along_u ? line : k, j = along_u ? k : line;
+      grid.emplace_back(static_cast<float>(i), static_cast<float>(j));
+      image.push_back(corners[static_cast<std::size_t>(j * cols + i)]);
+    }
+  }
+  const cv::Mat h = cv::findHomography(grid, image);
+  if (h.empty()) return 0;
+  const auto project = [&h](float u, float v) {
+    std::vector<cv::Point2f> out;
+    cv::perspectiveTransform(std::vector<cv::Point2f>{{u, v}}, out, h);
+    return out[0];
+  };
+  constexpr int kMaxRings = 20;
+  int extra = 0;
+  for (int ring = 2; ring < kMaxRings; ++ring) {
+    // Squares of ring `ring`: square index a (along the side's normal) and b = -1 .. across - 1.
+    const int a = low ? -ring : lines - 2 + ring;
+    std::vector<SquareSample> squares;
+    for (int b = -1; b < across; ++b) {
+      // The quarter of the square nearest the board: outer squares are often cut narrower.
+      const float cu = static_cast<float>(a) + (low ? 0.75f : 0.25f), cv_ = static_cast<float>(b) + 0.5f;
+      const float u = along_u ? cu : cv_, v = along_u ? cv_ : cu;
+      const cv::Point2f centre = project(u, v);
+      const float side_px = static_cast<float>(std::min(cv::norm(project(u + 0.5f, v) - project(u - 0.5f, v)),
+                                                        cv::norm(project(u, v + 0.5f) - project(u, v - 0.5f))));
+      squares.push_back({centre, 0.125f * side_px, parity(along_u ? a : b, along_u ? b : a)});
+    }
+    const std::optional<double> c = contrast(grey, squares);
+    if (!c || *c / interior_contrast < kExtensionContrastRatio) break;
+    ++extra;
+  }
+  return extra;
+}
+
+// The board size that fits the image when the detected grid continues beyond the board given,
+// or the board's own size.
+cv::Size fitting_chessboard(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, int cols, int rows) {
+  std::vector<SquareSample> interior;
+  for (int b = 0; b + 1 < rows; ++b) {
+    for (int a = 0; a + 1 < cols; ++a) {
+      const auto at = [&](int i, int j) { return corners[static_cast<std::size_t>(j * cols + i)]; };
+      const cv::Point2f centre = 0.25f * (at(a, b) + at(a + 1, b) + at(a, b + 1) + at(a + 1, b + 1));
+      const float side_px =
+          static_cast<float>(std::min(cv::norm(at(a + 1, b) - at(a, b)), cv::norm(at(a, b + 1) - at(a, b))));
+      interior.push_back({centre, 0.25f * side_px, parity(a, b)});
+    }
+  }
+  const std::optional<double> c = contrast(grey, interior);
+  if (!c || std::abs(*c) < 1.0) return {cols, rows};
+  std::array<int, 4> extra{};
+  for (int side = 0; side < 4; ++side)
+    extra[static_cast<std::size_t>(side)] = rings_beyond(grey, corners, cols, rows, side, *c);
+  return {cols + extra[0] + extra[1], rows + extra[2] + extra[3]};
+}
+
 }  // namespace
 
 std::string Board::text() const {
@@ -112,6 +227,12 @@ std::string Board::text() const {
   out << (kind == BoardKind::kChessboard ? "chessboard:" : "charuco:") << cols << 'x' << rows << ':' << square_m;
   if (kind == BoardKind::kCharuco) out << ':' << marker_m << ':' << dictionary;
   return out.str();
+}
+
+int refine_half_window_px(double smallest_spacing_px) {
+  if (!std::isfinite(smallest_spacing_px)) return kMinRefineHalfWindow_px;
+  return std::clamp(static_cast<int>(kRefineWindowFraction * smallest_spacing_px), kMinRefineHalfWindow_px,
+                    kMaxRefineHalfWindow_px);
 }
 
 int Board::corner_count() const { return kind == BoardKind::kChessboard ? cols * rows : (cols - 1) * (rows - 1); }
@@ -187,17 +308,30 @@ BoardDetection detect_board(const Board& board, const cv::Mat& image, const std:
   }
   if (board.kind == BoardKind::kChessboard) {
     const cv::Size pattern(board.cols, board.rows);
-    bool found = cv::findChessboardCornersSB(grey, pattern, corners, cv::CALIB_CB_NORMALIZE_IMAGE);
-    if (!found) {
-      found = cv::findChessboardCorners(grey, pattern, corners,
-                                        cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
-      if (found) {
-        cv::cornerSubPix(grey, corners, cv::Size(5, 5), cv::Size(-1, -1),
-                         cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-3));
-      }
-    }
-    if (!found) {
+    if (cv::findChessboardCornersSB(grey, pattern, corners, cv::CALIB_CB_NORMALIZE_IMAGE)) {
+      d.detector = "findChessboardCornersSB";
+    } else if (cv::findChessboardCorners(grey, pattern, corners,
+                                         cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE)) {
+      d.detector = "findChessboardCorners";
+    } else {
       d.reason = "pattern not found";
+      return d;
+    }
+    d.refine_half_window_px = refine_half_window_px(smallest_spacing_px(corners, board.cols, board.rows));
+    cv::cornerSubPix(
+        grey, corners, cv::Size(d.refine_half_window_px, d.refine_half_window_px), cv::Size(-1, -1),
+        cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, kRefineIterations, kRefineEpsilon_px));
+    const std::string window = std::to_string(2 * d.refine_half_window_px + 1);
+    d.detector += " + cornerSubPix " + window + "x" + window;
+    const cv::Size fits = fitting_chessboard(grey, corners, board.cols, board.rows);
+    if (fits != pattern) {
+      Board larger = board;
+      larger.cols = fits.width;
+      larger.rows = fits.height;
+      d.fitting_board = larger.text();
+      d.reason = "the board has " + std::to_string(fits.width) + "x" + std::to_string(fits.height) +
+                 " inner corners, not " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
+                 " (its squares continue beyond the corners found): give --board " + d.fitting_board;
       return d;
     }
     orient_chessboard(board, grey, corners);
@@ -214,6 +348,7 @@ BoardDetection detect_board(const Board& board, const cv::Mat& image, const std:
     const cv::Ptr<cv::aruco::Board> plain = board.charuco;
     cv::aruco::refineDetectedMarkers(grey, plain, marker_corners, marker_ids, rejected);
     cv::aruco::interpolateCornersCharuco(marker_corners, marker_ids, grey, board.charuco, corners, d.ids);
+    d.detector = "detectMarkers + refineDetectedMarkers + interpolateCornersCharuco";
   }
   if (static_cast<int>(corners.size()) < min_corners) {
     d.reason = "too few corners (" + std::to_string(corners.size()) + ", at least " + std::to_string(min_corners) + ")";

@@ -126,10 +126,22 @@ void save_camera(const std::string& path, const IntrinsicCalibration& c, const s
   }
   fs << "per_view_reprojection_errors" << cv::Mat(per_view, true);
   fs << "std_deviations_intrinsics" << cv::Mat(cv::Matx<double, 1, 9>(c.std_dev.data()));
+  fs << "views"
+     << "[";
+  for (const ViewReport& v : c.views) {
+    fs << "{"
+       << "image" << v.view << "used" << static_cast<int>(v.used) << "corners" << v.corners;
+    if (!v.detector.empty()) fs << "detector" << v.detector;
+    if (v.used || v.rms_px > 0) fs << "rms_px" << v.rms_px;
+    if (!v.used) fs << "rejection" << v.rejection;
+    fs << "}";
+  }
+  fs << "]";
   write_storage(fs, path);
 }
 
-void save_camera_ros(const std::string& path, const CameraModel& camera, const std::string& camera_name) {
+void save_camera_ros(const std::string& path, const CameraModel& camera, const std::string& camera_name,
+                     const std::vector<ViewReport>& views) {
   const auto matrix = [](const char* key, int rows, int cols, const std::vector<double>& data) {
     std::string text =
         std::string(key) + ":\n  rows: " + std::to_string(rows) + "\n  cols: " + std::to_string(cols) + "\n  data: [";
@@ -147,6 +159,13 @@ void save_camera_ros(const std::string& path, const CameraModel& camera, const s
   text += matrix("rectification_matrix", 3, 3, {1, 0, 0, 0, 1, 0, 0, 0, 1});
   text += matrix("projection_matrix", 3, 4,
                  {k(0, 0), k(0, 1), k(0, 2), 0, k(1, 0), k(1, 1), k(1, 2), 0, k(2, 0), k(2, 1), k(2, 2), 0});
+  for (const ViewReport& v : views) {
+    text += "# view " + v.view + ": " +
+            (v.used ? std::to_string(v.corners) + " corners, RMS " + model::shortest_number_text(v.rms_px) + " px, " +
+                          v.detector
+                    : "not used: " + v.rejection) +
+            "\n";
+  }
   write_text(path, text);
 }
 

@@ -5,7 +5,8 @@
 //   camera     camera_matrix (3x3), distortion_coefficients (1x5: k1 k2 p1 p2 k3),
 //              image_width, image_height, avg_reprojection_error, nr_of_frames,
 //              per_view_reprojection_errors, std_deviations_intrinsics (fx fy cx cy k1 k2 p1 p2 k3),
-//              board (the board's text form)
+//              board (the board's text form), views (one map per image given: image, used
+//              (0/1), corners, detector, rms_px, rejection -- an extra key OpenCV's loaders skip)
 //   stereo     as stereo_calib.cpp: M1 D1 M2 D2 R T E F R1 R2 P1 P2 Q, plus image_width,
 //              image_height, baseline_m, avg_reprojection_error
 //   hand-eye   gripper_T_camera and base_T_target (4x4, metres), method (the refinement's start),
@@ -17,8 +18,9 @@
 // camera_matrix, distortion_model (plumb_bob: k1 k2 p1 p2 k3), distortion_coefficients,
 // rectification_matrix (the identity: one camera) and projection_matrix ([K | 0], as
 // CameraInfo's documentation gives for a monocular camera), each matrix as {rows, cols, data}.
-// load_camera reads both (a file not starting with OpenCV's "%YAML:1.0" is read as ROS's, with
-// yaml-cpp); a ROS file's distortion_model must be plumb_bob.
+// The views, when given, follow as YAML comments ("# view IMAGE: N corners, RMS X px, DETECTOR"),
+// which ROS's parser skips. load_camera reads both (a file not starting with OpenCV's "%YAML:1.0" is read as ROS's,
+// with yaml-cpp); a ROS file's distortion_model must be plumb_bob.
 //
 // to_platform converts a camera to the firmware's camera block (shared::CameraIntrinsics, float
 // and u16, as the platform stores it), so a host calibration loads into the platform as it is.
@@ -30,6 +32,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "host/camera/hand_eye.hpp"
 #include "host/camera/intrinsics.hpp"
@@ -39,7 +42,8 @@
 namespace kincal::camera {
 
 void save_camera(const std::string& path, const IntrinsicCalibration& calibration, const std::string& board_text);
-void save_camera_ros(const std::string& path, const CameraModel& camera, const std::string& camera_name);
+void save_camera_ros(const std::string& path, const CameraModel& camera, const std::string& camera_name,
+                     const std::vector<ViewReport>& views = {});
 CameraModel load_camera(const std::string& path);
 
 void save_stereo(const std::string& path, const StereoCalibration& calibration);

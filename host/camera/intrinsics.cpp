@@ -36,45 +36,63 @@ cv::Mat CameraModel::distortion_mat() const {
   return d;
 }
 
+void refuse_wrong_board(const std::vector<BoardDetection>& detections) {
+  const auto wrong = [](const BoardDetection& d) { return !d.fitting_board.empty(); };
+  const auto first = std::find_if(detections.begin(), detections.end(), wrong);
+  if (first == detections.end()) return;
+  throw CalibrationError(first->view + ": " + first->reason + " (" +
+                         std::to_string(std::count_if(detections.begin(), detections.end(), wrong)) + " of " +
+                         std::to_string(detections.size()) + " views show a larger board)");
+}
+
+void refuse_other_image_sizes(const std::vector<BoardDetection>& detections, cv::Size expected,
+                              const std::string& whose) {
+  std::string others;
+  int count = 0;
+  for (const BoardDetection& d : detections) {
+    if (d.image_size.area() == 0 || d.image_size == expected) continue;
+    if (++count <= 5) others += "\n  " + d.view + ": " + size_text(d.image_size);
+  }
+  if (count == 0) return;
+  throw CalibrationError(std::to_string(count) + " images are not " + size_text(expected) + " like " + whose +
+                         " (another camera or another resolution):" + others + (count > 5 ? "\n  ..." : ""));
+}
+
 IntrinsicCalibration calibrate_intrinsics(const std::vector<BoardDetection>& detections,
                                           const IntrinsicOptions& options) {
+  refuse_wrong_board(detections);
+  const auto first_found =
+      std::find_if(detections.begin(), detections.end(), [](const BoardDetection& d) { return d.found; });
+  if (first_found != detections.end()) refuse_other_image_sizes(detections, first_found->image_size, first_found->view);
   IntrinsicCalibration result;
-  std::vector<std::vector<cv::Point3f>> object_points;
-  std::vector<std::vector<cv::Point2f>> image_points;
-  std::vector<std::size_t> used;  // indices into result.views
-  std::vector<const BoardDetection*> used_detections;
-  cv::Size image_size;
+  std::vector<std::size_t> used;  // indices into detections and result.views
   for (const BoardDetection& d : detections) {
     ViewReport v;
     v.view = d.view;
+    v.detector = d.detector;
     v.corners = static_cast<int>(d.image_px.size());
     if (!d.found) {
       v.rejection = d.reason;
     } else if (d.board_m.size() != d.image_px.size()) {
       v.rejection = "detection without board coordinates";
-    } else if (image_size.area() > 0 && d.image_size != image_size) {
-      v.rejection = "image size " + size_text(d.image_size) + " differs from the first view's " + size_text(image_size);
-    } else if (const auto twin = std::find_if(used_detections.begin(), used_detections.end(),
-                                              [&d](const BoardDetection* u) {
-                                                const double rms = same_corners_rms_px(d, *u);
+    } else if (const auto twin = std::find_if(used.begin(), used.end(),
+                                              [&](std::size_t u) {
+                                                const double rms = same_corners_rms_px(d, detections[u]);
                                                 return rms >= 0.0 && rms < kDuplicateViewRms_px;
                                               });
-               twin != used_detections.end()) {
-      v.rejection = "a near-duplicate of " + (*twin)->view + " (the same corners within " +
-                    fixed(same_corners_rms_px(d, **twin), 3) + " px RMS, less than " + fixed(kDuplicateViewRms_px, 1) +
-                    " px)";
+               twin != used.end()) {
+      v.rejection = "a near-duplicate of " + detections[*twin].view + " (the same corners within " +
+                    fixed(same_corners_rms_px(d, detections[*twin]), 3) + " px RMS, less than " +
+                    fixed(kDuplicateViewRms_px, 1) + " px)";
     } else {
-      image_size = d.image_size;
-      used_detections.push_back(&d);
       v.used = true;
-      object_points.push_back(d.board_m);
-      image_points.push_back(d.image_px);
       used.push_back(result.views.size());
     }
     result.views.push_back(std::move(v));
   }
-  result.views_used = static_cast<int>(used.size());
-  if (result.views_used < options.min_views) {
+  const auto refuse_if_too_few = [&] {
+    result.views_used = static_cast<int>(used.size());
+    if (result.views_used >= options.min_views) return;
     std::string message = "intrinsic calibration: " + std::to_string(result.views_used) + " usable views of " +
                           std::to_string(detections.size()) + ", at least " + std::to_string(options.min_views) +
                           " needed";
@@ -82,18 +100,63 @@ IntrinsicCalibration calibrate_intrinsics(const std::vector<BoardDetection>& det
       if (!v.used) message += "\n  " + v.view + ": " + v.rejection;
     }
     throw CalibrationError(message);
-  }
+  };
+  refuse_if_too_few();
+  const cv::Size image_size = detections[used.front()].image_size;
 
-  cv::Mat camera_matrix, distortion, std_intrinsics, std_extrinsics, per_view;
+  cv::Mat camera_matrix, distortion, std_intrinsics, per_view;
   std::vector<cv::Mat> rvecs, tvecs;
-  result.rms_px = cv::calibrateCamera(object_points, image_points, image_size, camera_matrix, distortion, rvecs, tvecs,
-                                      std_intrinsics, std_extrinsics, per_view, options.flags);
+  const auto solve = [&] {
+    std::vector<std::vector<cv::Point3f>> object_points;
+    std::vector<std::vector<cv::Point2f>> image_points;
+    for (std::size_t u : used) {
+      object_points.push_back(detections[u].board_m);
+      image_points.push_back(detections[u].image_px);
+    }
+    cv::Mat std_extrinsics;
+    result.rms_px = cv::calibrateCamera(object_points, image_points, image_size, camera_matrix, distortion, rvecs,
+                                        tvecs, std_intrinsics, std_extrinsics, per_view, options.flags);
+  };
+  solve();
+  // The outlier gate (see the header): drop, solve again once.
+  std::vector<double> sorted(per_view.begin<double>(), per_view.end<double>());
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+  const double median_px = sorted[sorted.size() / 2];
+  const double limit_px = std::max(options.outlier_over_median * median_px, options.outlier_floor_px);
+  std::vector<std::size_t> kept, outliers;
+  for (std::size_t k = 0; k < used.size(); ++k) {
+    const double rms_px = per_view.at<double>(static_cast<int>(k));
+    if (rms_px <= limit_px) {
+      kept.push_back(used[k]);
+      continue;
+    }
+    outliers.push_back(used[k]);
+    ViewReport& v = result.views[used[k]];
+    v.used = false;
+    v.rms_px = rms_px;
+    v.rejection = "an outlier: RMS " + fixed(rms_px, 3) + " px, more than " + fixed(limit_px, 3) + " px (" +
+                  fixed(options.outlier_over_median, 0) + " times the median view's " + fixed(median_px, 3) +
+                  " px, at least " + fixed(options.outlier_floor_px, 2) + " px): a bad detection or a moved board";
+  }
+  if (!outliers.empty()) {
+    if (static_cast<double>(outliers.size()) > options.max_outlier_fraction * static_cast<double>(used.size())) {
+      std::string message = "intrinsic calibration: " + std::to_string(outliers.size()) + " of " +
+                            std::to_string(used.size()) + " views are outliers (more than " +
+                            fixed(100 * options.max_outlier_fraction, 0) +
+                            " %): the views do not fit one camera (another camera, a zoomed or refocused lens, or a "
+                            "bent board)";
+      for (std::size_t o : outliers) message += "\n  " + result.views[o].view + ": " + result.views[o].rejection;
+      throw CalibrationError(message);
+    }
+    used = kept;
+    refuse_if_too_few();
+    solve();
+  }
   result.camera.image_size = image_size;
   result.camera.camera_matrix = cv::Matx33d(camera_matrix);
   for (int i = 0; i < 5; ++i) result.camera.distortion[static_cast<std::size_t>(i)] = distortion.at<double>(i);
   for (int i = 0; i < 9; ++i) result.std_dev[static_cast<std::size_t>(i)] = std_intrinsics.at<double>(i);
 
-  std::vector<double> view_rms;
   double max_tilt_rad = 0;
   std::vector<bool> cells(kGridCols * kGridRows, false);
   for (std::size_t k = 0; k < used.size(); ++k) {
@@ -101,12 +164,11 @@ IntrinsicCalibration calibrate_intrinsics(const std::vector<BoardDetection>& det
     v.rms_px = per_view.at<double>(static_cast<int>(k));
     v.camera_r_board = cv::Vec3d(rvecs[k]);
     v.camera_t_board_m = cv::Vec3d(tvecs[k]);
-    view_rms.push_back(v.rms_px);
     // Tilt: the angle between the board's normal and the camera's optical axis.
     cv::Matx33d r;
     cv::Rodrigues(v.camera_r_board, r);
     max_tilt_rad = std::max(max_tilt_rad, std::acos(std::min(1.0, std::abs(r(2, 2)))));
-    for (const cv::Point2f& p : image_points[k]) {
+    for (const cv::Point2f& p : detections[used[k]].image_px) {
       const int cx =
           std::clamp(static_cast<int>(p.x * kGridCols / static_cast<float>(image_size.width)), 0, kGridCols - 1);
       const int cy =
@@ -132,16 +194,6 @@ IntrinsicCalibration calibrate_intrinsics(const std::vector<BoardDetection>& det
     result.warnings.push_back("the board is never tilted more than " + fixed(max_tilt_rad * 180 / CV_PI, 1) +
                               " degrees (at least " + fixed(options.min_tilt_rad * 180 / CV_PI, 0) +
                               " wanted): focal length and distance are confounded; add tilted views");
-  }
-  std::vector<double> sorted = view_rms;
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
-  const double median = sorted[sorted.size() / 2];
-  for (std::size_t k = 0; k < used.size(); ++k) {
-    const ViewReport& v = result.views[used[k]];
-    if (v.rms_px > 3 * median) {
-      result.warnings.push_back(v.view + ": RMS " + fixed(v.rms_px, 3) + " px is more than 3 times the median (" +
-                                fixed(median, 3) + " px): a bad detection or a moved board?");
-    }
   }
   return result;
 }
@@ -170,7 +222,7 @@ std::string describe(const IntrinsicCalibration& c) {
   for (const ViewReport& v : c.views) {
     out << "view " << v.view << ": ";
     if (v.used) {
-      out << v.corners << " corners, RMS " << fixed(v.rms_px, 4) << " px\n";
+      out << v.corners << " corners, RMS " << fixed(v.rms_px, 4) << " px (" << v.detector << ")\n";
     } else {
       out << "rejected: " << v.rejection << "\n";
     }

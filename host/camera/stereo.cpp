@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include <opencv2/calib3d.hpp>
@@ -10,6 +12,94 @@
 #include "host/camera/number_text.hpp"
 
 namespace kincal::camera {
+
+namespace {
+
+// right_T_left from one pair's own board poses (cv::solvePnP in each camera).
+struct PairPose {
+  cv::Matx33d right_R_left;
+  cv::Vec3d right_t_left_m;
+};
+
+std::optional<PairPose> pair_pose(const std::vector<cv::Point3f>& board_m, const std::vector<cv::Point2f>& left_px,
+                                  const std::vector<cv::Point2f>& right_px, const CameraModel& left,
+                                  const CameraModel& right) {
+  cv::Vec3d rl, tl, rr, tr;
+  if (!cv::solvePnP(board_m, left_px, cv::Mat(left.camera_matrix), left.distortion_mat(), rl, tl) ||
+      !cv::solvePnP(board_m, right_px, cv::Mat(right.camera_matrix), right.distortion_mat(), rr, tr))
+    return std::nullopt;
+  cv::Matx33d left_R_board, right_R_board;
+  cv::Rodrigues(rl, left_R_board);
+  cv::Rodrigues(rr, right_R_board);
+  const cv::Matx33d r = right_R_board * left_R_board.t();
+  return PairPose{r, tr - r * tl};
+}
+
+double angle_between_rad(const cv::Matx33d& a, const cv::Matx33d& b) {
+  cv::Vec3d v;
+  cv::Rodrigues(a * b.t(), v);
+  return cv::norm(v);
+}
+
+double median_of(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+// The pair-consistency gate (see the header).
+void refuse_disagreeing_pairs(const StereoCalibration& result, const std::vector<std::size_t>& used,
+                              const std::vector<std::vector<cv::Point3f>>& board_m,
+                              const std::vector<std::vector<cv::Point2f>>& left_px,
+                              const std::vector<std::vector<cv::Point2f>>& right_px, const StereoOptions& options) {
+  std::vector<PairPose> poses;
+  std::vector<std::size_t> posed;  // indices into used
+  for (std::size_t k = 0; k < used.size(); ++k) {
+    if (const std::optional<PairPose> pose =
+            pair_pose(board_m[k], left_px[k], right_px[k], result.left, result.right)) {
+      poses.push_back(*pose);
+      posed.push_back(k);
+    }
+  }
+  if (poses.size() < 3) return;
+  // How far pose a is from pose b, in units of the gate's limits (above 1: disagrees).
+  const auto distance = [&](const PairPose& a, const PairPose& b) {
+    return std::max(angle_between_rad(a.right_R_left, b.right_R_left) / options.max_pair_rotation_rad,
+                    cv::norm(a.right_t_left_m - b.right_t_left_m) /
+                        (options.max_pair_translation_fraction * cv::norm(b.right_t_left_m)));
+  };
+  std::size_t medoid = 0;
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    std::vector<double> d;
+    for (const PairPose& other : poses) d.push_back(distance(other, poses[i]));
+    if (const double m = median_of(d); m < best) {
+      best = m;
+      medoid = i;
+    }
+  }
+  std::vector<std::size_t> bad;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    if (distance(poses[i], poses[medoid]) > 1) bad.push_back(i);
+  }
+  if (bad.empty()) return;
+  const PairPose& first = poses[bad.front()];
+  const PairPose& consensus = poses[medoid];
+  const StereoPairReport& p = result.pairs[used[posed[bad.front()]]];
+  const StereoPairReport& c = result.pairs[used[posed[medoid]]];
+  throw CalibrationError("stereo calibration: pair " + p.left_view + " / " + p.right_view +
+                         " disagrees with the others: its right_T_left " +
+                         "(from its own board poses) differs from the consensus (pair " + c.left_view + " / " +
+                         c.right_view + ") by " +
+                         fixed(angle_between_rad(first.right_R_left, consensus.right_R_left) * 180 / CV_PI, 2) +
+                         " degrees and " + fixed(cv::norm(first.right_t_left_m - consensus.right_t_left_m), 4) +
+                         " m (at most " + fixed(options.max_pair_rotation_rad * 180 / CV_PI, 1) + " degrees and " +
+                         fixed(100 * options.max_pair_translation_fraction, 0) + " % of the baseline " +
+                         fixed(cv::norm(consensus.right_t_left_m), 4) + " m); " + std::to_string(bad.size()) + " of " +
+                         std::to_string(poses.size()) +
+                         " pairs disagree: the left and right lists are shifted or mismatched, or the cameras moved");
+}
+
+}  // namespace
 
 StereoCalibration calibrate_stereo(const std::vector<BoardDetection>& left, const std::vector<BoardDetection>& right,
                                    const CameraModel& left_camera, const CameraModel& right_camera,
@@ -21,6 +111,10 @@ StereoCalibration calibrate_stereo(const std::vector<BoardDetection>& left, cons
   if (left_camera.image_size != right_camera.image_size) {
     throw CalibrationError("stereo calibration: the cameras' image sizes differ");
   }
+  refuse_wrong_board(left);
+  refuse_wrong_board(right);
+  refuse_other_image_sizes(left, left_camera.image_size, "the left camera's calibration");
+  refuse_other_image_sizes(right, right_camera.image_size, "the right camera's calibration");
   StereoCalibration result;
   result.left = left_camera;
   result.right = right_camera;
@@ -31,11 +125,6 @@ StereoCalibration calibrate_stereo(const std::vector<BoardDetection>& left, cons
     const BoardDetection& l = left[i];
     const BoardDetection& r = right[i];
     StereoPairReport p{l.view, r.view, false, {}, 0, 0};
-    for (const BoardDetection* d : {&l, &r}) {
-      if (d->found && d->image_size != left_camera.image_size) {
-        throw CalibrationError(d->view + ": image size differs from the camera's calibration");
-      }
-    }
     if (!l.found || !r.found) {
       p.rejection = !l.found ? l.view + ": " + l.reason : r.view + ": " + r.reason;
     } else {
@@ -72,6 +161,8 @@ StereoCalibration calibrate_stereo(const std::vector<BoardDetection>& left, cons
     }
     throw CalibrationError(message);
   }
+
+  refuse_disagreeing_pairs(result, used, object_points, left_points, right_points, options);
 
   cv::Mat k1(left_camera.camera_matrix), k2(right_camera.camera_matrix);
   cv::Mat d1 = left_camera.distortion_mat(), d2 = right_camera.distortion_mat();
@@ -110,6 +201,19 @@ StereoCalibration calibrate_stereo(const std::vector<BoardDetection>& left, cons
     // OpenCV gives the RMS of each camera per view; the pair's RMS is over both images.
     const double el = per_view.at<double>(static_cast<int>(k), 0), er = per_view.at<double>(static_cast<int>(k), 1);
     result.pairs[used[k]].rms_px = std::sqrt(0.5 * (el * el + er * er));
+  }
+  std::vector<double> pair_rms;
+  for (std::size_t u : used) pair_rms.push_back(result.pairs[u].rms_px);
+  const double limit_px = std::max(options.outlier_over_median * median_of(pair_rms), options.outlier_floor_px);
+  for (std::size_t u : used) {
+    const StereoPairReport& p = result.pairs[u];
+    if (p.rms_px > limit_px)
+      throw CalibrationError("stereo calibration: pair " + p.left_view + " / " + p.right_view + " has RMS " +
+                             fixed(p.rms_px, 3) + " px, more than " + fixed(limit_px, 3) + " px (" +
+                             fixed(options.outlier_over_median, 0) + " times the median pair's, at least " +
+                             fixed(options.outlier_floor_px, 2) +
+                             " px): its corners do not fit the stereo geometry (a mismatched pair, or the board "
+                             "moved between the two exposures)");
   }
   cv::Mat r1, r2, p1, p2, q;
   cv::stereoRectify(k1, d1, k2, d2, left_camera.image_size, r, t, r1, r2, p1, p2, q, cv::CALIB_ZERO_DISPARITY, 0);

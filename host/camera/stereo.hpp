@@ -13,8 +13,20 @@
 // host/capture/stereo_source.hpp for pairing by time). A pair is used with the corners both
 // images found (matched by id); it is left out, with its reason, when either side has no board
 // or they share fewer than min_common_corners corners.
+// Gates (exit 0 must mean a result a user can trust): every pair sees the same rigid rig, so
+//  - pair consistency, before the solve: each usable pair's own right_T_left (the board's pose
+//    in each camera by cv::solvePnP with the cameras given, right_T_board * left_T_board^-1) is
+//    compared with the consensus, the pair whose pose has the smallest median distance to all
+//    others (distance: the larger of rotation / max_pair_rotation_rad and translation /
+//    (max_pair_translation_fraction * baseline)); a pair beyond distance 1 is refused, the
+//    first in list order named with its numbers. A right list shifted by one frame makes every
+//    pair disagree (tens of degrees; OpenCV's 13 sample pairs agree within 0.4 degrees and
+//    2.5 mm of their 83 mm baseline);
+//  - epipolar residuals, after the solve: a pair whose RMS exceeds both outlier_over_median
+//    times the median pair's and outlier_floor_px is refused, named;
+//  - refuse_wrong_board and refuse_other_image_sizes (host/camera/intrinsics.hpp) on both lists.
 // Errors: CalibrationError when the lists differ in length, the two cameras' image sizes
-// differ, an image size differs from its camera's, or fewer than min_pairs pairs are usable
+// differ, any gate refuses, or fewer than min_pairs pairs are usable
 // (the message lists each pair left out and why), or a baseline below
 // kMinBaselineOverBoardDistance of the median board distance (the same images left and right,
 // or one camera twice: the message gives both numbers).
@@ -37,6 +49,10 @@ struct StereoOptions {
   bool refine_intrinsics = false;
   int min_common_corners = 6;
   int min_pairs = 3;
+  double max_pair_rotation_rad = 2 * 3.14159265358979323846 / 180;
+  double max_pair_translation_fraction = 0.1;
+  double outlier_over_median = 3;
+  double outlier_floor_px = 1.0;
 };
 
 struct StereoPairReport {

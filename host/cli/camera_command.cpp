@@ -10,13 +10,13 @@
 #include "host/camera/calibration_file.hpp"
 #include "host/camera/hand_eye.hpp"
 #include "host/camera/intrinsics.hpp"
+#include "host/camera/robot_poses.hpp"
 #include "host/camera/stereo.hpp"
 #include "host/capture/frame_source.hpp"
 #include "host/capture/stereo_source.hpp"
 #include "host/cli/number_options.hpp"
 #include "host/files/input_limits.hpp"
 #include "host/files/output_file.hpp"
-#include "host/model/dataset.hpp"
 
 namespace kincal::cli {
 
@@ -24,7 +24,7 @@ namespace {
 
 struct CameraArgs {
   std::string board, out, left_camera, right_camera, camera, poses, convention = "gripper2base";
-  std::string format = "opencv", camera_name = "camera";
+  std::string format = "opencv", camera_name = "camera", rotation;
   std::vector<std::string> images, left, right;
   bool refine_intrinsics = false;
   double tolerance_s = 0.5;
@@ -58,7 +58,7 @@ int run_calibrate(const CameraArgs& a) {
   const camera::IntrinsicCalibration c = camera::calibrate_intrinsics(detect_all(board, a.images, a.min_corners));
   std::cout << camera::describe(c);
   if (a.format == "ros")
-    camera::save_camera_ros(a.out, c.camera, a.camera_name);
+    camera::save_camera_ros(a.out, c.camera, a.camera_name, c.views);
   else
     camera::save_camera(a.out, c, board.text());
   std::cout << "wrote " << a.out << "\n";
@@ -99,22 +99,17 @@ int run_stereo(const CameraArgs& a) {
 int run_hand_eye(const CameraArgs& a) {
   const camera::Board board = camera::parse_board(a.board);
   const camera::CameraModel cam = camera::load_camera(a.camera);
-  const model::Dataset poses = model::read_dataset(a.poses);
-  if (!poses.has_orientation) {
-    throw camera::CalibrationError(a.poses + ": no orientation columns (qw,qx,qy,qz): hand-eye needs full poses");
-  }
+  const std::vector<camera::RobotPose> poses = camera::read_robot_poses(
+      a.poses, a.rotation.empty() ? camera::RotationColumns::kUnnamed : camera::rotation_columns(a.rotation));
   const std::vector<camera::BoardDetection> detections = detect_all(board, a.images, a.min_corners);
-  if (detections.size() != poses.rows.size()) {
-    throw camera::CalibrationError(a.poses + ": " + std::to_string(poses.rows.size()) + " poses but " +
+  if (detections.size() != poses.size()) {
+    throw camera::CalibrationError(a.poses + ": " + std::to_string(poses.size()) + " poses but " +
                                    std::to_string(detections.size()) + " images");
   }
   std::vector<camera::HandEyeView> views;
   for (std::size_t i = 0; i < detections.size(); ++i) {
-    const model::Measurement& m = poses.rows[i];
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-    pose.linear() = m.orientation->normalized().toRotationMatrix();
-    pose.translation() = m.position;
-    views.push_back({detections[i].view + " (" + a.poses + ":" + std::to_string(m.line) + ")", pose, detections[i]});
+    views.push_back({detections[i].view + " (" + a.poses + ":" + std::to_string(poses[i].line) + ")", poses[i].pose,
+                     detections[i]});
   }
   camera::HandEyeOptions options;
   options.convention =
@@ -184,7 +179,15 @@ void add_camera_command(CLI::App& app, int& status) {
   CLI::App* hand_eye = camera->add_subcommand("hand-eye", "Hand-eye calibration of a camera on the gripper");
   add_common(hand_eye, *args);
   hand_eye->add_option("--camera", args->camera, "the camera's calibration (YAML)")->required();
-  hand_eye->add_option("--poses", args->poses, "robot poses: q1..qN,x,y,z,qw,qx,qy,qz, one row per image")->required();
+  hand_eye
+      ->add_option("--poses", args->poses,
+                   "robot poses, one per image: CSV x,y,z,qw,qx,qy,qz or x,y,z,rx,ry,rz (other columns ignored), "
+                   "or 4x4 matrices row-major")
+      ->required();
+  hand_eye
+      ->add_option("--rotation", args->rotation,
+                   "what rx,ry,rz are: rotvec (rotation vector, rad), rpy or rpy-deg (R = Rz Ry Rx, fixed axes)")
+      ->check(CLI::IsMember({"rotvec", "rpy", "rpy-deg"}));
   hand_eye
       ->add_option(
           "--images", args->images,

@@ -1,0 +1,180 @@
+#include "host/camera/robot_poses.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <stdexcept>
+
+#include "host/camera/intrinsics.hpp"
+
+namespace kincal::camera {
+
+namespace {
+
+constexpr double kRadPerDegree = 3.14159265358979323846 / 180;
+constexpr double kPoseTolerance = 1e-3;
+
+[[noreturn]] void bad_pose(const std::string& source, int line, const std::string& what) {
+  throw CalibrationError(source + ":" + std::to_string(line) + ": " + what);
+}
+
+std::string trimmed(const std::string& s) {
+  const auto first = s.find_first_not_of(" \t\r");
+  if (first == std::string::npos) return "";
+  return s.substr(first, s.find_last_not_of(" \t\r") - first + 1);
+}
+
+// The fields of `text` between separators (any character of `separators`); empty fields are
+// kept for a CSV (one separator) and dropped for whitespace-separated matrices.
+std::vector<std::string> fields_of(const std::string& text, const std::string& separators, bool keep_empty) {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t end = std::min(text.find_first_of(separators, start), text.size());
+    const std::string f = trimmed(text.substr(start, end - start));
+    if (keep_empty || !f.empty()) out.push_back(f);
+    start = end + 1;
+  }
+  return out;
+}
+
+double number_of(const std::string& field, const std::string& source, int line) {
+  char* end = nullptr;
+  const double v = std::strtod(field.c_str(), &end);
+  if (field.empty() || end != field.c_str() + field.size() || !std::isfinite(v))
+    bad_pose(source, line, "'" + field + "' is not a finite number");
+  return v;
+}
+
+void check_reach(const RobotPose& p, const std::string& source) {
+  if (p.pose.translation().norm() > kMaxRobotReach_m)
+    bad_pose(source, p.line,
+             "the translation is " + std::to_string(p.pose.translation().norm()) + " m, beyond " +
+                 std::to_string(static_cast<int>(kMaxRobotReach_m)) + " m: poses must be in metres (millimetres?)");
+}
+
+Eigen::Matrix3d rotation_of(RotationColumns rotation, const Eigen::Vector3d& r) {
+  if (rotation == RotationColumns::kRotationVector) {
+    const double angle = r.norm();
+    return angle > 0 ? Eigen::AngleAxisd(angle, r / angle).toRotationMatrix() : Eigen::Matrix3d::Identity();
+  }
+  const Eigen::Vector3d a = rotation == RotationColumns::kRpyDeg ? Eigen::Vector3d(r * kRadPerDegree) : r;
+  return (Eigen::AngleAxisd(a.z(), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+struct Line {
+  std::string text;
+  int number;
+};
+
+std::vector<RobotPose> parse_csv(const std::vector<Line>& lines, const std::string& source, RotationColumns rotation) {
+  const std::string separator = lines.front().text.find(',') != std::string::npos ? "," : ";";
+  const std::vector<std::string> header = fields_of(lines.front().text, separator, true);
+  std::map<std::string, std::size_t> column;
+  for (std::size_t i = 0; i < header.size(); ++i) column.emplace(header[i], i);
+  const auto has = [&](std::initializer_list<const char*> names) {
+    return std::all_of(names.begin(), names.end(), [&](const char* n) { return column.count(n) > 0; });
+  };
+  const int header_line = lines.front().number;
+  if (!has({"x", "y", "z"})) bad_pose(source, header_line, "the header has no x,y,z columns");
+  const bool quaternion = has({"qw", "qx", "qy", "qz"});
+  if (!quaternion && !has({"rx", "ry", "rz"}))
+    bad_pose(source, header_line, "the header has no rotation columns: qw,qx,qy,qz or rx,ry,rz");
+  if (!quaternion && rotation == RotationColumns::kUnnamed)
+    bad_pose(source, header_line,
+             "rx,ry,rz can mean a rotation vector or roll-pitch-yaw angles: name which (rotvec, rpy or rpy-deg)");
+  std::vector<RobotPose> poses;
+  for (std::size_t k = 1; k < lines.size(); ++k) {
+    const std::vector<std::string> f = fields_of(lines[k].text, separator, true);
+    const auto value = [&](const char* name) {
+      const std::size_t i = column.at(name);
+      if (i >= f.size()) bad_pose(source, lines[k].number, "no field for column " + std::string(name));
+      return number_of(f[i], source, lines[k].number);
+    };
+    RobotPose p;
+    p.line = lines[k].number;
+    p.pose.translation() = Eigen::Vector3d(value("x"), value("y"), value("z"));
+    if (quaternion) {
+      const Eigen::Quaterniond q(value("qw"), value("qx"), value("qy"), value("qz"));
+      if (std::abs(q.norm() - 1) > kPoseTolerance)
+        bad_pose(source, p.line, "the quaternion's norm is " + std::to_string(q.norm()) + ", not 1");
+      p.pose.linear() = q.normalized().toRotationMatrix();
+    } else {
+      p.pose.linear() = rotation_of(rotation, Eigen::Vector3d(value("rx"), value("ry"), value("rz")));
+    }
+    check_reach(p, source);
+    poses.push_back(p);
+  }
+  return poses;
+}
+
+std::vector<RobotPose> parse_matrices(const std::vector<Line>& lines, const std::string& source) {
+  std::vector<RobotPose> poses;
+  std::vector<double> m;  // the pose being read, row-major
+  int first_line = 0;
+  for (const Line& l : lines) {
+    const std::vector<std::string> f = fields_of(l.text, " \t,", false);
+    if (f.size() != 16 && f.size() != 4)
+      bad_pose(source, l.number,
+               std::to_string(f.size()) + " numbers: a line holds a 4x4 matrix (16 numbers) or one of its rows (4)");
+    if (f.size() == 16 && !m.empty()) bad_pose(source, l.number, "a whole matrix inside an unfinished one");
+    if (m.empty()) first_line = l.number;
+    for (const std::string& s : f) m.push_back(number_of(s, source, l.number));
+    if (m.size() < 16) continue;
+    const Eigen::Matrix4d t = Eigen::Map<const Eigen::Matrix<double, 4, 4, Eigen::RowMajor>>(m.data());
+    const Eigen::Matrix3d r = t.topLeftCorner<3, 3>();
+    if ((t.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > kPoseTolerance)
+      bad_pose(source, first_line, "the last row is not 0 0 0 1");
+    if ((r.transpose() * r - Eigen::Matrix3d::Identity()).norm() > kPoseTolerance || r.determinant() < 0)
+      bad_pose(source, first_line, "the rotation is not orthonormal with determinant +1 (within 1e-3)");
+    RobotPose p;
+    p.line = first_line;
+    p.pose.linear() = Eigen::Quaterniond(r).normalized().toRotationMatrix();
+    p.pose.translation() = t.topRightCorner<3, 1>();
+    check_reach(p, source);
+    poses.push_back(p);
+    m.clear();
+  }
+  if (!m.empty()) bad_pose(source, first_line, "an unfinished 4x4 matrix (" + std::to_string(m.size()) + " numbers)");
+  return poses;
+}
+
+}  // namespace
+
+RotationColumns rotation_columns(const std::string& name) {
+  if (name == "rotvec") return RotationColumns::kRotationVector;
+  if (name == "rpy") return RotationColumns::kRpy;
+  if (name == "rpy-deg") return RotationColumns::kRpyDeg;
+  throw std::invalid_argument("rotation columns '" + name + "': expected rotvec, rpy or rpy-deg");
+}
+
+std::vector<RobotPose> parse_robot_poses(std::istream& in, const std::string& source, RotationColumns rotation) {
+  std::vector<Line> lines;
+  std::string text;
+  for (int number = 1; std::getline(in, text); ++number) {
+    const std::string t = trimmed(text);
+    if (!t.empty() && t.front() != '#') lines.push_back({t, number});
+  }
+  if (lines.empty()) throw CalibrationError(source + ": no robot poses");
+  const bool header = std::any_of(lines.front().text.begin(), lines.front().text.end(), [](char c) {
+    return std::isalpha(static_cast<unsigned char>(c)) && c != 'e' && c != 'E';
+  });
+  std::vector<RobotPose> poses = header ? parse_csv(lines, source, rotation) : parse_matrices(lines, source);
+  if (poses.empty()) throw CalibrationError(source + ": no robot poses");
+  return poses;
+}
+
+std::vector<RobotPose> read_robot_poses(const std::string& path, RotationColumns rotation) {
+  std::ifstream in(path);
+  if (!in) throw CalibrationError(path + ": cannot read");
+  return parse_robot_poses(in, path, rotation);
+}
+
+}  // namespace kincal::camera
