@@ -1,0 +1,203 @@
+// Issue #22: kincal's camera calibration beside OpenCV's documented recipe, in one run, on real
+// photographs nobody here made: OpenCV's sample views (Debian's opencv-doc, left01..14.jpg and
+// right01..14.jpg, 13 views each, 640x480, a 9x6 chessboard; there is no 10).
+//
+// OpenCV's recipe (modules/calib3d/misc/python/test/test_calibration.py, published RMS 0.1963 px):
+// findChessboardCorners with its default flags, cornerSubPix (5, 5) with (EPS + COUNT, 30, 0.1),
+// calibrateCamera with no flags; for the pairs, stereoCalibrate on its corners with its two
+// cameras fixed (CALIB_FIX_INTRINSIC), as kincal's `camera stereo` does with its own.
+//
+// FIGUREs:
+//   camera_real_rms_px, camera_real_opencv_rms_px     reprojection RMS over the 13 left views
+//   camera_real_heldout_rms_px, ..._opencv_heldout_rms_px, camera_real_heldout_rms_over_opencv
+//       leave-one-view-out: each view's own corners predicted by the camera calibrated without
+//       it (its pose by solvePnP from its corners with the held-out intrinsics); RMS over all
+//       held-out corners, kincal over the recipe
+//   camera_real_lens_model_difference_px, camera_real_lens_model_difference_max_px
+//       the two left cameras: every 8th pixel of the image unprojected by the recipe's model
+//       and projected by kincal's; RMS and largest distance
+//   camera_real_stereo_baseline_difference_pct, camera_real_stereo_rotation_difference_deg
+//       kincal's right_T_left against stereoCalibrate's on the same 13 pairs
+// The board's square is taken as 25 mm for both (the sample does not say; only ratios matter).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "host/camera/board.hpp"
+#include "host/camera/intrinsics.hpp"
+#include "host/camera/stereo.hpp"
+
+using namespace kincal::camera;
+
+namespace {
+
+constexpr double kSquare_m = 0.025;
+const std::vector<int> kViews = {1, 2, 3, 4, 5, 6, 7, 8, 9, 11, 12, 13, 14};
+
+std::string sample(const char* side, int i) {
+  return std::string(KINCAL_OPENCV_SAMPLES) + "/" + side + (i < 10 ? "0" : "") + std::to_string(i) + ".jpg";
+}
+
+void figure(const char* name, double value, const char* unit) { std::printf("FIGURE %s %.6g %s\n", name, value, unit); }
+
+struct Views {
+  std::vector<std::vector<cv::Point3f>> board_m;
+  std::vector<std::vector<cv::Point2f>> image_px;
+};
+
+Views recipe_views(const char* side) {
+  std::vector<cv::Point3f> grid;
+  for (int j = 0; j < 6; ++j)
+    for (int i = 0; i < 9; ++i)
+      grid.emplace_back(static_cast<float>(i * kSquare_m), static_cast<float>(j * kSquare_m), 0.0f);
+  Views v;
+  for (int i : kViews) {
+    const cv::Mat grey = cv::imread(sample(side, i), cv::IMREAD_GRAYSCALE);
+    std::vector<cv::Point2f> corners;
+    if (!cv::findChessboardCorners(grey, cv::Size(9, 6), corners)) {
+      std::fprintf(stderr, "%s: the recipe does not find the board\n", sample(side, i).c_str());
+      std::exit(1);
+    }
+    cv::cornerSubPix(grey, corners, cv::Size(5, 5), cv::Size(-1, -1),
+                     cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 30, 0.1));
+    v.board_m.push_back(grid);
+    v.image_px.push_back(corners);
+  }
+  return v;
+}
+
+std::vector<BoardDetection> kincal_views(const char* side) {
+  const Board board = parse_board("chessboard:9x6:" + std::to_string(kSquare_m));
+  std::vector<BoardDetection> out;
+  for (int i : kViews) {
+    const std::string path = sample(side, i);
+    out.push_back(detect_board(board, cv::imread(path, cv::IMREAD_GRAYSCALE), path));
+  }
+  return out;
+}
+
+Views views_of(const std::vector<BoardDetection>& detections) {
+  Views v;
+  for (const BoardDetection& d : detections) {
+    v.board_m.push_back(d.board_m);
+    v.image_px.push_back(d.image_px);
+  }
+  return v;
+}
+
+// calibrateCamera with no flags; its RMS (px) into *rms_px when given.
+CameraModel recipe_camera(const Views& v, double* rms_px = nullptr) {
+  cv::Mat k, d;
+  std::vector<cv::Mat> r, t;
+  const double rms = cv::calibrateCamera(v.board_m, v.image_px, cv::Size(640, 480), k, d, r, t);
+  if (rms_px) *rms_px = rms;
+  CameraModel c;
+  c.image_size = cv::Size(640, 480);
+  c.camera_matrix = cv::Matx33d(k);
+  for (int i = 0; i < 5; ++i) c.distortion[static_cast<std::size_t>(i)] = d.at<double>(i);
+  return c;
+}
+
+// Sum of squared distances (px^2) between a view's corners and their projection by `camera`
+// at the pose solvePnP finds from those corners.
+double squared_prediction_error(const CameraModel& camera, const std::vector<cv::Point3f>& board_m,
+                                const std::vector<cv::Point2f>& image_px) {
+  cv::Mat r, t;
+  cv::solvePnP(board_m, image_px, cv::Mat(camera.camera_matrix), camera.distortion_mat(), r, t);
+  std::vector<cv::Point2f> predicted;
+  cv::projectPoints(board_m, r, t, cv::Mat(camera.camera_matrix), camera.distortion_mat(), predicted);
+  double sum = 0;
+  for (std::size_t i = 0; i < predicted.size(); ++i) {
+    const cv::Point2f e = predicted[i] - image_px[i];
+    sum += static_cast<double>(e.dot(e));
+  }
+  return sum;
+}
+
+// Leave-one-view-out RMS (px); `calibrate` maps a list of views to a camera.
+template <typename Calibrate>
+double held_out_rms_px(const Views& all, Calibrate calibrate) {
+  double sum = 0;
+  std::size_t n = 0;
+  for (std::size_t k = 0; k < all.board_m.size(); ++k) {
+    const CameraModel camera = calibrate(k);
+    sum += squared_prediction_error(camera, all.board_m[k], all.image_px[k]);
+    n += all.image_px[k].size();
+  }
+  return std::sqrt(sum / static_cast<double>(n));
+}
+
+}  // namespace
+
+int main() {
+  const std::vector<BoardDetection> left = kincal_views("left"), right = kincal_views("right");
+  const IntrinsicCalibration kincal_left = calibrate_intrinsics(left), kincal_right = calibrate_intrinsics(right);
+  const Views recipe_left = recipe_views("left"), recipe_right = recipe_views("right");
+  double recipe_rms_px = 0;
+  const CameraModel recipe_left_camera = recipe_camera(recipe_left, &recipe_rms_px);
+  figure("camera_real_rms_px", kincal_left.rms_px, "px");
+  figure("camera_real_opencv_rms_px", recipe_rms_px, "px");
+  std::printf("kincal uses %d of %zu views\n", kincal_left.views_used, left.size());
+
+  const double kincal_held_px = held_out_rms_px(views_of(left), [&](std::size_t k) {
+    std::vector<BoardDetection> others = left;
+    others.erase(others.begin() + static_cast<std::ptrdiff_t>(k));
+    return calibrate_intrinsics(others).camera;
+  });
+  const double recipe_held_px = held_out_rms_px(recipe_left, [&](std::size_t k) {
+    Views others = recipe_left;
+    others.board_m.erase(others.board_m.begin() + static_cast<std::ptrdiff_t>(k));
+    others.image_px.erase(others.image_px.begin() + static_cast<std::ptrdiff_t>(k));
+    return recipe_camera(others);
+  });
+  figure("camera_real_heldout_rms_px", kincal_held_px, "px");
+  figure("camera_real_opencv_heldout_rms_px", recipe_held_px, "px");
+  figure("camera_real_heldout_rms_over_opencv", kincal_held_px / recipe_held_px, "ratio");
+
+  // The lens models over the whole image: rays of the recipe's model, projected by kincal's.
+  std::vector<cv::Point2f> pixels;
+  for (int y = 0; y < 480; y += 8)
+    for (int x = 0; x < 640; x += 8) pixels.emplace_back(static_cast<float>(x), static_cast<float>(y));
+  std::vector<cv::Point2f> rays;
+  cv::undistortPoints(pixels, rays, cv::Mat(recipe_left_camera.camera_matrix), recipe_left_camera.distortion_mat(),
+                      cv::noArray(), cv::noArray(),
+                      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-12));
+  std::vector<cv::Point3f> points;
+  for (const cv::Point2f& p : rays) points.emplace_back(p.x, p.y, 1.0f);
+  std::vector<cv::Point2f> reprojected;
+  cv::projectPoints(points, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(kincal_left.camera.camera_matrix),
+                    kincal_left.camera.distortion_mat(), reprojected);
+  double sum = 0, largest = 0;
+  for (std::size_t i = 0; i < pixels.size(); ++i) {
+    const double e = cv::norm(reprojected[i] - pixels[i]);
+    sum += e * e;
+    largest = std::max(largest, e);
+  }
+  figure("camera_real_lens_model_difference_px", std::sqrt(sum / static_cast<double>(pixels.size())), "px");
+  figure("camera_real_lens_model_difference_max_px", largest, "px");
+
+  // The 13 pairs.
+  const StereoCalibration s = calibrate_stereo(left, right, kincal_left.camera, kincal_right.camera);
+  const CameraModel recipe_right_camera = recipe_camera(recipe_right);
+  cv::Mat k1(recipe_left_camera.camera_matrix), d1 = recipe_left_camera.distortion_mat();
+  cv::Mat k2(recipe_right_camera.camera_matrix), d2 = recipe_right_camera.distortion_mat();
+  cv::Mat rotation, translation, essential, fundamental;
+  const double recipe_stereo_rms_px =
+      cv::stereoCalibrate(recipe_left.board_m, recipe_left.image_px, recipe_right.image_px, k1, d1, k2, d2,
+                          cv::Size(640, 480), rotation, translation, essential, fundamental, cv::CALIB_FIX_INTRINSIC);
+  const double recipe_baseline_m = cv::norm(translation);
+  cv::Vec3d difference;
+  cv::Rodrigues(s.right_R_left * cv::Matx33d(rotation).t(), difference);
+  std::printf("stereo: kincal baseline %.6f m RMS %.4f px; stereoCalibrate baseline %.6f m RMS %.4f px\n", s.baseline_m,
+              s.rms_px, recipe_baseline_m, recipe_stereo_rms_px);
+  figure("camera_real_stereo_baseline_difference_pct", 100 * std::abs(s.baseline_m / recipe_baseline_m - 1), "%");
+  figure("camera_real_stereo_rotation_difference_deg", cv::norm(difference) * 180 / CV_PI, "deg");
+  return 0;
+}
