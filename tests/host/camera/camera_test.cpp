@@ -16,6 +16,7 @@
 #include "host/camera/calibration_file.hpp"
 #include "host/camera/hand_eye.hpp"
 #include "host/camera/intrinsics.hpp"
+#include "host/camera/robot_poses.hpp"
 #include "host/camera/stereo.hpp"
 #include "host/model/number_text.hpp"
 #include "shared/parameters.hpp"
@@ -463,4 +464,55 @@ TEST_CASE("a host calibration converts to the platform's camera block and back")
   CameraModel broken = truth;
   broken.distortion[4] = std::nan("");
   CHECK(contains(error_of([&] { (void)to_platform(broken); }), "camera parameter k3 = nan"));
+}
+
+TEST_CASE("robot poses as controllers give them: x,y,z + quaternion without joints, rx,ry,rz, 4x4 rows") {
+  const Eigen::Isometry3d expected = [] {
+    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+    t.linear() = Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+    t.translation() = Eigen::Vector3d(0.4, -0.1, 0.6);
+    return t;
+  }();
+  const Eigen::Quaterniond q(expected.rotation());
+  const Eigen::Vector3d rotvec = 0.5 * Eigen::Vector3d(1, 2, 3).normalized();
+  const Eigen::Vector3d zyx = expected.rotation().eulerAngles(2, 1, 0);  // yaw, pitch, roll
+  const auto same = [&](const std::vector<RobotPose>& p) {
+    REQUIRE(p.size() == 1);
+    CHECK((p[0].pose.matrix() - expected.matrix()).norm() < 1e-6);
+  };
+  std::ostringstream csv, rv, rpy, rows16, rows4;
+  csv.precision(17);
+  rv.precision(17);
+  rpy.precision(17);
+  rows16.precision(17);
+  rows4.precision(17);
+  csv << "# from the controller\ntime,x,y,z,qw,qx,qy,qz\n7," << 0.4 << ",-0.1,0.6," << q.w() << ',' << q.x() << ','
+      << q.y() << ',' << q.z() << "\n";
+  rv << "x;y;z;rx;ry;rz\n0.4;-0.1;0.6;" << rotvec.x() << ';' << rotvec.y() << ';' << rotvec.z() << "\n";
+  rpy << "x,y,z,rx,ry,rz\n0.4,-0.1,0.6," << zyx[2] << ',' << zyx[1] << ',' << zyx[0] << "\n";
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) {
+      rows16 << expected.matrix()(r, c) << (c < 3 || r < 3 ? " " : "\n");
+      rows4 << expected.matrix()(r, c) << (c < 3 ? ", " : "\n");
+    }
+  }
+  std::istringstream in_csv(csv.str()), in_rv(rv.str()), in_rpy(rpy.str()), in16(rows16.str()), in4(rows4.str());
+  same(parse_robot_poses(in_csv, "q.csv", RotationColumns::kUnnamed));
+  same(parse_robot_poses(in_rv, "rv.csv", RotationColumns::kRotationVector));
+  same(parse_robot_poses(in_rpy, "rpy.csv", RotationColumns::kRpy));
+  same(parse_robot_poses(in16, "rows16.txt", RotationColumns::kUnnamed));
+  same(parse_robot_poses(in4, "rows4.txt", RotationColumns::kUnnamed));
+
+  std::istringstream unnamed(rv.str());
+  CHECK(contains(error_of([&] { (void)parse_robot_poses(unnamed, "rv.csv", RotationColumns::kUnnamed); }),
+                 "rv.csv:1: rx,ry,rz can mean a rotation vector or roll-pitch-yaw angles"));
+  std::istringstream millimetres("x,y,z,qw,qx,qy,qz\n400,-100,600,1,0,0,0\n");
+  CHECK(contains(error_of([&] { (void)parse_robot_poses(millimetres, "mm.csv", RotationColumns::kUnnamed); }),
+                 "mm.csv:2: the translation is"));
+  std::istringstream unfinished("1 0 0 0\n0 1 0 0\n");
+  CHECK(contains(error_of([&] { (void)parse_robot_poses(unfinished, "m.txt", RotationColumns::kUnnamed); }),
+                 "m.txt:1: an unfinished 4x4 matrix (8 numbers)"));
+  std::istringstream skewed("1 0.1 0 0 0 1 0 0 0 0 1 0 0 0 0 1\n");
+  CHECK(contains(error_of([&] { (void)parse_robot_poses(skewed, "s.txt", RotationColumns::kUnnamed); }),
+                 "s.txt:1: the rotation is not orthonormal"));
 }

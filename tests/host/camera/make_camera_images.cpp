@@ -4,6 +4,9 @@
 //   right/right_NN.png     the first 8 of them seen by the stereo rig's right camera
 //   poses.csv              base_T_gripper for each view (q1,x,y,z,qw,qx,qy,qz; q1 a dummy joint)
 //   poses_swapped.csv      the same poses inverted (gripper_T_base), a convention mix-up
+//   poses_rotvec.csv       the same poses as a controller gives them: x,y,z,rx,ry,rz (rotation
+//                          vector), no joint columns
+//   poses_4x4.txt          the same poses as 4x4 matrices, row-major, 16 numbers a line
 //   blank.png              an image without a board;  not_an_image.png  text, not an image
 #include <cstdio>
 #include <filesystem>
@@ -32,6 +35,20 @@ void write_poses(const std::string& path, const std::vector<Eigen::Isometry3d>& 
     const Eigen::Vector3d t = poses[i].translation();
     out << 0.1 * static_cast<double>(i) << ',' << t.x() << ',' << t.y() << ',' << t.z() << ',' << q.w() << ',' << q.x()
         << ',' << q.y() << ',' << q.z() << '\n';
+  }
+}
+
+void write_controller_poses(const std::string& rotvec_path, const std::string& matrix_path,
+                            const std::vector<Eigen::Isometry3d>& poses) {
+  std::ofstream rotvec(rotvec_path), matrices(matrix_path);
+  rotvec.precision(17);
+  matrices.precision(17);
+  rotvec << "x,y,z,rx,ry,rz\n";
+  for (const Eigen::Isometry3d& p : poses) {
+    const Eigen::AngleAxisd a(p.rotation());
+    const Eigen::Vector3d r = a.angle() * a.axis(), t = p.translation();
+    rotvec << t.x() << ',' << t.y() << ',' << t.z() << ',' << r.x() << ',' << r.y() << ',' << r.z() << '\n';
+    for (int i = 0; i < 16; ++i) matrices << p.matrix()(i / 4, i % 4) << (i < 15 ? ' ' : '\n');
   }
 }
 
@@ -67,6 +84,7 @@ int main(int argc, char** argv) {
   std::vector<Eigen::Isometry3d> swapped;
   for (const Eigen::Isometry3d& p : poses) swapped.push_back(p.inverse());
   write_poses((dir / "poses_swapped.csv").string(), swapped);
+  write_controller_poses((dir / "poses_rotvec.csv").string(), (dir / "poses_4x4.txt").string(), poses);
   cv::imwrite((dir / "blank.png").string(), cv::Mat(480, 640, CV_8UC1, cv::Scalar(150)));
   std::ofstream(dir / "not_an_image.png") << "plain text, not a PNG\n";
   return 0;

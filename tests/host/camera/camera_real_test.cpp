@@ -1,0 +1,108 @@
+// Issue #22 on real photographs: OpenCV's own sample views (Debian's opencv-doc, 13 views of a
+// 9x6 chessboard per camera, 640x480) against OpenCV's documented recipe computed here, the
+// wrong-board and shifted-pair gates. Registered only where opencv-doc is installed.
+#include <doctest/doctest.h>
+
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "host/camera/board.hpp"
+#include "host/camera/intrinsics.hpp"
+#include "host/camera/stereo.hpp"
+
+using namespace kincal::camera;
+
+namespace {
+
+const std::vector<int> kSampleViews = {1, 2, 3, 4, 5, 6, 7, 8, 9, 11, 12, 13, 14};  // there is no 10
+
+std::string sample(const char* side, int i) {
+  return std::string(KINCAL_OPENCV_SAMPLES) + "/" + side + (i < 10 ? "0" : "") + std::to_string(i) + ".jpg";
+}
+
+std::vector<BoardDetection> detect_samples(const Board& board, const char* side) {
+  std::vector<BoardDetection> out;
+  for (int i : kSampleViews) {
+    const std::string path = sample(side, i);
+    out.push_back(detect_board(board, cv::imread(path, cv::IMREAD_GRAYSCALE), path));
+  }
+  return out;
+}
+
+// OpenCV's recipe (modules/calib3d/misc/python/test/test_calibration.py): findChessboardCorners
+// with its default flags, cornerSubPix (5, 5) with (EPS + COUNT, 30, 0.1), calibrateCamera.
+double recipe_rms_px() {
+  std::vector<std::vector<cv::Point3f>> board;
+  std::vector<std::vector<cv::Point2f>> image;
+  std::vector<cv::Point3f> grid;
+  for (int j = 0; j < 6; ++j)
+    for (int i = 0; i < 9; ++i) grid.emplace_back(static_cast<float>(i), static_cast<float>(j), 0.0f);
+  for (int i : kSampleViews) {
+    const cv::Mat grey = cv::imread(sample("left", i), cv::IMREAD_GRAYSCALE);
+    std::vector<cv::Point2f> corners;
+    if (!cv::findChessboardCorners(grey, cv::Size(9, 6), corners)) continue;
+    cv::cornerSubPix(grey, corners, cv::Size(5, 5), cv::Size(-1, -1),
+                     cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 30, 0.1));
+    board.push_back(grid);
+    image.push_back(corners);
+  }
+  cv::Mat k, d;
+  std::vector<cv::Mat> r, t;
+  return cv::calibrateCamera(board, image, cv::Size(640, 480), k, d, r, t);
+}
+
+template <typename F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+}  // namespace
+
+TEST_CASE("OpenCV's 13 sample views calibrate at least as well as OpenCV's own recipe") {
+  const IntrinsicCalibration c = calibrate_intrinsics(detect_samples(parse_board("chessboard:9x6:0.025"), "left"));
+  const double recipe_px = recipe_rms_px();
+  MESSAGE(describe(c) << "OpenCV's recipe: " << recipe_px << " px");
+  CHECK(c.views_used == 13);  // every view passes the outlier gate
+  CHECK(c.rms_px <= recipe_px);
+  for (const ViewReport& v : c.views) CHECK(contains(v.detector, "+ cornerSubPix"));
+}
+
+TEST_CASE("a chessboard of the wrong size is refused, naming the size that fits") {
+  const std::vector<BoardDetection> d = detect_samples(parse_board("chessboard:8x6:0.025"), "left");
+  const std::string message = error_of([&] { (void)calibrate_intrinsics(d); });
+  CHECK(contains(message, "has 9x6 inner corners, not 8x6"));
+  CHECK(contains(message, "give --board chessboard:9x6:0.025"));
+  CHECK(contains(message, "left0"));
+  // The right size passes the same check in every view of both cameras.
+  const Board right_size = parse_board("chessboard:9x6:0.025");
+  for (const char* side : {"left", "right"}) {
+    for (const BoardDetection& v : detect_samples(right_size, side)) CHECK_MESSAGE(v.found, v.view << ": " << v.reason);
+  }
+}
+
+TEST_CASE("a right list shifted by one is refused, naming the first pair") {
+  const Board board = parse_board("chessboard:9x6:0.025");
+  const std::vector<BoardDetection> left = detect_samples(board, "left"), right = detect_samples(board, "right");
+  const CameraModel left_camera = calibrate_intrinsics(left).camera, right_camera = calibrate_intrinsics(right).camera;
+  const StereoCalibration s = calibrate_stereo(left, right, left_camera, right_camera);
+  CHECK(s.baseline_m == doctest::Approx(0.083).epsilon(0.02));
+
+  const std::vector<BoardDetection> left_first(left.begin(), left.end() - 1),
+      right_shifted(right.begin() + 1, right.end());
+  const std::string message =
+      error_of([&] { (void)calibrate_stereo(left_first, right_shifted, left_camera, right_camera); });
+  CHECK(contains(message, "pair " + sample("left", 1) + " / " + sample("right", 2) + " disagrees with the others"));
+  CHECK(contains(message, "shifted or mismatched"));
+}
