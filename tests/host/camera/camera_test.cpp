@@ -516,3 +516,46 @@ TEST_CASE("robot poses as controllers give them: x,y,z + quaternion without join
   CHECK(contains(error_of([&] { (void)parse_robot_poses(skewed, "s.txt", RotationColumns::kUnnamed); }),
                  "s.txt:1: the rotation is not orthonormal"));
 }
+
+TEST_CASE("a 17x28 board in a rendered 4K view: the primary detector, a window sized to its squares") {
+  // The same scene at VGA and at 4K (6 times the focal length and image): the corner error in
+  // pixels per square (the square's size in pixels) should not grow with the resolution.
+  const Board board = parse_board("chessboard:17x28:0.008");
+  const sim::PlanarTarget target = scenes::target_of(board);
+  Eigen::Isometry3d camera_T_board = Eigen::Isometry3d::Identity();
+  camera_T_board.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 0.5, 0).normalized()).toRotationMatrix();
+  camera_T_board.translation() = Eigen::Vector3d(-0.07, -0.11, 0.55);
+  double error_per_square[2] = {0, 0};
+  for (const int scale : {1, 6}) {
+    sim::CameraSpec spec = scenes::test_camera();
+    spec.width_px *= scale;
+    spec.height_px *= scale;
+    spec.fx_px *= scale;
+    spec.fy_px *= scale;
+    spec.cx_px = (spec.cx_px + 0.5) * scale - 0.5;
+    spec.cy_px = (spec.cy_px + 0.5) * scale - 0.5;
+    const BoardDetection d = detect_board(board, scenes::render(spec, camera_T_board, target, 5), "4k");
+    CAPTURE(scale);
+    REQUIRE_MESSAGE(d.found, d.reason);
+    std::vector<cv::Point2f> truth;
+    cv::Mat r, rvec;
+    const Eigen::Matrix3d rotation = camera_T_board.rotation();
+    cv::eigen2cv(rotation, r);
+    cv::Rodrigues(r, rvec);
+    const cv::Vec3d t(camera_T_board.translation().x(), camera_T_board.translation().y(),
+                      camera_T_board.translation().z());
+    cv::projectPoints(d.board_m, rvec, t, cv::Mat(model_of(spec).camera_matrix), model_of(spec).distortion_mat(),
+                      truth);
+    double sum = 0;
+    for (std::size_t i = 0; i < truth.size(); ++i) sum += std::pow(cv::norm(truth[i] - d.image_px[i]), 2);
+    const double square_px = cv::norm(truth[1] - truth[0]);
+    error_per_square[scale == 1 ? 0 : 1] = std::sqrt(sum / static_cast<double>(truth.size())) / square_px;
+    MESSAGE(d.detector << ": corner RMS " << std::sqrt(sum / static_cast<double>(truth.size())) << " px, square "
+                       << square_px << " px");
+    if (scale == 6) {
+      CHECK(contains(d.detector, "findChessboardCornersSB"));
+      CHECK(d.refine_half_window_px > 10);
+    }
+  }
+  CHECK(error_per_square[1] <= 1.2 * error_per_square[0]);
+}
