@@ -15,7 +15,10 @@ Vector3 perpendicular(const Vector3& v, const Vector3& axis, const Vector3& fall
   Vector3 p = v - v.dot(axis) * axis;
   if (p.norm() < 1e-9) p = fallback - fallback.dot(axis) * axis;
   if (p.norm() < 1e-9) p = axis.unitOrthogonal();
-  return p.normalized();
+  // Once more: for v within 1e-8 rad of the axis, rounding leaves p a component along it of
+  // about eps / |p|, and frames built on it were 2e-9 off orthonormal (found by fuzz.urdf).
+  p = p.normalized();
+  return (p - p.dot(axis) * axis).normalized();
 }
 
 struct Frame {

@@ -18,7 +18,7 @@
 // and everything else kept (link and joint names, meshes, inertias, limits, axes, other
 // branches, comments). The text is edited in place, found by the parser's own element order
 // (urdf_text.hpp), so any spelling the reader accepts works: of the chain's <origin> elements
-// only the xyz or rpy values that changed by more than 1e-12 m or 1e-12 rad are rewritten (in
+// only the xyz or rpy values that changed by more than 1e-11 m or 1e-11 rad are rewritten (in
 // the element's own quotes; a number of three within that of its old value keeps its old
 // spelling; a missing attribute is added after the element's name, a missing <origin> after
 // the joint's start tag). So a joint whose origin did not change keeps its text byte for byte,

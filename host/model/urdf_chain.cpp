@@ -64,8 +64,13 @@ std::string required_attribute(const tinyxml2::XMLElement& e, const char* name, 
 Transform parse_origin(const tinyxml2::XMLElement* origin, const std::string& source) {
   Transform t;
   if (origin == nullptr) return t;
-  if (const char* xyz = origin->Attribute("xyz"))
+  if (const char* xyz = origin->Attribute("xyz")) {
     t.translation = parse_triple(xyz, source, origin->GetLineNum(), "xyz");
+    if (t.translation.norm() > kMaxOriginM)
+      fail_at(source, origin->GetLineNum(),
+              "an origin " + shortest_number_text(t.translation.norm()) + " m from its parent frame: more than " +
+                  shortest_number_text(kMaxOriginM) + " m is not a robot's geometry");
+  }
   if (const char* rpy = origin->Attribute("rpy"))
     t.rotation = rotation_from_rpy(parse_triple(rpy, source, origin->GetLineNum(), "rpy"));
   return t;

@@ -469,6 +469,9 @@ TEST_CASE("urdf: bad input is refused naming the file, the line and what is wron
   CHECK(error(head + "<joint name=\"j1\" type=\"fixed\"><parent link=\"a\"/><child link=\"x\"/></joint></robot>") ==
         "bad.urdf:5: joint 'j1' names link 'x', which is not defined");
   CHECK(error(head + j1 + "</robot>", {"a", "c"}) == "bad.urdf:4: link 'c' is not below link 'a'");
+  CHECK(error(head + "<joint name=\"j1\" type=\"fixed\"><parent link=\"a\"/><child link=\"b\"/>\n"
+                     "<origin xyz=\"0 2e4 0\"/></joint></robot>") ==
+        "bad.urdf:6: an origin 20000 m from its parent frame: more than 10000 m is not a robot's geometry");
   CHECK(error("<robot><link name=\"a\">\n</robot>").starts_with("bad.urdf:1: XML: Error=XML_ERROR_MISMATCHED_ELEMENT"));
   CHECK(error(head + j1 + "</robot>") ==
         "bad.urdf:1: the links form no single tree (roots: a, c): choose the chain's first link with --base-link");
