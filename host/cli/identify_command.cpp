@@ -146,6 +146,11 @@ int run_identify(const IdentifyArgs& a) {
                               {{"--model", a.model.path}, {"--data", a.data}, {"--validate", a.validate}});
     const model::RobotModel nominal = a.model.load();
     const model::Dataset data = model::read_dataset(a.data);
+    std::optional<model::Dataset> held_out;  // read before the solve: a bad file fails in a second
+    if (!a.validate.empty()) {
+      held_out = model::read_dataset(a.validate);
+      model::check_joint_count(nominal, held_out->joint_count, held_out->source);
+    }
     if (!a.accept_implausible)
       identify::require_plausible(nominal, data, "--accept-implausible", {.noise_given = a.sigma_m > 0});
     identify::IdentifyResult result = identify::identify(nominal, data, options);
@@ -158,11 +163,6 @@ int run_identify(const IdentifyArgs& a) {
       } catch (const model::InputError& e) {
         std::cout << "baseline: not available (" << e.what() << ")\n";
       }
-    }
-    std::optional<model::Dataset> held_out;
-    if (!a.validate.empty()) {
-      held_out = model::read_dataset(a.validate);
-      model::check_joint_count(nominal, held_out->joint_count, held_out->source);
     }
     std::optional<identify::AccuracyStats> calibrated_held_out;
     if (held_out) calibrated_held_out = identify::accuracy(result.model, *held_out);

@@ -459,7 +459,7 @@ void add_session_command(CLI::App& app, int& status) {
   cmd->add_option("--validation", a->validation, "random validation poses (simulated robot)")
       ->check(whole_in(0, 10000))
       ->capture_default_str();
-  cmd->add_option("--validation-plan", a->validation_plan, "validation poses (joints CSV)")->check(CLI::ExistingFile);
+  cmd->add_option("--validation-plan", a->validation_plan, "validation poses (joints CSV)");
   cmd->add_option("--robot", a->robot, "sim or manual")->check(CLI::IsMember({"sim", "manual"}))->capture_default_str();
   cmd->add_option("--robot-cmd", a->robot_cmd, "command that moves the robot; {q} = the joint values");
   cmd->add_option("--left", a->left,

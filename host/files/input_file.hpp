@@ -32,10 +32,13 @@ class InputFileError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// What a file holds (for messages) and how large it may be.
+// What a file holds (for messages), how large it may be, and whether its text is decoded: a
+// journal checks every line's CRC itself, and a journal torn by a crash may end in NUL bytes.
+enum class Decoding { utf8, none };
 struct InputKind {
   const char* what;
   std::uintmax_t max_bytes;
+  Decoding decoding = Decoding::utf8;
 };
 
 inline constexpr std::uintmax_t kMiB = std::uintmax_t{1} << 20;
@@ -43,7 +46,7 @@ inline constexpr InputKind kDatasetFile{"dataset", 256 * kMiB};  // also joints 
 inline constexpr InputKind kExportFile{"measurement export", 256 * kMiB};
 inline constexpr InputKind kModelFile{"model file", 16 * kMiB};
 inline constexpr InputKind kUrdfFile{"URDF", 64 * kMiB};
-inline constexpr InputKind kJournalFile{"journal", 256 * kMiB};
+inline constexpr InputKind kJournalFile{"journal", 256 * kMiB, Decoding::none};
 inline constexpr InputKind kCandumpFile{"candump log", 256 * kMiB};
 inline constexpr InputKind kSettingsFile{"settings file (YAML)", 16 * kMiB};  // platform, camera
 inline constexpr InputKind kImageFile{"image", 512 * kMiB};

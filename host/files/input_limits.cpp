@@ -1,5 +1,7 @@
 #include "host/files/input_limits.hpp"
 
+#include "host/files/input_file.hpp"
+
 #include <array>
 #include <fstream>
 #include <optional>
@@ -76,6 +78,7 @@ void check_image_size(const std::string& path, std::int64_t width_px, std::int64
 }
 
 void check_image_header(const std::string& path) {
+  check_input_file(path, kImageFile);
   std::ifstream in(path, std::ios::binary);
   if (!in) return;
   std::optional<Size> size = png_size(in);

@@ -31,9 +31,10 @@ class InputLimitError : public std::runtime_error {
 inline constexpr const char* kImageLimitText = "at most 16384 px a side and 64 Mpx";
 inline constexpr const char* kTextLimitText = "at most 256 MiB";
 
-// Throws InputLimitError when the image's header states a size over the limits. Headers it
-// cannot read (other formats, damaged files) pass: the decoder reports those, and
-// check_image_size() then checks the decoded size.
+// Throws InputLimitError when the image's header states a size over the limits, and
+// InputFileError (input_file.hpp) for a path that is not a regular file of at most
+// kImageFile.max_bytes. Headers it cannot read (other formats, damaged files) pass: the decoder
+// reports those, and check_image_size() then checks the decoded size.
 void check_image_header(const std::string& path);
 void check_image_size(const std::string& path, std::int64_t width_px, std::int64_t height_px);
 

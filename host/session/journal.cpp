@@ -417,8 +417,6 @@ Journal Journal::resume(const std::string& path, const JournalIdentity& identity
   } catch (const files::InputFileError& e) {
     throw JournalError(e.what());
   }
-  // A byte-order mark that read_text_from() removed still counts in the file's offsets.
-  const off_t removed = ::lseek(fd, 0, SEEK_CUR) - static_cast<off_t>(text.size());
 
   std::size_t start = 0;
   int line = 0;
@@ -435,7 +433,7 @@ Journal Journal::resume(const std::string& path, const JournalIdentity& identity
     if (bad && line == 1) fail(path, 1, "the journal header is damaged: " + *bad);
     if (bad && !last) fail(path, line, "damaged record before the end of the journal: " + *bad);
     if (bad) {
-      if (::ftruncate(fd, static_cast<off_t>(start) + removed) != 0 || ::fsync(fd) != 0)
+      if (::ftruncate(fd, static_cast<off_t>(start)) != 0 || ::fsync(fd) != 0)
         fail_os(path, "cannot cut off the torn last line");
       journal.notes_.push_back(path + ":" + std::to_string(line) + ": the last line was torn (" + *bad + "); cut off " +
                                std::to_string(text.size() - start) + " bytes");

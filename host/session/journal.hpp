@@ -29,7 +29,7 @@
 //
 // Reading: resume() reads through files::read_text_from() (files/input_file.hpp): a regular file
 // (a directory, a device, a named pipe are refused by name before they are opened) of at most
-// files::kJournalFile.max_bytes, UTF-8.
+// files::kJournalFile.max_bytes, its bytes as they are (the CRCs check them).
 //
 // Cost: append() is one write() and one fsync() (milliseconds on a disk, dominated by the
 // fsync); resume() reads the whole file, O(bytes). Memory: every record is kept in memory.
