@@ -1,21 +1,42 @@
 #!/usr/bin/env python3
-"""Hostile and careless inputs to every writing subcommand of kincal (issue #16).
+"""Hostile and careless inputs to every subcommand of kincal (issues #16 and #25).
 
 Each case runs the kincal binary and checks: the exit status, a message matching a pattern (the
-options, numbers and likely cause), that no input file changed (SHA-256 before and after), and
-that no temporary file was left beside an output. Prints the number of cases per subcommand.
+options, numbers and likely cause), that no input file changed (SHA-256 before and after), that
+special files (named pipes, sockets, links to /dev/null) are still what they were, that no
+output was left behind by a failed run, that no temporary file was left beside an output, that
+the message is short (no 8 MB field echoed), and that the run stayed within a memory bound and a
+time limit. The cases of issue #25 are a table: every file kind kincal reads, at every option that
+reads it, against every class of hostile file (table_cases() below). Cases run on a pool of
+threads, each table case in its own directory. Prints the number of cases per subcommand and the
+wall time.
 
 usage: hostile_inputs.py KINCAL KINCAL_PLATFORM ROBOTS_DIR CAMERA_IMAGES_DIR WORK_DIR
 """
-import csv, hashlib, math, os, random, re, shutil, struct, subprocess, sys, zlib
+import csv, hashlib, math, os, random, re, shutil, socket, stat, struct, subprocess, sys, threading, time, zlib
 from collections import Counter
+from concurrent.futures import ThreadPoolExecutor
 
 kincal, platform, robots, camera_dir, work = sys.argv[1:6]
+started = time.monotonic()
 shutil.rmtree(work, ignore_errors=True)
 os.makedirs(work)
 os.chdir(work)
 puma = os.path.join(robots, "puma560.yaml")
-failures, counts = [], Counter()
+failures, counts, lock, times = [], Counter(), threading.Lock(), []
+pending = []  # (name, function): run on the pool at the end
+
+# Memory bound: an ASan build reserves terabytes of address space, so `prlimit --as` cannot bound
+# it; there ASan's own hard_rss_limit_mb kills a run that grows past the bound.
+MEMORY_MB = 1536
+with open(kincal, "rb") as f:
+    sanitized = b"__asan_init" in f.read()
+env = dict(os.environ)
+prefix = []
+if sanitized:
+    env["ASAN_OPTIONS"] = (env.get("ASAN_OPTIONS", "") + f":hard_rss_limit_mb={MEMORY_MB}").lstrip(":")
+elif shutil.which("prlimit"):
+    prefix = ["prlimit", f"--as={MEMORY_MB << 20}"]
 
 
 def sha(path):
@@ -23,27 +44,45 @@ def sha(path):
         return hashlib.sha256(f.read()).hexdigest()
 
 
-def case(name, args, pattern, rc_ok=False, protect=(), exe=None, timeout=300):
-    counts[name.split(":")[0]] += 1
-    before = {p: sha(p) for p in protect}
+def fail(message):
+    with lock:
+        failures.append(message)
+
+
+def check_run(name, argv, pattern, rc_ok, cwd, timeout, stdin=None, max_message=None):
+    """Runs argv; returns the output, or None (failure noted) when it did not finish."""
+    begun = time.monotonic()
     try:
-        r = subprocess.run([exe or kincal] + args, capture_output=True, text=True, timeout=timeout)
+        r = subprocess.run(prefix + argv, capture_output=True, text=True, errors="replace", timeout=timeout, cwd=cwd,
+                           env=env, stdin=stdin if stdin is not None else subprocess.DEVNULL)
         out, rc = r.stdout + r.stderr, r.returncode
     except subprocess.TimeoutExpired:
-        failures.append(f"{name}: did not finish within {timeout} s")
-        return
+        fail(f"{name}: did not finish within {timeout} s")
+        return None
+    with lock:
+        times.append((time.monotonic() - begun, name))
     if (rc == 0) != rc_ok:
-        failures.append(f"{name}: exit status {rc}\n{out[-600:]}")
+        fail(f"{name}: exit status {rc}\n{out[-600:]}")
     if pattern and not re.search(pattern, out, re.S):
-        failures.append(f"{name}: no /{pattern}/ in:\n{out[-600:]}")
-    if rc < 0 or "terminate called" in out or "Assertion" in out:
-        failures.append(f"{name}: crashed\n{out[-600:]}")
-    for p, h in before.items():
-        if sha(p) != h:
-            failures.append(f"{name}: input {p} changed")
-    leftovers = [f for f in os.listdir(".") if ".kincal-" in f]
-    if leftovers:
-        failures.append(f"{name}: temporary files left: {leftovers}")
+        fail(f"{name}: no /{pattern}/ in:\n{out[-600:]}")
+    if rc < 0 or "terminate called" in out or "Assertion" in out or "AddressSanitizer" in out or "runtime error" in out:
+        fail(f"{name}: crashed or ran out of memory (exit {rc})\n{out[-600:]}")
+    if max_message is not None and len(r.stderr) > max_message:
+        fail(f"{name}: a message of {len(r.stderr)} characters (an echoed field?): {r.stderr[:300]}")
+    return out
+
+
+def case(name, args, pattern, rc_ok=False, protect=(), exe=None, timeout=300):
+    """A case of issue #16, run in WORK_DIR on the pool."""
+    counts[name.split(":")[0]] += 1
+
+    def go():
+        before = {p: sha(p) for p in protect}
+        check_run(name, [exe or kincal] + args, pattern, rc_ok, work, timeout)
+        for p, h in before.items():
+            if sha(p) != h:
+                fail(f"{name}: input {p} changed")
+    pending.append((name, go))
 
 
 def run(args):
@@ -105,7 +144,7 @@ case("identify:not a dataset", ident + ["--data", puma, "--out", "o.yaml"], r"pu
 case("predict:out=joints", ["predict", "--model", puma, "--joints", "q.csv", "-o", "q.csv"], r"-o q\.csv is the same file as --joints", protect=["q.csv"])
 case("predict:out=model", ["predict", "--model", puma, "--joints", "q.csv", "-o", puma], r"same file as --model", protect=[puma])
 case("plan:out=model", ["plan", "--model", puma, "-n", "5", "-o", puma], r"same file as --model", protect=[puma])
-case("plan:progress on stderr", ["plan", "--model", puma, "-n", "40", "--pool", "300"], r"exchange sweep 1: 40 of 40", rc_ok=True)
+case("plan:progress on stderr", ["plan", "--model", puma, "-n", "40", "--pool", "60"], r"exchange sweep 1: 40 of 40", rc_ok=True)
 case("plan:count 0", ["plan", "--model", puma, "-n", "0"], r"-n|count")
 case("urdf:out=model", ["urdf", "--model", puma, "-o", puma], r"same file as --model", protect=[puma])
 case("urdf:out is a directory", ["urdf", "--model", puma, "-o", "sub"], r"sub")
@@ -200,7 +239,320 @@ case("camera:2x2 board", ["camera", "calibrate", "--board", "chessboard:2x2:0.03
 case("dbc:out is a directory", ["dbc", "-o", "sub"], r"sub: is a directory")
 case("monitor:duration nan", ["monitor", "--replay", "q.csv", "--duration-s", "nan"], r"not a finite")
 
-print("hostile cases per subcommand:", ", ".join(f"{k} {v}" for k, v in sorted(counts.items())), f"(total {sum(counts.values())})")
+# --- issue #25: the table of hostile files, at every option that reads or writes one
+MiB = 1 << 20
+arid = os.path.join(robots, "arid_prrr.yaml")
+stanford = os.path.join(robots, "stanford_rrp.yaml")
+ur10_yaml, ur10_urdf = os.path.join(robots, "ur10.yaml"), os.path.join(robots, "ur10.urdf")
+D, Q, E = os.path.join(work, "d.csv"), os.path.join(work, "q.csv"), os.path.join(work, "exact.csv")
+with open("replay.log", "w") as f:
+    f.write("(1436509052.249713) vcan0 123#DEADBEEF\n(1436509052.249800) vcan0 12345678#0102\n")
+LOG = os.path.join(work, "replay.log")
+with open("platform.yaml", "w") as f:
+    f.write("rangers: []\n")
+# a prismatic arm's data for per-joint units, and single-joint sweeps of it for discover
+run(["plan", "--model", stanford, "-n", "20", "--pool", "100", "-o", "stanford_q.csv"])
+run(["predict", "--model", stanford, "--joints", "stanford_q.csv", "-o", "stanford_exact.csv"])
+rows = list(csv.reader(open("stanford_exact.csv")))
+write_csv("stanford_degmm.csv", rows[0], [[float(r[0]) * 180 / math.pi, float(r[1]) * 180 / math.pi, float(r[2]) * 1000]
+                                          + [float(v) for v in r[3:]] for r in rows[1:]])
+sweep_q = []
+for joint, values in enumerate([[0.1 * k for k in range(8)], [0.3 + 0.1 * k for k in range(8)], [0.2 + 0.05 * k for k in range(8)]]):
+    for v in values:
+        q = [0.2, 0.5, 0.4]
+        q[joint] = v
+        sweep_q.append(q)
+write_csv("sweeps_q.csv", ["q1", "q2", "q3"], sweep_q)
+run(["predict", "--model", stanford, "--joints", "sweeps_q.csv", "-o", "sweeps.csv"])
+rows = list(csv.reader(open("sweeps.csv")))
+for joint in range(3):
+    still = [[float(v) for v in r] for r in rows[1:]]
+    for k in range(8 * joint + 1, 8 * joint + 8):
+        still[k][3:] = still[8 * joint][3:]
+    write_csv(f"still{joint}.csv", rows[0], still)
+shared_inputs = [D, Q, E, LOG, puma, arid, stanford, ur10_yaml, ur10_urdf, os.path.join(work, "s.journal")]
+shared_hashes = {p: sha(p) for p in shared_inputs}
+six = ["--joints", "q1,q2,q3,q4,q5,q6", "--joint-unit", "rad", "--position", "x,y,z", "--position-unit", "m"]
+sess_resume = ["session", "--model", arid, "--poses", "12", "--validation", "3", "--resume", "--journal"]
+limits = {"dataset": 256, "export": 256, "model": 16, "urdf": 64, "journal": 256, "candump": 256, "platform": 16}
+
+
+def tcase(name, argv, pattern, rc_ok=False, make=None, absent=(), stdin_bytes=None, max_message=3000, timeout=180):
+    """A case in its own directory: make(dir) creates its files; argv may hold '{d}' for that directory."""
+    counts[name.split(":")[0]] += 1
+    number = len(pending)
+
+    def go():
+        d = os.path.join(work, "c", str(number))
+        os.makedirs(d)
+        specials = make(d) if make else {}
+        args = [a.replace("{d}", d) for a in argv]
+        stdin = None
+        if stdin_bytes is not None:
+            stdin = open(os.path.join(d, ".stdin"), "w+b")
+            stdin.write(stdin_bytes)
+            stdin.seek(0)
+        check_run(name, [kincal] + args, pattern, rc_ok, d, timeout, stdin=stdin, max_message=max_message)
+        if stdin:
+            stdin.close()
+        for a in absent:
+            if os.path.lexists(os.path.join(d, a)):
+                fail(f"{name}: a failed run left {a} behind")
+        for path, kind in (specials or {}).items():
+            if kind() is False:
+                fail(f"{name}: the special file {path} was replaced")
+    pending.append((name, go))
+
+
+def is_fifo(p):
+    return lambda: stat.S_ISFIFO(os.lstat(p).st_mode)
+
+
+def is_socket(p):
+    return lambda: stat.S_ISSOCK(os.lstat(p).st_mode)
+
+
+def links_to(p, target):
+    return lambda: os.path.islink(p) and os.readlink(p) == target
+
+
+def is_dir(p):
+    return lambda: os.path.isdir(p) and not os.path.islink(p)
+
+
+def make_socket(p):
+    s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    s.bind(p)
+    s.close()
+
+
+def write_bytes(p, data):
+    with open(p, "wb") as f:
+        f.write(data)
+
+
+random.seed(25)
+garbage = bytes(random.getrandbits(8) for _ in range(4096)) + b"\0"
+
+
+# Hostile inputs: (class, maker(path, template bytes, kind) -> special-file checks, pattern).
+def sparse(p, kind):
+    with open(p, "wb") as f:
+        f.truncate((limits[kind] + 1) * MiB)
+
+
+input_classes = [
+    ("directory", lambda p, t, k: (os.mkdir(p), {p: is_dir(p)})[1], r"directory"),
+    ("/dev/zero link", lambda p, t, k: (os.symlink("/dev/zero", p), {p: links_to(p, "/dev/zero")})[1],
+     r"is a character device, not a regular file"),
+    ("/dev/null link", lambda p, t, k: (os.symlink("/dev/null", p), {p: links_to(p, "/dev/null")})[1],
+     r"is a character device, not a regular file"),
+    ("named pipe", lambda p, t, k: (os.mkfifo(p), {p: is_fifo(p)})[1], r"is a named pipe \(FIFO\), not a regular file"),
+    ("socket", lambda p, t, k: (make_socket(p), {p: is_socket(p)})[1], r"is a socket, not a regular file"),
+    ("missing", lambda p, t, k: {}, r"no such file|does not exist|[Nn]o journal"),
+    ("UTF-16 with BOM", lambda p, t, k: write_bytes(p, t.decode().encode("utf-16")), r"UTF-16 text \(byte-order mark FF FE\)"),
+    ("UTF-16 without BOM", lambda p, t, k: write_bytes(p, t.decode().encode("utf-16-le")), r":1:2: a NUL byte \(byte 1\)"),
+    ("Latin-1", lambda p, t, k: write_bytes(p, b"# caf\xe9\n" + t), r":1:6: byte 0xE9 \(byte 5\) is not UTF-8"),
+    ("Latin-1 late", lambda p, t, k: write_bytes(p, t + b"# \xb5m\n"), r":[0-9]+:3: byte 0xB5 \(byte [0-9]+\) is not UTF-8"),
+    ("binary", lambda p, t, k: write_bytes(p, garbage), r"NUL byte|not UTF-8"),
+    ("8 MB first line", lambda p, t, k: write_bytes(p, b"7" * (8 * MiB) + b"\n" + t), r"in\."),
+    ("over the size limit", lambda p, t, k: sparse(p, k), r"MiB is over the limit of [0-9]+ MiB"),
+    ("empty", lambda p, t, k: write_bytes(p, b""), r"in\."),
+]
+
+# Readers: (label, kind, file name, template, argv with {in}, outputs that must not appear,
+# whether valid variants (BOM, CRLF) are run to success).
+readers = [
+    ("identify --data", "dataset", "in.csv", D, ["identify", "--model", puma, "--data", "{in}", "--out", "o.yaml"], ["o.yaml"], False),
+    ("identify --validate", "dataset", "in.csv", D,
+     ["identify", "--model", puma, "--data", D, "--out", "o.yaml", "--validate", "{in}"], ["o.yaml"], False),
+    ("identify --model", "model", "in.yaml", puma, ["identify", "--model", "{in}", "--data", D, "--out", "o.yaml"], ["o.yaml"], False),
+    ("identify --model urdf", "urdf", "in.urdf", ur10_urdf,
+     ["identify", "--model", "{in}", "--tip-link", "ft_frame", "--data", D, "--out", "o.yaml", "--urdf", "o.urdf"], ["o.yaml", "o.urdf"], False),
+    ("predict --joints", "dataset", "in.csv", Q, ["predict", "--model", puma, "--joints", "{in}", "-o", "o.csv"], ["o.csv"], True),
+    ("predict --model", "model", "in.yaml", puma, ["predict", "--model", "{in}", "--joints", Q, "-o", "o.csv"], ["o.csv"], True),
+    ("predict --model urdf", "urdf", "in.urdf", ur10_urdf, ["predict", "--model", "{in}", "--tip-link", "ft_frame", "--joints", Q, "-o", "o.csv"], ["o.csv"], True),
+    ("plan --model", "model", "in.yaml", puma, ["plan", "--model", "{in}", "-n", "12", "--pool", "40", "-o", "o.csv"], ["o.csv"], False),
+    ("plan --model urdf", "urdf", "in.urdf", ur10_urdf, ["plan", "--model", "{in}", "--tip-link", "ft_frame", "-n", "12", "--pool", "40", "-o", "o.csv"],
+     ["o.csv"], False),
+    ("export --model", "model", "in.yaml", ur10_yaml, ["export", "--format", "ur-kinematics", "--model", "{in}", "-o", "o.yaml"],
+     ["o.yaml"], True),
+    ("urdf --model", "model", "in.yaml", puma, ["urdf", "--model", "{in}", "-o", "o.urdf"], ["o.urdf"], True),
+    ("import export", "export", "in.csv", E, ["import", "{in}", "-o", "o.csv"] + six, ["o.csv"], True),
+    ("import --model", "model", "in.yaml", puma, ["import", E, "-o", "o.csv", "--model", "{in}"] + six, ["o.csv"], True),
+    ("discover --data", "dataset", "in.csv", D, ["discover", "--data", "{in}", "-o", "o.yaml", "--urdf", "o.urdf"],
+     ["o.yaml", "o.urdf"], False),
+    ("session --journal --resume", "journal", "in.journal", os.path.join(work, "s.journal"), sess_resume + ["{in}"], [], False),
+    ("monitor --replay", "candump", "in.log", LOG, ["monitor", "--replay", "{in}"], [], True),
+    ("platform load --geometry", "platform", "in.yaml", os.path.join(work, "platform.yaml"),
+     ["platform", "load", "--can", "vcan-none", "--geometry", "{in}"], [], False),
+]
+
+
+def table_cases():
+    for label, kind, file_name, template, argv, outputs, valid_runs in readers:
+        with open(template, "rb") as f:
+            text = f.read()
+        command = label.split()[0]
+        for cls, maker, pattern in input_classes:
+            if kind == "journal" and cls in ("UTF-16 with BOM", "UTF-16 without BOM", "Latin-1",
+                                             "Latin-1 late", "binary", "8 MB first line", "empty"):
+                pattern = r"in\.journal:1: the journal (header is damaged|has no header)|in\.journal:[0-9]+: damaged record"
+            if kind == "journal" and cls == "Latin-1 late":
+                continue  # a last line that fails its CRC is a torn line, cut off by design
+            if cls == "empty" and kind == "candump":
+                continue  # an empty log is a log of no frames
+            if cls == "missing" and kind == "journal":
+                continue  # covered by session's own "no journal to resume"
+
+            def make(d, maker=maker, text=text, kind=kind, file_name=file_name):
+                return maker(os.path.join(d, file_name), text, kind)
+            tcase(f"{command}:{label} {cls}", [a.replace("{in}", file_name) for a in argv], pattern, make=make, absent=outputs)
+        if kind not in ("export", "urdf"):  # import reads standard input; '-' is no *.urdf
+            tcase(f"{command}:{label} '-'", [a.replace("{in}", "-") for a in argv],
+                  r"standard input is not read here|-: no journal to resume", absent=outputs)
+        if valid_runs:
+            for cls, variant in [("with a byte-order mark", b"\xef\xbb\xbf" + text),
+                                 ("with CRLF line ends", text.replace(b"\r\n", b"\n").replace(b"\n", b"\r\n"))]:
+                def make(d, variant=variant, file_name=file_name):
+                    write_bytes(os.path.join(d, file_name), variant)
+                tcase(f"{command}:{label} {cls}", [a.replace("{in}", file_name) for a in argv], None, rc_ok=True, make=make)
+    # standard input where import documents it; bounded even when it never ends
+    with open(E, "rb") as f:
+        export_text = f.read()
+    tcase("import:export from standard input", ["import", "-", "-o", "o.csv"] + six, r"from standard input", rc_ok=True,
+          stdin_bytes=export_text)
+    tcase("import:standard input from /dev/zero", ["import", "-", "-o", "o.csv"] + six,
+          r"standard input(:1:1)?: (a NUL byte|more than the limit)", stdin_bytes=b"\0" * 4096, absent=["o.csv"])
+
+    # Outputs: (label, argv with {out}, '-' is standard output)
+    writers = [
+        ("identify --out", ["identify", "--model", puma, "--data", D, "--out", "{out}"], False),
+        ("identify --urdf", ["identify", "--model", puma, "--data", D, "--out", "o.yaml", "--urdf", "{out}"], False),
+        ("discover -o", ["discover", "--data", D, "-o", "{out}"], False),
+        ("discover --urdf", ["discover", "--data", D, "-o", "o.yaml", "--urdf", "{out}"], False),
+        ("discover --report", ["discover", "--data", D, "-o", "o.yaml", "--report", "{out}"], False),
+        ("import -o", ["import", E, "-o", "{out}"] + six, False),
+        ("plan -o", ["plan", "--model", puma, "-n", "12", "--pool", "40", "-o", "{out}"], True),
+        ("predict -o", ["predict", "--model", puma, "--joints", Q, "-o", "{out}"], True),
+        ("export -o", ["export", "--format", "ur-kinematics", "--model", ur10_yaml, "-o", "{out}"], True),
+        ("dbc -o", ["dbc", "-o", "{out}"], True),
+        ("urdf -o", ["urdf", "--model", puma, "-o", "{out}"], None),
+        ("session --out", ["session", "--model", arid, "--poses", "12", "--journal", "j.journal", "--out", "{out}"], False),
+        ("session --report", ["session", "--model", arid, "--poses", "12", "--journal", "j.journal", "--report", "{out}"], False),
+        ("session --dataset", ["session", "--model", arid, "--poses", "12", "--journal", "j.journal", "--dataset", "{out}"], False),
+        ("monitor --log", ["monitor", "--replay", LOG, "--log", "{out}"], False),
+    ]
+    output_classes = [
+        ("named pipe", lambda p: (os.mkfifo(p), {p: is_fifo(p)})[1], r"is a named pipe \(FIFO\), not a regular file: refusing to replace it"),
+        ("/dev/null link", lambda p: (os.symlink("/dev/null", p), {p: links_to(p, "/dev/null")})[1],
+         r"is a character device, not a regular file: refusing to replace it"),
+        ("socket", lambda p: (make_socket(p), {p: is_socket(p)})[1], r"is a socket, not a regular file: refusing to replace it"),
+        ("directory", lambda p: (os.mkdir(p), {p: is_dir(p)})[1], r"is a directory, not a file"),
+    ]
+    for label, argv, dash in writers:
+        command = label.split()[0]
+        others = [o for o in ["o.yaml", "j.journal"] if o not in argv]
+        for cls, maker, pattern in output_classes:
+            tcase(f"{command}:{label} is a {cls}", [a.replace("{out}", "out.x") for a in argv], pattern,
+                  make=lambda d, maker=maker: maker(os.path.join(d, "out.x")), absent=others + ["o.yaml"] * ("o.yaml" in argv))
+        tcase(f"{command}:{label} in a missing directory", [a.replace("{out}", "nodir/out.x") for a in argv],
+              r"the directory nodir does not exist", absent=["nodir", "o.yaml", "j.journal"])
+        if dash is False:
+            tcase(f"{command}:{label} -", [a.replace("{out}", "-") for a in argv], r"does not write to standard output",
+                  absent=["-", "o.yaml", "j.journal"])
+        elif dash:
+            tcase(f"{command}:{label} - is standard output", [a.replace("{out}", "-") for a in argv], r"\S", rc_ok=True, absent=["-"])
+
+    # Semantic checks that close classes
+    imp = ["import", E, "-o", "o.csv", "--joint-unit", "rad", "--position-unit", "m"]
+    for joints, position, column in [("q1,q1,q3,q4,q5,q6", "x,y,z", "q1"), ("q1,q2,q3,q4,q5,q5", "x,y,z", "q5"),
+                                     ("q1,q2,x,q4,q5,q6", "x,y,z", "x"), ("q1,q2,q3,q4,q5,q6", "x,y,x", "x"),
+                                     ("q1,q2,q3,q4,q5,q6", "x,q2,z", "q2"), ("q6,q2,q3,q4,q5,q6", "x,y,z", "q6")]:
+        tcase(f"import:--joints {joints} --position {position}", imp + ["--joints", joints, "--position", position],
+              rf"column '{column}' is named twice", absent=["o.csv"])
+    tcase("import:--position-std = --position", imp + ["--joints", "q1,q2,q3,q4,q5,q6", "--position", "x,y,z",
+          "--position-std", "x,y,z"], r"column 'x' is named twice: as value 1 of --position and as value 1 of --position-std",
+          absent=["o.csv"])
+    tcase("import:--model with the wrong joint count", ["import", E, "-o", "o.csv", "--joints", "q1,q2,q3", "--joint-unit", "rad",
+          "--position", "x,y,z", "--position-unit", "m", "--model", puma], r"3 joint columns but the model 'puma560' has 6",
+          absent=["o.csv"])
+    srr = ["import", os.path.join(work, "stanford_exact.csv"), "-o", "o.csv", "--joints", "q1,q2,q3", "--position", "x,y,z",
+           "--position-unit", "m", "--model", stanford]
+    tcase("import:deg for a prismatic joint", srr + ["--joint-unit", "deg"],
+          r"joint 3 .* is prismatic but its unit is deg", absent=["o.csv"])
+    tcase("import:mm for a revolute joint", srr + ["--joint-unit", "mm,rad,m"], r"joint 1 .* is revolute but its unit is mm",
+          absent=["o.csv"])
+    tcase("import:two units for three joints", srr + ["--joint-unit", "rad,m"], r"2 units for", absent=["o.csv"])
+    tcase("import:a unit per joint", srr + ["--joint-unit", "rad,rad,m"], r"wrote o\.csv", rc_ok=True)
+    tcase("import:a unit per joint in deg and mm", srr[:1] + [os.path.join(work, "stanford_degmm.csv")] + srr[2:] +
+          ["--joint-unit", "deg,deg,mm"], r"wrote o\.csv", rc_ok=True)
+    for joint in range(3):
+        tcase(f"discover:sweep of joint {joint + 1} that does not move", ["discover", "--data", os.path.join(work, f"still{joint}.csv"),
+              "-o", "o.yaml", "--urdf", "o.urdf"], rf"joint {joint + 1} \(lines [0-9]+-[0-9]+\): its reading changes by .* the measured "
+              r"points do not move", absent=["o.yaml", "o.urdf"])
+    tcase("discover:--urdf in a missing directory", ["discover", "--data", D, "-o", "found.yaml", "--urdf", "nodir/x.urdf"],
+          r"nodir does not exist", absent=["found.yaml"])
+    tcase("identify:--urdf in a missing directory", ["identify", "--model", puma, "--data", D, "--out", "o.yaml", "--urdf",
+          "nodir/x.urdf"], r"nodir does not exist", absent=["o.yaml"])
+    joint = "  - name: j{}\n    type: revolute\n    convention: dh\n    d: 0.3\n    theta: 0\n    a: 0.2\n    alpha: 1.5\n" \
+            "    limits: [-3, 3]\n"
+    bad_models = [
+        ("negative compliance", "    compliance: -1e-4\n", r":18:17: joint 2: compliance must not be negative"),
+        ("zero scale", "    scale: 0\n", r":18:12: joint 2: scale must be positive"),
+        ("negative scale", "    scale: -1\n", r":18:12: joint 2: scale must be positive"),
+        ("negative mass", "    mass: -3\n", r":18:11: joint 2 mass must not be negative"),
+        ("equal limits", "    limits: [1, 1]\n", r":18:13: joint 2: lower limit must be below the upper limit"),
+        ("reversed limits", "    limits: [1, -1]\n", r":18:13: joint 2: lower limit must be below the upper limit"),
+        ("8 MB number", "    offset: " + "7" * (8 * MiB) + "\n", r":18:13: joint 2 offset: '7{80}\.\.\. \(8388608 bytes\)' is not a number"),
+        ("8 MB key", "    " + "k" * (8 * MiB) + ": 1\n", r":18:[0-9]+: YAML syntax"),  # yaml-cpp: implicit keys of at most 1024 characters
+    ]
+    for name, extra, pattern in bad_models:
+        model_text = ("name: bad\njoints:\n" + joint.format(1) + joint.format(2).replace("    limits: [-3, 3]\n", "") + extra +
+                      joint.format(3) + "tool:\n  point: [0, 0, 0.1]\n")
+        for command, argv in [("plan", ["plan", "--model", "m.yaml", "-n", "12", "--pool", "40", "-o", "o.csv"]),
+                              ("predict", ["predict", "--model", "m.yaml", "--joints", os.path.join(work, "sweeps_q.csv"),
+                                           "-o", "o.csv"])]:
+            def make(d, model_text=model_text):
+                with open(os.path.join(d, "m.yaml"), "w") as f:
+                    f.write(model_text)
+            tcase(f"{command}:model with {name}", argv, "m\\.yaml" + pattern, make=make, absent=["o.csv"])
+    for pool in ["10", "12", "13", "20"]:
+        tcase(f"plan:-n 10 --pool {pool} prints no NaN", ["plan", "--model", puma, "-n", "10", "--pool", pool], r"^(?!.*nan)(?!.*inf).*$",
+              rc_ok=True)
+    tcase("plan:-n 10 --pool 10 says why it has no comparison", ["plan", "--model", puma, "-n", "10", "--pool", "10"],
+          r"none of 50 random plans", rc_ok=True)
+    # 8 MB cells and headers: quoted at most 80 bytes
+    with open("cell.csv", "w") as f:
+        f.write("q1,q2,q3,q4,q5,q6,x,y,z\n" + "7" * (8 * MiB) + ",0,0,0,0,0,1,1,1\n")
+    with open("header.csv", "w") as f:
+        f.write(",".join("h" * 3000 + str(i) for i in range(1000)) + "\n1\n")
+    tcase("import:8 MB cell", ["import", os.path.join(work, "cell.csv"), "-o", "o.csv"] + six,
+          r"'7{80}\.\.\. \(8388608 bytes\)' is not a number", absent=["o.csv"], max_message=1000)
+    tcase("identify:8 MB cell", ["identify", "--model", puma, "--data", os.path.join(work, "cell.csv"), "--out", "o.yaml"],
+          r"'7{80}\.\.\. \(8388608 bytes\)' is not a number", absent=["o.yaml"], max_message=1000)
+    tcase("import:3 MB header", ["import", os.path.join(work, "header.csv"), "-o", "o.csv"] + six,
+          r"no column named 'q1' in the header .* and 980 more", absent=["o.csv"], max_message=3000)
+    with open("cell.log", "w") as f:
+        f.write("(1436509052.249713) vcan0 123#" + "A" * (16 * MiB) + "\n")
+    tcase("monitor:16 MB candump field", ["monitor", "--replay", os.path.join(work, "cell.log")],
+          r"cell\.log:1: 8388608 data bytes is not a valid classic CAN length", max_message=1000)
+    with open("cell_hex.log", "w") as f:
+        f.write("(1436509052.249713) vcan0 123#" + "G" * (8 * MiB) + "\n")
+    tcase("monitor:8 MB candump frame", ["monitor", "--replay", os.path.join(work, "cell_hex.log")],
+          r"cell_hex\.log:1: .*\(8388609 bytes\)|is not a valid", max_message=1000)
+
+
+table_cases()
+with ThreadPoolExecutor(max_workers=int(os.environ.get("KINCAL_HOSTILE_JOBS", "3"))) as pool:
+    for future in [pool.submit(go) for _, go in pending]:
+        future.result()
+leftovers = [os.path.join(d, f) for d, _, fs in os.walk(work) for f in fs if ".kincal-" in f]
+if leftovers:
+    failures.append(f"temporary files left: {leftovers}")
+print("slowest cases:", ", ".join(f"{name} {t:.1f} s" for t, name in sorted(times, reverse=True)[:8]))
+print("hostile cases per subcommand:", ", ".join(f"{k} {v}" for k, v in sorted(counts.items())),
+      f"(total {sum(counts.values())}, {time.monotonic() - started:.0f} s)")
 if failures:
     print("\n\n".join(failures))
     sys.exit(1)
