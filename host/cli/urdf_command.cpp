@@ -54,12 +54,13 @@ int run_urdf(const UrdfArgs& a) {
 }  // namespace
 
 std::string print_registration(const model::CalibratedUrdf& c) {
-  const model::Vector3 rpy = model::rpy_from_rotation(c.device_T_base_link.rotation);
+  // + 0.0: no "-0" in what a user reads.
+  const model::Vector3 rpy = model::rpy_from_rotation(c.device_T_base_link.rotation) + model::Vector3::Zero();
   std::ostringstream out;
   out.precision(6);
-  out << "the base link in the measuring device's frame (device_T_base_link): xyz "
-      << c.device_T_base_link.translation.x() << ' ' << c.device_T_base_link.translation.y() << ' '
-      << c.device_T_base_link.translation.z() << " m, rpy " << rpy.x() << ' ' << rpy.y() << ' ' << rpy.z() << " rad\n";
+  const model::Vector3 xyz = c.device_T_base_link.translation + model::Vector3::Zero();
+  out << "the base link in the measuring device's frame (device_T_base_link): xyz " << xyz.x() << ' ' << xyz.y() << ' '
+      << xyz.z() << " m, rpy " << rpy.x() << ' ' << rpy.y() << ' ' << rpy.z() << " rad\n";
   for (const std::string& note : c.notes) out << "note: " << note << '\n';
   return out.str();
 }
