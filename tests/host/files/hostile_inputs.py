@@ -222,7 +222,8 @@ case("camera:one image three times", ["camera", "calibrate"] + board + ["v0.png"
      r"a near-duplicate of v0\.png \(the same corners within 0\.000 px RMS", protect=mine)
 run(["camera", "calibrate"] + board + [os.path.join(bg, p) for p in pngs] + ["-o", "cam.yaml"])
 case("camera:stereo same images", ["camera", "stereo"] + board + ["--left", bg, "--right", bg, "--left-camera", "cam.yaml",
-     "--right-camera", "cam.yaml", "-o", "s.yaml"], r"baseline 0\.0000[0-9]* m is 0\.0[0-9]* % of the board's median distance")
+     "--right-camera", "cam.yaml", "-o", "s.yaml"], # the pair-consistency gate (#22) may refuse first: a baseline near 0 makes every pair disagree
+     r"baseline 0\.0000[0-9]* m is 0\.0[0-9]* % of the board's median distance|disagrees with the others")
 pose_rows = open(os.path.join(camera_dir, "poses.csv")).read().splitlines()
 with open("poses_shuffled.csv", "w") as f:  # the images' poses, one row late
     f.write("\n".join([pose_rows[0]] + pose_rows[2:] + [pose_rows[1]]) + "\n")
