@@ -14,6 +14,7 @@
 #include "host/camera/board.hpp"
 #include "host/camera/intrinsics.hpp"
 #include "host/camera/stereo.hpp"
+#include "tests/host/camera/error_text.hpp"
 
 using namespace kincal::camera;
 
@@ -55,18 +56,6 @@ double recipe_rms_px() {
   std::vector<cv::Mat> r, t;
   return cv::calibrateCamera(board, image, cv::Size(640, 480), k, d, r, t);
 }
-
-template <typename F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
-
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 }  // namespace
 

@@ -21,6 +21,7 @@
 #include "host/model/number_text.hpp"
 #include "shared/parameters.hpp"
 #include "tests/host/camera/camera_scenes.hpp"
+#include "tests/host/camera/error_text.hpp"
 
 namespace fs = std::filesystem;
 using namespace kincal;
@@ -99,18 +100,6 @@ BoardDetection projected(const Board& board, const CameraModel& camera, const Ei
 double rotation_error_rad(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
   return Eigen::AngleAxisd(a.rotation().transpose() * b.rotation()).angle();
 }
-
-template <typename F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
-
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 struct TempDir {
   fs::path path;
