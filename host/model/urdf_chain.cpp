@@ -6,10 +6,8 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <map>
 #include <set>
-#include <sstream>
 #include <unordered_map>
 
 #include "host/model/axes.hpp"
@@ -309,14 +307,6 @@ UrdfChain parse_urdf_chain(const std::string& text, const std::string& source, c
   }
   chain.joints = std::move(path);
   return chain;
-}
-
-UrdfChain read_urdf_chain(const std::string& path, const UrdfChainEnds& ends) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open the URDF file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_urdf_chain(text.str(), path, ends);
 }
 
 std::vector<Transform> urdf_link_poses(const UrdfChain& chain, std::span<const double> q) {

@@ -103,7 +103,6 @@ inline constexpr std::size_t kMaxListedChains = 20;
 
 // Throws InputError ("FILE:LINE: what") for everything the top lists as refused.
 UrdfChain parse_urdf_chain(const std::string& text, const std::string& source, const UrdfChainEnds& ends = {});
-UrdfChain read_urdf_chain(const std::string& path, const UrdfChainEnds& ends = {});
 
 // base_link_T_(child link of joint k) for every joint of the chain at the movable joints'
 // values q (q.size() == movable_count()).
