@@ -7,6 +7,7 @@
   shared/        includes only shared/ and those standard headers;
   host/session   never includes host/sim/ or host/demo/: a session is what a calibration of a
                  real robot runs; the simulator implements its interfaces from host/demo/.
+  host/correct   the same: the correction of a real robot's targets (issue #24).
 
   layering_check.py REPO_ROOT     prints each violation as FILE:LINE and exits 1 if any
 """
@@ -24,8 +25,8 @@ SOURCES = ("*.hpp", "*.h", "*.cpp", "*.cc", "*.c")
 
 
 def allowed(rel, target):
-    if rel.startswith("host/session/") and target.startswith(("host/sim/", "host/demo/")):
-        return "host/session must not include the simulator (host/sim, host/demo)"
+    if rel.startswith(("host/session/", "host/correct/")) and target.startswith(("host/sim/", "host/demo/")):
+        return f"{'/'.join(rel.split('/')[:2])} must not include the simulator (host/sim, host/demo)"
     if rel.startswith("firmware/") and target.startswith("host/"):
         return "firmware must not include host code"
     if rel.startswith("firmware/core/") or rel.startswith("shared/"):
@@ -41,7 +42,7 @@ def allowed(rel, target):
 def main(root):
     root = pathlib.Path(root)
     problems = []
-    for top in ("firmware", "shared", "host/session"):
+    for top in ("firmware", "shared", "host/session", "host/correct"):
         for pattern in SOURCES:
             for path in sorted((root / top).rglob(pattern)):
                 rel = path.relative_to(root).as_posix()

@@ -1,0 +1,70 @@
+// Joint readings that put a model's tool at a goal pose or point: the damped Newton
+// (Levenberg-Marquardt) solve behind `kincal correct` (issue #24), for Cartesian targets and for
+// joint targets where the platform's first-order step is not enough.
+//
+// Problem: min over readings q within [lower, upper] of |W^1/2 e(q)|^2, with
+//   e(q) = [p_goal - p(q); log(R_goal R(q)^T)]   (rotation rows only when `orientation`)
+//   W    = diag(1, 1, 1, L^2, L^2, L^2),  L = rotation_weight_m,
+// p, R the model's forward_kinematics (its joint map, deflection and base included), in the frame
+// forward_kinematics returns. Step: dq = (J^T W J + lambda^2 I)^-1 J^T W e over the joints that
+// are free, J = joint_jacobian(model, q); lambda starts at initial_damping, shrinks by 3 after a
+// step that lowers the cost and grows by 10 after one that does not (the step is then not taken):
+// near a singularity lambda bounds the step, away from one the solve is Gauss-Newton. A joint at a
+// limit whose descent direction points out of its range is held there for the step (active set);
+// every step is clamped into the limits; a seed outside them starts clamped.
+//
+// Termination and outcome (Solution::outcome):
+//   reached        position residual <= tolerance_m and (with orientation) rotation <= tolerance_rad;
+//   joint_limit    not reached, and a joint is held at a limit that the descent pushes against;
+//   out_of_reach   not reached where the joints can no longer move the tool toward the goal
+//                  (|J^T W e| below stall_cosine times |W^1/2 J|_2 |W^1/2 e|: a stationary point
+//                  off the goal, where J is singular in the residual's direction) with the goal
+//                  farther from frame 0's origin than the tool: the arm stretched toward it;
+//   singularity    such a stationary point otherwise (folded, or a wrist singular for the goal);
+//   not_converged  max_iterations used, or lambda above 1e8 (no step lowers the cost), none of the
+//                  above.
+// Only `reached` is a result to use; the others carry the best readings found and their residual.
+// A local solve: it keeps the seed's configuration (elbow, wrist branch) and can stop in a local
+// minimum that is not the goal (reported as not reached, never as reached).
+// Cost per iteration: one forward kinematics and one Jacobian (each O(n) frames), an n x n solve;
+// typically 2 to 5 iterations from a seed within a few millimetres. Throws std::invalid_argument
+// when the seed's size is not the model's joint count. Thread-safe (no shared state).
+#pragma once
+
+#include <span>
+#include <string>
+#include <vector>
+
+#include "host/model/robot_model.hpp"
+
+namespace kincal::correct {
+
+struct SolveOptions {
+  double rotation_weight_m = 0.5;  // L: a radian weighs as L metres
+  double tolerance_m = 1e-7;
+  double tolerance_rad = 1e-7;
+  int max_iterations = 60;
+  double initial_damping = 1e-3;  // weighted metres
+  double stall_cosine = 1e-2;
+};
+
+enum class Outcome { reached, joint_limit, out_of_reach, singularity, not_converged };
+
+// "reached", "joint-limit", "out-of-reach", "singularity", "not-converged" (as files and messages write it).
+const char* outcome_name(Outcome outcome);
+
+struct Solution {
+  std::vector<double> q;
+  Outcome outcome = Outcome::not_converged;
+  double residual_m = 0.0;    // |p_goal - p(q)|
+  double residual_rad = 0.0;  // angle of R_goal R(q)^T (0 without orientation)
+  int iterations = 0;
+};
+
+Solution solve_pose(const model::RobotModel& model, const model::Transform& goal, bool orientation,
+                    std::span<const double> seed, const SolveOptions& options = {});
+
+// The twist e(q) of the top comment (6 rows; the rotation rows exact, not first-order).
+Eigen::Matrix<double, 6, 1> pose_residual(const model::Transform& goal, const model::Transform& at);
+
+}  // namespace kincal::correct

@@ -1,0 +1,284 @@
+// host/correct (issue #24): the PC's joint correction against the platform's (firmware/core read
+// from the correction block, in float) on the plain chain and the joint map; the Newton solve
+// where first order is not enough; inverse kinematics with limits, reach and seeds; the nominal
+// rebuilt from a calibration record; the predicted spread.
+#include <doctest.h>
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <random>
+
+#include "firmware/app/kinematic_correction.hpp"
+#include "host/correct/cartesian_targets.hpp"
+#include "host/correct/joint_correction.hpp"
+#include "host/correct/platform_step.hpp"
+#include "host/correct/prediction_spread.hpp"
+#include "host/model/model_file.hpp"
+#include "host/session/online_correction.hpp"
+
+using namespace kincal;
+
+namespace {
+
+model::RobotModel robot(const char* file) { return model::load_model(std::string(KINCAL_ROBOTS_DIR) + "/" + file); }
+
+// Every link parameter, and the tool, off by up to `angle_rad` / `length_m`.
+model::RobotModel perturbed(const model::RobotModel& m, double angle_rad, double length_m, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  model::RobotModel out = m;
+  for (model::Joint& j : out.joints) {
+    j.parameters.a_m += length_m * u(rng);
+    j.parameters.d_m += length_m * u(rng);
+    j.parameters.alpha_rad += angle_rad * u(rng);
+    j.offset += angle_rad * u(rng);
+  }
+  out.flange_T_tool.translation += length_m * model::Vector3(u(rng), u(rng), u(rng));
+  return out;
+}
+
+// The elbow reported relative to the shoulder, masses, gravity; the calibrated arm adds gear
+// scales and compliance (as session_test's joint-map case).
+void add_joint_map(model::RobotModel& start, model::RobotModel& calibrated) {
+  for (model::RobotModel* m : {&start, &calibrated}) {
+    m->joints[2].coupling = {0, 1, 1, 0, 0, 0};
+    const double mass_kg[6] = {0, 17.4, 4.8, 0.82, 0.34, 0.09};
+    for (std::size_t j = 0; j < 6; ++j) m->joints[j].mass_kg = mass_kg[j];
+    m->joints[1].centre_of_mass_m = {-0.3638, 0.006, 0.2275};
+    m->joints[2].centre_of_mass_m = {-0.0203, -0.0141, 0.070};
+    m->payload.mass_kg = 3.0;
+    m->payload.centre_of_mass_m = {0, 0, 0.1};
+    m->joints[1].compliance = 0.0;
+    m->joints[2].compliance = 0.0;
+  }
+  calibrated.joints[0].scale = 1.0 + 4e-4;
+  calibrated.joints[1].scale = 1.0 - 3e-4;
+  calibrated.joints[1].compliance = 2e-5;
+  calibrated.joints[2].compliance = 3e-5;
+}
+
+std::vector<double> random_readings(std::mt19937_64& rng) {
+  std::vector<double> q = {0.1, -0.4, 0.3, 0.2, -0.5, 0.7};
+  for (double& v : q) v += std::uniform_real_distribution<double>(-0.4, 0.4)(rng);
+  return q;
+}
+
+model::Vector3 tool_in_frame0(model::RobotModel m, const std::vector<double>& q) {
+  m.base_T_frame0 = model::Transform{};
+  return model::forward_kinematics(m, q).translation;
+}
+
+// PC and platform on the same targets: the tool within 1 um, and the PC on the goal.
+void check_agreement(const model::RobotModel& start, const model::RobotModel& calibrated) {
+  correct::PlatformStep platform(start, calibrated);
+  correct::JointCorrector pc(start, calibrated);
+  REQUIRE(pc.platform_step());
+  // The platform step is the platform's: the app's correction gives the same readings to its
+  // 2^-16 rad quantization (one LSB: the float results may straddle a rounding boundary).
+  static app::KinematicCorrection app_correction;
+  const shared::CorrectionParameters block = session::correction_block(start, calibrated);
+  std::mt19937_64 rng(5);
+  double worst_apart_m = 0.0, worst_goal_m = 0.0, worst_uncorrected_m = 0.0;
+  for (int trial = 0; trial < 30; ++trial) {
+    const std::vector<double> q = random_readings(rng);
+    const correct::JointCorrection c = pc.correct(q);
+    REQUIRE(c.solution.outcome == correct::Outcome::reached);
+    CHECK(c.platform_step_used);
+    const std::optional<std::vector<double>> step = platform.correct(q);
+    REQUIRE(step);
+    const std::vector<double>& p = *step;
+    app::JointRaw raw{}, corrected_raw{};
+    for (std::size_t j = 0; j < q.size(); ++j) raw[j] = shared::quantize_joint_angle(q[j]);
+    std::vector<double> quantized(q.size());
+    for (std::size_t j = 0; j < q.size(); ++j) quantized[j] = shared::joint_angle_rad<double>(raw[j]);
+    REQUIRE(app_correction.correct(block, raw, corrected_raw) == app::CorrectStatus::kOk);
+    const std::optional<std::vector<double>> from_quantized = platform.correct(quantized);
+    REQUIRE(from_quantized);
+    for (std::size_t j = 0; j < q.size(); ++j)
+      CHECK(std::abs(shared::quantize_joint_angle((*from_quantized)[j]) - corrected_raw[j]) <= 1);
+    worst_apart_m =
+        std::max(worst_apart_m, (tool_in_frame0(calibrated, c.solution.q) - tool_in_frame0(calibrated, p)).norm());
+    worst_goal_m = std::max(worst_goal_m, (tool_in_frame0(calibrated, c.solution.q) - c.goal.translation).norm());
+    worst_uncorrected_m = std::max(worst_uncorrected_m, (tool_in_frame0(calibrated, q) - c.goal.translation).norm());
+  }
+  MESSAGE("uncorrected " << worst_uncorrected_m * 1e3 << " mm, PC to goal " << worst_goal_m * 1e6
+                         << " um, PC to platform " << worst_apart_m * 1e6 << " um at the tool");
+  CHECK(worst_uncorrected_m > 1e-3);
+  CHECK(worst_goal_m < 10e-6);
+  CHECK(worst_apart_m < 1e-6);
+}
+
+}  // namespace
+
+TEST_CASE("joint targets: the PC and the platform agree within 1 um at the tool (plain chain)") {
+  const model::RobotModel start = robot("puma560.yaml");
+  check_agreement(start, perturbed(start, 1e-3, 1e-3, 1));
+}
+
+TEST_CASE("joint targets: the PC and the platform agree within 1 um at the tool (joint map)") {
+  model::RobotModel start = robot("puma560.yaml");
+  model::RobotModel calibrated = perturbed(start, 1e-3, 1e-3, 2);
+  add_joint_map(start, calibrated);
+  check_agreement(start, calibrated);
+}
+
+TEST_CASE("joint targets: where first order is not enough, the Newton solve reaches the goal") {
+  model::RobotModel start = robot("puma560.yaml");
+  model::RobotModel calibrated = perturbed(start, 0.01, 0.01, 3);  // 0.6 degree and 10 mm
+  add_joint_map(start, calibrated);
+  correct::PlatformStep platform(start, calibrated);
+  correct::JointCorrector pc(start, calibrated);
+  correct::JointCorrectionOptions newton_only;
+  newton_only.platform_step = false;
+  correct::JointCorrector alone(start, calibrated, newton_only);
+  CHECK_FALSE(alone.platform_step());
+  std::mt19937_64 rng(7);
+  double worst_platform_m = 0.0;
+  int refined = 0, refused = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    const std::vector<double> q = random_readings(rng);
+    const correct::JointCorrection c = pc.correct(q);
+    REQUIRE(c.solution.outcome == correct::Outcome::reached);
+    refined += c.refined ? 1 : 0;
+    CHECK((tool_in_frame0(calibrated, c.solution.q) - c.goal.translation).norm() < 1e-5);
+    if (const std::optional<std::vector<double>> p = platform.correct(q))
+      worst_platform_m = std::max(worst_platform_m, (tool_in_frame0(calibrated, *p) - c.goal.translation).norm());
+    else
+      ++refused;
+    const correct::JointCorrection d = alone.correct(q);
+    REQUIRE(d.solution.outcome == correct::Outcome::reached);
+    CHECK(d.solution.residual_m <= 1e-7);
+    CHECK(d.solution.residual_rad <= 1e-7);
+    for (std::size_t j = 0; j < q.size(); ++j) CHECK(d.solution.q[j] == doctest::Approx(c.solution.q[j]).epsilon(1e-4));
+  }
+  MESSAGE("platform step alone leaves up to " << worst_platform_m * 1e6 << " um, refuses " << refused
+                                              << " targets; refined " << refined << " of 20");
+  CHECK((worst_platform_m > 1e-5 || refused > 0));
+  CHECK(refined > 0);
+}
+
+TEST_CASE("joint targets: models the block cannot carry get the Newton solve alone") {
+  const model::RobotModel start = robot("puma560.yaml");
+  model::RobotModel calibrated = perturbed(start, 1e-3, 1e-3, 4);
+  calibrated.joints[3].mass_kg = 2.0;  // the block carries one set of masses
+  correct::JointCorrector pc(start, calibrated);
+  CHECK_FALSE(pc.platform_step());
+  CHECK(pc.platform_note().find("mass") != std::string::npos);
+  const correct::JointCorrection c = pc.correct(std::vector<double>{0.1, -0.4, 0.3, 0.2, -0.5, 0.7});
+  CHECK(c.refined);
+  CHECK(c.solution.outcome == correct::Outcome::reached);
+  CHECK_THROWS_AS(pc.correct(std::vector<double>{0.1, 0.2}), std::invalid_argument);
+}
+
+TEST_CASE("solve_pose: reachable poses reached within the limits, from a seed in the same branch") {
+  const model::RobotModel m = robot("puma560.yaml");
+  std::mt19937_64 rng(9);
+  for (int trial = 0; trial < 20; ++trial) {
+    const std::vector<double> q = random_readings(rng);
+    const model::Transform goal = model::forward_kinematics(m, q);
+    std::vector<double> seed = q;
+    for (double& v : seed) v += std::uniform_real_distribution<double>(-0.05, 0.05)(rng);
+    const correct::Solution s = correct::solve_pose(m, goal, true, seed);
+    REQUIRE(s.outcome == correct::Outcome::reached);
+    for (std::size_t j = 0; j < q.size(); ++j) CHECK(s.q[j] == doctest::Approx(q[j]).epsilon(1e-5));
+    const correct::Solution point = correct::solve_pose(m, goal, false, seed);
+    REQUIRE(point.outcome == correct::Outcome::reached);
+    CHECK((model::forward_kinematics(m, point.q).translation - goal.translation).norm() < 1e-7);
+  }
+}
+
+TEST_CASE("solve_pose: out of reach, joint limits and a bad seed are reported, never returned as reached") {
+  model::RobotModel m = robot("puma560.yaml");
+  for (model::Joint& j : m.joints) j.lower = -(j.upper = std::numeric_limits<double>::infinity());
+  const std::vector<double> seed = {0.1, -0.4, 0.3, 0.2, -0.5, 0.7};
+  model::Transform far = model::forward_kinematics(m, seed);
+  far.translation *= 5.0;
+  const correct::Solution out = correct::solve_pose(m, far, false, seed);
+  CHECK(out.outcome == correct::Outcome::out_of_reach);
+  CHECK(out.residual_m > 1.0);
+  CHECK(std::string(correct::outcome_name(out.outcome)) == "out-of-reach");
+
+  // A goal only the first joint beyond its limit reaches.
+  model::RobotModel limited = m;
+  limited.joints[0].lower = -0.2;
+  limited.joints[0].upper = 0.2;
+  std::vector<double> beyond = seed;
+  beyond[0] = 0.6;
+  const correct::Solution blocked = correct::solve_pose(limited, model::forward_kinematics(m, beyond), true, seed);
+  CHECK(blocked.outcome == correct::Outcome::joint_limit);
+  CHECK(blocked.q[0] <= 0.2);
+  CHECK(blocked.residual_m > 1e-3);
+  CHECK_THROWS_AS(correct::solve_pose(m, far, false, std::vector<double>{0.0}), std::invalid_argument);
+}
+
+TEST_CASE("Cartesian targets: base and device frames give the same readings; the seed's wrist is kept") {
+  model::RobotModel start = robot("puma560.yaml");
+  start.base_T_frame0 = model::Transform{};
+  model::RobotModel calibrated = perturbed(start, 1e-3, 1e-3, 6);
+  calibrated.base_T_frame0.translation = {1.5, -0.3, 0.2};
+  calibrated.base_T_frame0.rotation = Eigen::AngleAxisd(0.7, model::Vector3::UnitZ()).toRotationMatrix();
+  const correct::CartesianSolver in_base(start, calibrated, correct::TargetFrame::base);
+  const correct::CartesianSolver in_device(start, calibrated, correct::TargetFrame::device);
+  const std::vector<double> q = {0.1, -0.4, 0.3, 0.2, -0.5, 0.7};
+  model::RobotModel arm = calibrated;
+  arm.base_T_frame0 = model::Transform{};
+  const model::Transform base_T_goal = model::forward_kinematics(start, q);  // start's base is the identity
+  const correct::CartesianSolution a = in_base.solve(base_T_goal, true, q);
+  const correct::CartesianSolution b = in_device.solve(calibrated.base_T_frame0 * base_T_goal, true, q);
+  REQUIRE(a.calibrated.outcome == correct::Outcome::reached);
+  REQUIRE(b.calibrated.outcome == correct::Outcome::reached);
+  REQUIRE(a.nominal.outcome == correct::Outcome::reached);
+  for (std::size_t j = 0; j < q.size(); ++j) {
+    CHECK(a.calibrated.q[j] == doctest::Approx(b.calibrated.q[j]).epsilon(1e-6));
+    CHECK(a.nominal.q[j] == doctest::Approx(q[j]).epsilon(1e-6));
+  }
+  CHECK((model::forward_kinematics(arm, a.calibrated.q).translation - base_T_goal.translation).norm() < 1e-7);
+  // The wrist flipped (q4 + pi, -q5, q6 + pi): the same pose; each seed keeps its own branch.
+  const std::vector<double> wrist = {0.1, -0.4, 0.3, -0.8, -0.5, 0.7};
+  const std::vector<double> flipped = {0.1, -0.4, 0.3, -0.8 + std::numbers::pi, 0.5, 0.7 + std::numbers::pi};
+  const model::Transform pose = model::forward_kinematics(start, wrist);
+  const correct::CartesianSolution w = in_base.solve(pose, true, wrist), f = in_base.solve(pose, true, flipped);
+  REQUIRE(w.calibrated.outcome == correct::Outcome::reached);
+  REQUIRE(f.calibrated.outcome == correct::Outcome::reached);
+  CHECK(std::abs(w.calibrated.q[3] - wrist[3]) < 0.01);
+  CHECK(std::abs(f.calibrated.q[3] - flipped[3]) < 0.01);
+}
+
+TEST_CASE("nominal_from_record undoes the recorded changes; the spread is the covariance propagated") {
+  const model::RobotModel start = robot("puma560.yaml");
+  const std::vector<core::ParameterId> ids = {{core::ParameterKind::link_a, 1},
+                                              {core::ParameterKind::link_theta, 2},
+                                              {core::ParameterKind::tool_x, 0},
+                                              {core::ParameterKind::tool_rz, 0},
+                                              {core::ParameterKind::base_y, 0}};
+  Eigen::VectorXd change(5);
+  change << 1e-3, 2e-3, -5e-4, 3e-3, 0.02;
+  model::RobotModel calibrated = model::apply_parameter_errors(start, ids, change);
+  calibrated.calibration = model::CalibrationRecord{};
+  const double stddev[5] = {1e-5, 2e-5, 3e-5, 4e-5, 5e-5};
+  for (std::size_t k = 0; k < ids.size(); ++k)
+    calibrated.calibration->parameters.push_back(
+        {model::parameter_name(ids[k]), change(static_cast<Eigen::Index>(k)), stddev[k]});
+  const model::RobotModel nominal = correct::nominal_from_record(calibrated);
+  const std::vector<double> q = {0.1, -0.4, 0.3, 0.2, -0.5, 0.7};
+  const model::Transform want = model::forward_kinematics(start, q), got = model::forward_kinematics(nominal, q);
+  CHECK((want.translation - got.translation).norm() < 1e-12);
+  CHECK((want.rotation - got.rotation).norm() < 1e-12);
+  CHECK_THROWS_AS(correct::nominal_from_record(start), model::InputError);
+
+  const auto covariance = correct::record_covariance(calibrated);
+  REQUIRE(covariance);
+  const Eigen::MatrixXd e = model::parameter_jacobian(calibrated, q, ids);
+  double with_base = 0.0, without_base = 0.0;
+  for (Eigen::Index k = 0; k < 5; ++k) {
+    const double s2 = stddev[k] * stddev[k] * e.col(k).head<3>().squaredNorm();
+    with_base += s2;
+    if (k != 4) without_base += s2;
+  }
+  CHECK(correct::predicted_spread(calibrated, *covariance, q, true).position_m ==
+        doctest::Approx(std::sqrt(with_base)));
+  CHECK(correct::predicted_spread(calibrated, *covariance, q, false).position_m ==
+        doctest::Approx(std::sqrt(without_base)));
+  CHECK(correct::predicted_spread(calibrated, *covariance, q, true).orientation_rad > 0.0);
+}
