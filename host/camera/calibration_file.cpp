@@ -1,12 +1,12 @@
 #include "host/camera/calibration_file.hpp"
 
 #include <cmath>
-#include <fstream>
 #include <limits>
 
 #include <yaml-cpp/yaml.h>
 #include <opencv2/core/eigen.hpp>
 
+#include "host/files/input_file.hpp"
 #include "host/files/output_file.hpp"
 #include "host/model/number_text.hpp"
 
@@ -14,10 +14,17 @@ namespace kincal::camera {
 
 namespace {
 
-cv::FileStorage open_for_reading(const std::string& path) {
+// The file's text through the input layer (a regular file within kSettingsFile's limit, UTF-8).
+std::string read_camera_text(const std::string& path) {
+  std::string text = files::read_text_or_throw<CalibrationError>(path, files::kSettingsFile);
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw CalibrationError(path + ": empty file");
+  return text;
+}
+
+cv::FileStorage open_for_reading(const std::string& path, const std::string& text) {
   cv::FileStorage fs;
   try {
-    fs.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);
+    fs.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
   } catch (const cv::Exception& e) {
     throw CalibrationError(path + ": not an OpenCV YAML file (" + e.what() + ")");
   }
@@ -170,10 +177,10 @@ void save_camera_ros(const std::string& path, const CameraModel& camera, const s
 }
 
 // A ROS camera_info file (no "%YAML:1.0" line, which OpenCV needs and yaml-cpp refuses).
-CameraModel load_ros_camera(const std::string& path) {
+CameraModel load_ros_camera(const std::string& path, const std::string& text) {
   YAML::Node root;
   try {
-    root = YAML::LoadFile(path);
+    root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
     throw CalibrationError(path + ": not a YAML file (" + e.what() + ")");
   }
@@ -202,11 +209,9 @@ CameraModel load_ros_camera(const std::string& path) {
 }
 
 CameraModel load_camera(const std::string& path) {
-  std::ifstream in(path);
-  std::string first_line;
-  std::getline(in, first_line);
-  if (in && first_line.rfind("%YAML:", 0) != 0) return load_ros_camera(path);
-  cv::FileStorage fs = open_for_reading(path);
+  const std::string text = read_camera_text(path);
+  if (text.rfind("%YAML:", 0) != 0) return load_ros_camera(path, text);
+  cv::FileStorage fs = open_for_reading(path, text);
   const cv::Mat k = read_matrix(fs, path, "camera_matrix", 3, 3);
   const cv::Mat d = read_matrix(fs, path, "distortion_coefficients", 1, 5);
   return camera_from(k, d, read_size(fs, path));
@@ -227,7 +232,7 @@ void save_stereo(const std::string& path, const StereoCalibration& c) {
 }
 
 StereoCalibration load_stereo(const std::string& path) {
-  cv::FileStorage fs = open_for_reading(path);
+  cv::FileStorage fs = open_for_reading(path, read_camera_text(path));
   const cv::Size size = read_size(fs, path);
   StereoCalibration c;
   const cv::Mat m1 = read_matrix(fs, path, "M1", 3, 3), d1 = read_matrix(fs, path, "D1", 1, 5);
@@ -259,7 +264,7 @@ void save_hand_eye(const std::string& path, const HandEyeCalibration& c) {
 }
 
 HandEyeCalibration load_hand_eye(const std::string& path) {
-  cv::FileStorage fs = open_for_reading(path);
+  cv::FileStorage fs = open_for_reading(path, read_camera_text(path));
   HandEyeCalibration c;
   c.gripper_T_camera = isometry_of(read_matrix(fs, path, "gripper_T_camera", 4, 4), path, "gripper_T_camera");
   c.base_T_target = isometry_of(read_matrix(fs, path, "base_T_target", 4, 4), path, "base_T_target");

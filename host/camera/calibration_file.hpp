@@ -25,6 +25,10 @@
 // to_platform converts a camera to the firmware's camera block (shared::CameraIntrinsics, float
 // and u16, as the platform stores it), so a host calibration loads into the platform as it is.
 //
+// Reading: every loader reads the file through files::read_text (input_file.hpp, kSettingsFile):
+// a regular file of at most 16 MiB, UTF-8 (a byte-order mark accepted), CRLF accepted; a
+// directory, device or FIFO, UTF-16/Latin-1 text or an empty file is refused by name.
+//
 // Errors: CalibrationError naming the file and, for a bad or missing key, the key ("PATH: key
 // 'camera_matrix' missing or not a 3x3 matrix"); "cannot write" / "cannot read" for I/O.
 // to_platform refuses (CalibrationError naming the parameter) a non-finite value, one beyond

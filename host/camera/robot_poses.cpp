@@ -5,12 +5,13 @@
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
+#include <sstream>
 #include <map>
 #include <optional>
 #include <stdexcept>
 
 #include "host/camera/intrinsics.hpp"
+#include "host/files/input_file.hpp"
 
 namespace kincal::camera {
 
@@ -47,7 +48,7 @@ double number_of(const std::string& field, const std::string& source, int line) 
   char* end = nullptr;
   const double v = std::strtod(field.c_str(), &end);
   if (field.empty() || end != field.c_str() + field.size() || !std::isfinite(v))
-    bad_pose(source, line, "'" + field + "' is not a finite number");
+    bad_pose(source, line, "'" + files::excerpt(field) + "' is not a finite number");
   return v;
 }
 
@@ -172,8 +173,7 @@ std::vector<RobotPose> parse_robot_poses(std::istream& in, const std::string& so
 }
 
 std::vector<RobotPose> read_robot_poses(const std::string& path, RotationColumns rotation) {
-  std::ifstream in(path);
-  if (!in) throw CalibrationError(path + ": cannot read");
+  std::istringstream in(files::read_text_or_throw<CalibrationError>(path, files::kDatasetFile));
   return parse_robot_poses(in, path, rotation);
 }
 

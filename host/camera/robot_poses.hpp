@@ -16,6 +16,9 @@
 //  - 4x4 matrices, row-major: each line holds 16 numbers (one pose) or 4 numbers (one row; four
 //    such lines make a pose), separated by spaces, tabs or commas. The last row must be
 //    0 0 0 1 and the rotation orthonormal with determinant +1, within 1e-3.
+// read_robot_poses reads through files::read_text (kDatasetFile: a regular file of at most
+// 256 MiB, UTF-8 with an optional byte-order mark, CRLF accepted; directories, devices, FIFOs,
+// UTF-16/Latin-1 refused by name).
 // Errors (CalibrationError "FILE:LINE: what"): an unreadable file, no poses, a header without
 // x,y,z or a rotation, rx,ry,rz without `rotation` named, a field that is not a finite number, a
 // row with too few fields, a quaternion or rotation out of tolerance, an incomplete matrix, and a

@@ -1,14 +1,13 @@
 #include "host/cli/colour_table.hpp"
 
-#include <fstream>
 #include <iostream>
-#include <iterator>
 #include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "host/cli/number_options.hpp"
+#include "host/files/input_file.hpp"
 #include "host/files/output_file.hpp"
 #include "host/vision/colour_table_builder.hpp"
 #include "host/vision/image_labeling.hpp"
@@ -54,9 +53,8 @@ int run_colour_table(const ColourTableOptions& o) {
 }  // namespace
 
 core::ColourClassTable read_colour_table(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path + ": cannot open the colour table");
-  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string file = files::read_text(path, files::kColourTableFile);
+  const std::vector<std::uint8_t> bytes(file.begin(), file.end());
   core::ColourClassTable table;
   switch (core::parse_colour_table(bytes, table)) {
     case core::ColourTableStatus::kOk:

@@ -14,8 +14,10 @@ namespace kincal::cli {
 
 void add_colour_table_command(CLI::App& app, int& status);
 
-// A table file as `kincal colour-table` writes it; std::runtime_error naming the file and what is
-// wrong with it (size, magic, version, colour space, CRC).
+// A table file as `kincal colour-table` writes it, read through files::read_text as bytes
+// (kColourTableFile: a regular file of at most 1 MiB; directories, devices, FIFOs refused by
+// name); std::runtime_error naming the file and what is wrong with it (size, magic, version,
+// colour space, CRC).
 core::ColourClassTable read_colour_table(const std::string& path);
 
 }  // namespace kincal::cli

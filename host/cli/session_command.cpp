@@ -446,8 +446,7 @@ void add_session_command(CLI::App& app, int& status) {
   cmd->add_option("--rig", a->rig, "platform (camera + rangers over CAN) or stereo (beacon and stereo pair)")
       ->check(CLI::IsMember({"platform", "stereo"}))
       ->capture_default_str();
-  cmd->add_option("--plan", a->plan, "calibration poses (joints CSV, e.g. from `kincal plan`)")
-      ->check(CLI::ExistingFile);
+  cmd->add_option("--plan", a->plan, "calibration poses (joints CSV, e.g. from `kincal plan`)");
   cmd->add_option("--sweeps", a->sweeps,
                   "single-joint sweeps with this many readings per joint (default 10 on the stereo rig and with "
                   "--discover)")
@@ -471,12 +470,10 @@ void add_session_command(CLI::App& app, int& status) {
   cmd->add_option("--right", a->right, "real stereo rig: the right camera's frames, as --left")->expected(1, -1);
   cmd->add_option("--stereo", a->stereo,
                   "real stereo rig: the calibrated pair (`kincal camera stereo`); positions are measured in the "
-                  "left camera's frame (x right, y down, z forward): the model's base is placed in it")
-      ->check(CLI::ExistingFile);
+                  "left camera's frame (x right, y down, z forward): the model's base is placed in it");
   cmd->add_option("--colour-table", a->colour_table,
                   "real stereo rig: the beacon's colour class (`kincal colour-table`); without it the beacon is the "
-                  "brightest blob")
-      ->check(CLI::ExistingFile);
+                  "brightest blob");
   cmd->add_option("--pixel-sigma", a->pixel_sigma_px,
                   "real stereo rig: centroid noise (px) the measurements' covariance assumes; the identification "
                   "estimates any excess as model error")

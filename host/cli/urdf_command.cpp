@@ -1,11 +1,11 @@
 #include "host/cli/urdf_command.hpp"
 
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <sstream>
 
 #include "host/cli/model_option.hpp"
+#include "host/files/input_file.hpp"
 #include "host/files/output_file.hpp"
 #include "host/model/model_file.hpp"
 #include "host/model/urdf.hpp"
@@ -29,11 +29,9 @@ int run_urdf(const UrdfArgs& a) {
       // The chain options name the original's chain; a YAML model has none.
       const model::RobotModel m =
           model::load_model(a.model.path, model::is_urdf_path(a.model.path) ? a.model.ends : model::UrdfChainEnds{});
-      std::ifstream in(a.original);
-      if (!in) throw model::InputError(a.original + ": cannot open the URDF file");
-      std::ostringstream original;
-      original << in.rdbuf();
-      const model::CalibratedUrdf c = model::write_calibrated_urdf(original.str(), a.original, a.model.ends, m);
+      // Read with its byte-order mark, if any: every byte but the changed values is written back.
+      const std::string original = files::read_text(a.original, files::kOriginalUrdfFile);
+      const model::CalibratedUrdf c = model::write_calibrated_urdf(original, a.original, a.model.ends, m);
       text = c.text;
       std::ostream& report = a.out.empty() ? std::cerr : std::cout;
       report << print_registration(c);

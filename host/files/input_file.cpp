@@ -53,10 +53,11 @@ std::size_t utf8_length(std::string_view text, std::size_t i) {
   return n;
 }
 
-// Removes a UTF-8 byte-order mark; throws for UTF-16/32 and for bytes that are not UTF-8.
+// Removes a UTF-8 byte-order mark (unless the kind keeps it); throws for UTF-16/32 and for bytes
+// that are not UTF-8.
 void decode(std::string& text, const std::string& path, const InputKind& kind) {
   if (kind.decoding == Decoding::none) return;
-  if (text.starts_with("\xEF\xBB\xBF")) text.erase(0, 3);
+  if (kind.decoding == Decoding::utf8 && text.starts_with("\xEF\xBB\xBF")) text.erase(0, 3);
   if (text.starts_with("\xFF\xFE") || text.starts_with("\xFE\xFF"))
     refuse(path, std::string("UTF-16 text (byte-order mark ") + (text[0] == '\xFF' ? "FF FE" : "FE FF") + "): a " +
                      kind.what + " must be UTF-8 (save it as UTF-8)");

@@ -392,7 +392,22 @@ TEST_CASE("calibration files round-trip in OpenCV YAML and name bad keys") {
   std::ofstream(dir.file("partial.yaml")) << "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n";
   CHECK(error_of([&] { (void)load_camera(dir.file("partial.yaml")); }) ==
         dir.file("partial.yaml") + ": key 'camera_matrix' missing or not a 3x3 matrix");
-  CHECK(error_of([&] { (void)load_camera(dir.file("none.yaml")); }) == dir.file("none.yaml") + ": cannot read");
+  CHECK(error_of([&] { (void)load_camera(dir.file("none.yaml")); }) == dir.file("none.yaml") + ": no such file");
+  // Read through the input layer: a directory, an empty file and Latin-1 text are refused by name.
+  CHECK(error_of([&] { (void)load_stereo(dir.path.string()); }) == dir.path.string() + ": is a directory, not a file");
+  std::ofstream(dir.file("empty.yaml")) << "\n";
+  CHECK(error_of([&] { (void)load_camera(dir.file("empty.yaml")); }) == dir.file("empty.yaml") + ": empty file");
+  std::ofstream(dir.file("latin1.yaml")) << "%YAML:1.0\n# caf\xe9\n";
+  CHECK(contains(error_of([&] { (void)load_camera(dir.file("latin1.yaml")); }), "not UTF-8"));
+  // A byte-order mark and CRLF line ends, as Windows editors write, are read.
+  {
+    std::ofstream crlf(dir.file("crlf.yaml"), std::ios::binary);
+    std::string text = "\xef\xbb\xbf";
+    std::ifstream in(dir.file("camera.yaml"), std::ios::binary);
+    for (std::string line; std::getline(in, line);) text += line + "\r\n";
+    crlf << text;
+  }
+  CHECK(load_camera(dir.file("crlf.yaml")).camera_matrix == load_camera(dir.file("camera.yaml")).camera_matrix);
   CHECK(contains(error_of([&] { (void)load_hand_eye(dir.file("camera.yaml")); }), "key 'gripper_T_camera' missing"));
 }
 

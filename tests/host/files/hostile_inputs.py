@@ -12,6 +12,8 @@ threads, each table case in its own directory. Prints the number of cases per su
 wall time.
 
 usage: hostile_inputs.py KINCAL KINCAL_PLATFORM ROBOTS_DIR CAMERA_IMAGES_DIR WORK_DIR
+(KINCAL_HOSTILE_JOBS: threads, 3; KINCAL_HOSTILE_ONLY: a regular expression, only the table's cases
+whose names it matches)
 """
 import csv, hashlib, math, os, random, re, shutil, socket, stat, struct, subprocess, sys, threading, time, zlib
 from collections import Counter
@@ -179,6 +181,7 @@ case("colour-table:out=positive", ct + ["-o", "pos.png"], r"-o pos\.png is the s
 case("colour-table:out=negative", ct + ["-o", "neg.png"], r"same file as --negative", protect=["pos.png", "neg.png"])
 case("colour-table:max-distance nan", ct + ["-o", "t.kcct", "--max-distance", "nan"], r"not a finite number")
 case("colour-table:max-distance 1e308", ct + ["-o", "t.kcct", "--max-distance", "1e308"], r"1e\+308 is too large: must be <= 10\b")
+run(ct + ["-o", "beacon.kcct"])  # a valid table for the reader table below
 
 
 # --- images over the size limit (a valid 20000 x 20000 PNG of a few hundred kB) and a PGM whose header lies
@@ -275,7 +278,8 @@ shared_inputs = [D, Q, E, LOG, puma, arid, stanford, ur10_yaml, ur10_urdf, os.pa
 shared_hashes = {p: sha(p) for p in shared_inputs}
 six = ["--joints", "q1,q2,q3,q4,q5,q6", "--joint-unit", "rad", "--position", "x,y,z", "--position-unit", "m"]
 sess_resume = ["session", "--model", arid, "--poses", "12", "--validation", "3", "--resume", "--journal"]
-limits = {"dataset": 256, "export": 256, "model": 16, "urdf": 64, "journal": 256, "candump": 256, "platform": 16}
+limits = {"dataset": 256, "export": 256, "model": 16, "urdf": 64, "journal": 256, "candump": 256, "platform": 16,
+          "camera": 16, "colour table": 1}
 
 
 def tcase(name, argv, pattern, rc_ok=False, make=None, absent=(), stdin_bytes=None, max_message=3000, timeout=180):
@@ -351,8 +355,8 @@ input_classes = [
     ("named pipe", lambda p, t, k: (os.mkfifo(p), {p: is_fifo(p)})[1], r"is a named pipe \(FIFO\), not a regular file"),
     ("socket", lambda p, t, k: (make_socket(p), {p: is_socket(p)})[1], r"is a socket, not a regular file"),
     ("missing", lambda p, t, k: {}, r"no such file|does not exist|[Nn]o journal"),
-    ("UTF-16 with BOM", lambda p, t, k: write_bytes(p, t.decode().encode("utf-16")), r"UTF-16 text \(byte-order mark FF FE\)"),
-    ("UTF-16 without BOM", lambda p, t, k: write_bytes(p, t.decode().encode("utf-16-le")), r":1:2: a NUL byte \(byte 1\)"),
+    ("UTF-16 with BOM", lambda p, t, k: write_bytes(p, t.decode(errors="replace").encode("utf-16")), r"UTF-16 text \(byte-order mark FF FE\)"),
+    ("UTF-16 without BOM", lambda p, t, k: write_bytes(p, t.decode(errors="replace").encode("utf-16-le")), r":1:2: a NUL byte \(byte 1\)"),
     ("Latin-1", lambda p, t, k: write_bytes(p, b"# caf\xe9\n" + t), r":1:6: byte 0xE9 \(byte 5\) is not UTF-8"),
     ("Latin-1 late", lambda p, t, k: write_bytes(p, t + b"# \xb5m\n"), r":[0-9]+:3: byte 0xB5 \(byte [0-9]+\) is not UTF-8"),
     ("binary", lambda p, t, k: write_bytes(p, garbage), r"NUL byte|not UTF-8"),
@@ -387,6 +391,17 @@ readers = [
     ("monitor --replay", "candump", "in.log", LOG, ["monitor", "--replay", "{in}"], [], True),
     ("platform load --geometry", "platform", "in.yaml", os.path.join(work, "platform.yaml"),
      ["platform", "load", "--can", "vcan-none", "--geometry", "{in}"], [], False),
+    ("urdf --original", "urdf", "in.urdf", ur10_urdf,
+     ["urdf", "--model", ur10_urdf, "--tip-link", "ft_frame", "--original", "{in}", "-o", "o.urdf"], ["o.urdf"], True),
+    ("session --plan", "dataset", "in.csv", Q,
+     ["session", "--model", puma, "--plan", "{in}", "--journal", "j.journal", "--out", "o.yaml"], ["o.yaml", "j.journal"], False),
+    ("camera hand-eye --camera", "camera", "in.yaml", os.path.join(work, "cam.yaml"),
+     ["camera", "hand-eye"] + board + ["--camera", "{in}", "--poses", os.path.join(camera_dir, "poses.csv"), "--images", bg,
+                                       "-o", "he.yaml"], ["he.yaml"], True),
+    ("camera hand-eye --poses", "dataset", "in.csv", os.path.join(camera_dir, "poses.csv"),
+     ["camera", "hand-eye"] + board + ["--camera", os.path.join(work, "cam.yaml"), "--poses", "{in}", "--images", bg, "-o", "he.yaml"], ["he.yaml"], True),
+    ("blobs --colour-table", "colour table", "in.kcct", os.path.join(work, "beacon.kcct"),
+     ["blobs", "--colour-table", "{in}", img], [], False),
 ]
 
 
@@ -399,6 +414,9 @@ def table_cases():
             if kind == "journal" and cls in ("UTF-16 with BOM", "UTF-16 without BOM", "Latin-1",
                                              "Latin-1 late", "binary", "2 MB first line", "empty"):
                 pattern = r"in\.journal:1: the journal (header is damaged|has no header)|in\.journal:[0-9]+: damaged record"
+            if kind == "colour table" and cls in ("UTF-16 with BOM", "UTF-16 without BOM", "Latin-1", "Latin-1 late",
+                                                  "binary", "2 MB first line", "empty"):
+                pattern = r"in\.kcct: (not a colour table \([0-9]+ bytes, expected [0-9]+\)|3 MiB is over the limit)"  # bytes
             if kind == "journal" and cls == "Latin-1 late":
                 continue  # a last line that fails its CRC is a torn line, cut off by design
             if cls == "empty" and kind == "candump":
@@ -545,8 +563,9 @@ def table_cases():
 
 
 table_cases()
+only = re.compile(os.environ.get("KINCAL_HOSTILE_ONLY", ""))  # a developer's filter of the table's cases by name
 with ThreadPoolExecutor(max_workers=int(os.environ.get("KINCAL_HOSTILE_JOBS", "3"))) as pool:
-    for future in [pool.submit(go) for _, go in pending]:
+    for future in [pool.submit(go) for name, go in pending if only.search(name)]:
         future.result()
 leftovers = [os.path.join(d, f) for d, _, fs in os.walk(work) for f in fs if ".kincal-" in f]
 if leftovers:
