@@ -104,7 +104,7 @@ IntrinsicCalibration calibrate_intrinsics(const std::vector<BoardDetection>& det
   refuse_if_too_few();
   const cv::Size image_size = detections[used.front()].image_size;
 
-  cv::Mat camera_matrix, distortion, std_intrinsics, per_view;
+  cv::Mat camera_matrix, distortion, per_view;
   std::vector<cv::Mat> rvecs, tvecs;
   const auto solve = [&] {
     std::vector<std::vector<cv::Point3f>> object_points;
@@ -113,7 +113,7 @@ IntrinsicCalibration calibrate_intrinsics(const std::vector<BoardDetection>& det
       object_points.push_back(detections[u].board_m);
       image_points.push_back(detections[u].image_px);
     }
-    cv::Mat std_extrinsics;
+    cv::Mat std_intrinsics, std_extrinsics;
     result.rms_px = cv::calibrateCamera(object_points, image_points, image_size, camera_matrix, distortion, rvecs,
                                         tvecs, std_intrinsics, std_extrinsics, per_view, options.flags);
   };
@@ -155,7 +155,6 @@ IntrinsicCalibration calibrate_intrinsics(const std::vector<BoardDetection>& det
   result.camera.image_size = image_size;
   result.camera.camera_matrix = cv::Matx33d(camera_matrix);
   for (int i = 0; i < 5; ++i) result.camera.distortion[static_cast<std::size_t>(i)] = distortion.at<double>(i);
-  for (int i = 0; i < 9; ++i) result.std_dev[static_cast<std::size_t>(i)] = std_intrinsics.at<double>(i);
 
   double max_tilt_rad = 0;
   std::vector<bool> cells(kGridCols * kGridRows, false);
@@ -178,6 +177,14 @@ IntrinsicCalibration calibrate_intrinsics(const std::vector<BoardDetection>& det
   }
   result.coverage =
       static_cast<double>(std::count(cells.begin(), cells.end(), true)) / static_cast<double>(cells.size());
+  std::vector<SolvedView> solved;
+  for (std::size_t k = 0; k < used.size(); ++k) {
+    const ViewReport& v = result.views[used[k]];
+    solved.push_back({&detections[used[k]].board_m, &detections[used[k]].image_px, v.camera_r_board, v.camera_t_board_m});
+  }
+  result.uncertainty = intrinsics_covariance(result.camera, solved, options.flags);
+  for (int i = 0; i < 9; ++i)
+    result.std_dev[static_cast<std::size_t>(i)] = std::sqrt(result.uncertainty.covariance(i, i));
 
   if (result.views_used < options.recommended_views) {
     result.warnings.push_back("only " + std::to_string(result.views_used) + " views used; " +
@@ -217,6 +224,28 @@ std::string describe(const IntrinsicCalibration& c) {
   out << "reprojection RMS: " << fixed(c.rms_px, 4) << " px\n";
   for (std::size_t i = 0; i < kNames.size(); ++i) {
     out << kNames[i] << ": " << general(values[i]) << " +- " << general(c.std_dev[i]) << "\n";
+  }
+  out << "corner sigma (from the residuals): " << fixed(c.uncertainty.corner_sigma_px, 4) << " px\n";
+  const ProjectionSigmaGrid grid = projection_sigma_grid(c.camera, c.uncertainty, 16, 12);
+  std::vector<double> sigmas;
+  cv::Point largest_at;
+  double largest_px = 0;
+  for (int r = 0; r < grid.sigma_px.rows; ++r) {
+    for (int col = 0; col < grid.sigma_px.cols; ++col) {
+      const double s = grid.sigma_px.at<double>(r, col);
+      if (!std::isfinite(s)) continue;
+      sigmas.push_back(s);
+      if (s > largest_px) {
+        largest_px = s;
+        largest_at = {col, r};
+      }
+    }
+  }
+  if (!sigmas.empty()) {
+    std::nth_element(sigmas.begin(), sigmas.begin() + static_cast<std::ptrdiff_t>(sigmas.size() / 2), sigmas.end());
+    out << "projection sigma over the image (worst axis, 16x12 grid): median " << fixed(sigmas[sigmas.size() / 2], 3)
+        << " px, largest " << fixed(largest_px, 3) << " px at (" << fixed(grid.x_px[static_cast<std::size_t>(largest_at.x)], 0)
+        << ", " << fixed(grid.y_px[static_cast<std::size_t>(largest_at.y)], 0) << ")\n";
   }
   out << "coverage: " << fixed(100 * c.coverage, 0) << " %\n";
   for (const ViewReport& v : c.views) {

@@ -30,6 +30,10 @@
 // Errors: CalibrationError when fewer than options.min_views views are usable; its message
 // counts the views and lists each rejected one with its reason. Detections must carry their
 // board coordinates (detect_board does).
+// Uncertainty: the intrinsics' covariance with the view poses marginalised and the corner noise
+// estimated from the residuals (host/camera/uncertainty.hpp); std_dev is its diagonal's root.
+// describe() prints sigma and the worst-axis projection sigma over the image (its median and
+// largest on a 16 x 12 grid, and where the largest is).
 // Cost: one Levenberg-Marquardt solve in OpenCV, about a millisecond per view and iteration.
 #pragma once
 
@@ -41,6 +45,7 @@
 #include <opencv2/core.hpp>
 
 #include "host/camera/board.hpp"
+#include "host/camera/uncertainty.hpp"
 
 namespace kincal::camera {
 
@@ -81,7 +86,8 @@ struct IntrinsicOptions {
 
 struct IntrinsicCalibration {
   CameraModel camera;
-  std::array<double, 9> std_dev{};  // fx fy cx cy (px), k1 k2 p1 p2 k3
+  std::array<double, 9> std_dev{};  // fx fy cx cy (px), k1 k2 p1 p2 k3: sqrt of uncertainty's diagonal
+  IntrinsicsCovariance uncertainty;  // host/camera/uncertainty.hpp: poses marginalised, sigma from residuals
   double rms_px = 0;
   double coverage = 0;  // fraction of the 8 x 6 cells holding a corner
   int views_used = 0;

@@ -3,6 +3,7 @@
 // wrong-board and shifted-pair gates. Registered only where opencv-doc is installed.
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -66,6 +67,34 @@ TEST_CASE("OpenCV's 13 sample views calibrate at least as well as OpenCV's own r
   CHECK(c.views_used == 13);  // every view passes the outlier gate
   CHECK(c.rms_px <= recipe_px);
   for (const ViewReport& v : c.views) CHECK(contains(v.detector, "+ cornerSubPix"));
+}
+
+TEST_CASE("the intrinsics' standard deviations agree with OpenCV's stdDeviationsIntrinsics on the 13 views") {
+  const std::vector<BoardDetection> d = detect_samples(parse_board("chessboard:9x6:0.025"), "left");
+  const IntrinsicCalibration c = calibrate_intrinsics(d);
+  std::vector<std::vector<cv::Point3f>> board;
+  std::vector<std::vector<cv::Point2f>> image;
+  for (const BoardDetection& v : d) {
+    board.push_back(v.board_m);
+    image.push_back(v.image_px);
+  }
+  cv::Mat k, dist, opencv_std, std_extrinsics, per_view;
+  std::vector<cv::Mat> r, t;
+  cv::calibrateCamera(board, image, cv::Size(640, 480), k, dist, r, t, opencv_std, std_extrinsics, per_view);
+  // OpenCV divides the squared residuals by N - n (corners less parameters), kincal by 2N - n
+  // (residuals less parameters; host/camera/uncertainty.hpp): the rest must agree.
+  const double n = c.uncertainty.parameters, corners = c.uncertainty.corners;
+  CHECK(c.uncertainty.corners == 13 * 54);
+  CHECK(c.uncertainty.parameters == 9 + 6 * 13);
+  const double dof_ratio = std::sqrt((2 * corners - n) / (corners - n));
+  // calibrateCamera's RMS is per corner: SSR = N rms^2.
+  CHECK(c.uncertainty.corner_sigma_px == doctest::Approx(c.rms_px * std::sqrt(corners / (2 * corners - n))).epsilon(1e-6));
+  for (int i = 0; i < 9; ++i) {
+    const double ratio = c.std_dev[static_cast<std::size_t>(i)] * dof_ratio / opencv_std.at<double>(i);
+    MESSAGE("parameter " << i << ": kincal " << c.std_dev[static_cast<std::size_t>(i)] << ", OpenCV "
+                         << opencv_std.at<double>(i) << ", ratio with the same sigma 1 + " << ratio - 1);
+    CHECK(ratio == doctest::Approx(1.0).epsilon(1e-5));
+  }
 }
 
 TEST_CASE("a chessboard of the wrong size is refused, naming the size that fits") {
