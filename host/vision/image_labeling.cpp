@@ -3,7 +3,6 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
-#include <filesystem>
 #include <memory>
 #include <stdexcept>
 
@@ -89,8 +88,6 @@ LabelResult run(const cv::Mat& img, const core::LabelerConfig& config, FillRow f
 }  // namespace
 
 cv::Mat read_image(const std::string& path, bool grey) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw std::runtime_error(path + ": no such file");
   cv::Mat img;
   try {
     files::check_image_header(path);
