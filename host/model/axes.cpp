@@ -60,7 +60,8 @@ LinkResult dh_link(const Frame& f, const AxisLine& next_axis, double d_template,
   const double b = z.dot(u);
   double s = 0.0;
   const double sine = z.cross(u).norm();
-  if (sine > std::sin(parallel_tolerance) * 1e-3) {
+  const bool parallel = sine <= std::sin(parallel_tolerance) * 1e-3;
+  if (!parallel) {
     const double denom = 1.0 - b * b;
     s = (b * u.dot(w0) - z.dot(w0)) / denom;
   } else {
@@ -70,10 +71,24 @@ LinkResult dh_link(const Frame& f, const AxisLine& next_axis, double d_template,
   const Vector3 b_point = next_axis.point + (a_point - next_axis.point).dot(u) * u;
   const Vector3 n = b_point - a_point;
   double a = n.norm();
-  Vector3 x = a > 1e-12 ? Vector3(n / a) : perpendicular(z.cross(u), z, x_hint);
-  if (a <= 1e-12) {
-    x = perpendicular(x, u, x_hint);
-    a = 0.0;
+  Vector3 x;
+  if (!parallel) {
+    // Skew or intersecting: the common normal is along z x u, exactly normal to both axes. (Its
+    // direction from the foot points, n / a, is off by eps |w0| / a: 1e-7 rad where the axes
+    // pass within 1e-9 m of each other.)
+    x = z.cross(u) / sine;
+    a = n.dot(x);
+    if (a < 0.0) {
+      x = -x;
+      a = -a;
+    }
+    if (a <= 1e-12) a = 0.0;
+  } else {
+    x = a > 1e-12 ? Vector3(n / a) : perpendicular(z.cross(u), z, x_hint);
+    if (a <= 1e-12) {
+      x = perpendicular(x, u, x_hint);
+      a = 0.0;
+    }
   }
   keep_sign_of_hint(x, a, x_hint);
   LinkResult r;
