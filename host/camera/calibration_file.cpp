@@ -14,6 +14,9 @@ namespace kincal::camera {
 
 namespace {
 
+// The projection-uncertainty grid in camera files: coarse, a cell about 40 px wide at VGA.
+constexpr int kProjectionGridCols = 16, kProjectionGridRows = 12;
+
 // The file's text through the input layer (a regular file within kSettingsFile's limit, UTF-8).
 std::string read_camera_text(const std::string& path) {
   std::string text = files::read_text_or_throw<CalibrationError>(path, files::kSettingsFile);
@@ -133,6 +136,14 @@ void save_camera(const std::string& path, const IntrinsicCalibration& c, const s
   }
   fs << "per_view_reprojection_errors" << cv::Mat(per_view, true);
   fs << "std_deviations_intrinsics" << cv::Mat(cv::Matx<double, 1, 9>(c.std_dev.data()));
+  const ProjectionSigmaGrid grid =
+      projection_sigma_grid(c.camera, c.uncertainty, kProjectionGridCols, kProjectionGridRows);
+  fs << "intrinsics_covariance" << cv::Mat(c.uncertainty.covariance);
+  fs << "intrinsics_covariance_order" << kIntrinsicsOrder;
+  fs << "corner_sigma_px" << c.uncertainty.corner_sigma_px;
+  fs << "projection_sigma_grid_x_px" << cv::Mat(grid.x_px, true).t();
+  fs << "projection_sigma_grid_y_px" << cv::Mat(grid.y_px, true).t();
+  fs << "projection_sigma_grid_px" << grid.sigma_px;
   fs << "views"
      << "[";
   for (const ViewReport& v : c.views) {
@@ -148,11 +159,12 @@ void save_camera(const std::string& path, const IntrinsicCalibration& c, const s
 }
 
 void save_camera_ros(const std::string& path, const CameraModel& camera, const std::string& camera_name,
-                     const std::vector<ViewReport>& views) {
+                     const std::vector<ViewReport>& views, const std::optional<IntrinsicsCovariance>& uncertainty) {
   const auto matrix = [](const char* key, int rows, int cols, const std::vector<double>& data) {
     std::string text =
         std::string(key) + ":\n  rows: " + std::to_string(rows) + "\n  cols: " + std::to_string(cols) + "\n  data: [";
-    for (std::size_t i = 0; i < data.size(); ++i) text += (i ? ", " : "") + model::shortest_number_text(data[i]);
+    for (std::size_t i = 0; i < data.size(); ++i)
+      text += (i ? ", " : "") + (std::isnan(data[i]) ? std::string(".nan") : model::shortest_number_text(data[i]));
     return text + "]\n";
   };
   const cv::Matx33d& k = camera.camera_matrix;
@@ -166,6 +178,18 @@ void save_camera_ros(const std::string& path, const CameraModel& camera, const s
   text += matrix("rectification_matrix", 3, 3, {1, 0, 0, 0, 1, 0, 0, 0, 1});
   text += matrix("projection_matrix", 3, 4,
                  {k(0, 0), k(0, 1), k(0, 2), 0, k(1, 0), k(1, 1), k(1, 2), 0, k(2, 0), k(2, 1), k(2, 2), 0});
+  if (uncertainty) {
+    const ProjectionSigmaGrid grid =
+        projection_sigma_grid(camera, *uncertainty, kProjectionGridCols, kProjectionGridRows);
+    text += "# kincal: the intrinsics' covariance and the projection uncertainty (ROS ignores these keys)\n";
+    text += matrix("intrinsics_covariance", 9, 9, {uncertainty->covariance.val, uncertainty->covariance.val + 81});
+    text += std::string("intrinsics_covariance_order: \"") + kIntrinsicsOrder + "\"\n";
+    text += "corner_sigma_px: " + model::shortest_number_text(uncertainty->corner_sigma_px) + "\n";
+    text += matrix("projection_sigma_grid_x_px", 1, kProjectionGridCols, grid.x_px);
+    text += matrix("projection_sigma_grid_y_px", 1, kProjectionGridRows, grid.y_px);
+    text += matrix("projection_sigma_grid_px", kProjectionGridRows, kProjectionGridCols,
+                   {grid.sigma_px.begin<double>(), grid.sigma_px.end<double>()});
+  }
   for (const ViewReport& v : views) {
     text += "# view " + v.view + ": " +
             (v.used ? std::to_string(v.corners) + " corners, RMS " + model::shortest_number_text(v.rms_px) + " px, " +
@@ -176,25 +200,31 @@ void save_camera_ros(const std::string& path, const CameraModel& camera, const s
   write_text(path, text);
 }
 
-// A ROS camera_info file (no "%YAML:1.0" line, which OpenCV needs and yaml-cpp refuses).
-CameraModel load_ros_camera(const std::string& path, const std::string& text) {
-  YAML::Node root;
+// A ROS camera_info file's YAML (no "%YAML:1.0" line, which OpenCV needs and yaml-cpp refuses).
+YAML::Node parse_ros(const std::string& path, const std::string& text) {
   try {
-    root = YAML::Load(text);
+    return YAML::Load(text);
   } catch (const YAML::Exception& e) {
     throw CalibrationError(path + ": not a YAML file (" + e.what() + ")");
   }
+}
+
+// A {rows, cols, data} matrix of a ROS file (CV_64F); throws YAML::Exception for a bad scalar.
+cv::Mat ros_matrix(const YAML::Node& root, const std::string& path, const std::string& key, int rows, int cols) {
+  const YAML::Node m = root[key];
+  std::vector<double> data;
+  if (m && m["rows"] && m["cols"] && m["data"] && m["rows"].as<int>() == rows && m["cols"].as<int>() == cols)
+    data = m["data"].as<std::vector<double>>();
+  if (data.size() != static_cast<std::size_t>(rows * cols))
+    throw CalibrationError(path + ": key '" + key + "' missing or not a " + std::to_string(rows) + "x" +
+                           std::to_string(cols) + " matrix");
+  return cv::Mat(data, true).reshape(1, rows);
+}
+
+CameraModel load_ros_camera(const std::string& path, const std::string& text) {
+  const YAML::Node root = parse_ros(path, text);
   try {
-    const auto matrix = [&](const char* key, int rows, int cols) {
-      const YAML::Node m = root[key];
-      std::vector<double> data;
-      if (m && m["rows"] && m["cols"] && m["data"] && m["rows"].as<int>() == rows && m["cols"].as<int>() == cols)
-        data = m["data"].as<std::vector<double>>();
-      if (data.size() != static_cast<std::size_t>(rows * cols))
-        throw CalibrationError(path + ": key '" + key + "' missing or not a " + std::to_string(rows) + "x" +
-                               std::to_string(cols) + " matrix");
-      return cv::Mat(data, true).reshape(1, rows);
-    };
+    const auto matrix = [&](const char* key, int rows, int cols) { return ros_matrix(root, path, key, rows, cols); };
     const std::string model = root["distortion_model"] ? root["distortion_model"].as<std::string>() : "";
     if (model != "plumb_bob")
       throw CalibrationError(path + ": distortion_model '" + model + "': only plumb_bob (k1 k2 p1 p2 k3) is supported");
@@ -215,6 +245,50 @@ CameraModel load_camera(const std::string& path) {
   const cv::Mat k = read_matrix(fs, path, "camera_matrix", 3, 3);
   const cv::Mat d = read_matrix(fs, path, "distortion_coefficients", 1, 5);
   return camera_from(k, d, read_size(fs, path));
+}
+
+std::optional<IntrinsicsCovariance> load_camera_uncertainty(const std::string& path) {
+  const std::string text = read_camera_text(path);
+  cv::Mat covariance;
+  std::string order;
+  IntrinsicsCovariance out;
+  if (text.rfind("%YAML:", 0) != 0) {
+    const YAML::Node root = parse_ros(path, text);
+    if (!root["intrinsics_covariance"]) return std::nullopt;
+    try {
+      covariance = ros_matrix(root, path, "intrinsics_covariance", 9, 9);
+      if (root["intrinsics_covariance_order"]) order = root["intrinsics_covariance_order"].as<std::string>();
+      if (!root["corner_sigma_px"]) throw CalibrationError(path + ": key 'corner_sigma_px' missing or not a number");
+      out.corner_sigma_px = root["corner_sigma_px"].as<double>();
+    } catch (const YAML::Exception& e) {
+      throw CalibrationError(path + ": " + e.what());
+    }
+  } else {
+    cv::FileStorage fs = open_for_reading(path, text);
+    if (fs["intrinsics_covariance"].empty()) return std::nullopt;
+    covariance = read_matrix(fs, path, "intrinsics_covariance", 9, 9);
+    if (fs["intrinsics_covariance_order"].isString()) order = static_cast<std::string>(fs["intrinsics_covariance_order"]);
+    out.corner_sigma_px = read_number(fs, path, "corner_sigma_px");
+  }
+  if (order != kIntrinsicsOrder) {
+    throw CalibrationError(path + ": key 'intrinsics_covariance_order' is '" + order + "', not '" + kIntrinsicsOrder +
+                           "'");
+  }
+  out.covariance = cv::Matx<double, 9, 9>(covariance);
+  bool valid = std::isfinite(out.corner_sigma_px) && out.corner_sigma_px >= 0;
+  for (int i = 0; i < 9; ++i) {
+    valid = valid && out.covariance(i, i) >= 0;
+    for (int j = 0; j < 9; ++j) {
+      const double a = out.covariance(i, j), b = out.covariance(j, i);
+      valid = valid && std::isfinite(a) && std::abs(a - b) <= 1e-9 * (std::abs(a) + std::abs(b));
+    }
+  }
+  if (!valid) {
+    throw CalibrationError(path +
+                           ": key 'intrinsics_covariance' is not a symmetric covariance with a non-negative diagonal, "
+                           "or corner_sigma_px is negative");
+  }
+  return out;
 }
 
 void save_stereo(const std::string& path, const StereoCalibration& c) {

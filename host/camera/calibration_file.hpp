@@ -7,6 +7,13 @@
 //              per_view_reprojection_errors, std_deviations_intrinsics (fx fy cx cy k1 k2 p1 p2 k3),
 //              board (the board's text form), views (one map per image given: image, used
 //              (0/1), corners, detector, rms_px, rejection -- an extra key OpenCV's loaders skip)
+//              and issue #22's uncertainty, extra keys too: intrinsics_covariance (9x9, its
+//              order in intrinsics_covariance_order: "fx fy cx cy k1 k2 p1 p2 k3"; px^2, px, 1;
+//              the view poses marginalised, host/camera/uncertainty.hpp), corner_sigma_px (the
+//              corner noise estimated from the residuals), projection_sigma_grid_px (12x16: the
+//              worst-axis projection sigma in px at the pixels projection_sigma_grid_x_px (1x16)
+//              and projection_sigma_grid_y_px (1x12), the centres of a 16x12 division of the
+//              image; .nan where the model does not invert)
 //   stereo     as stereo_calib.cpp: M1 D1 M2 D2 R T E F R1 R2 P1 P2 Q, plus image_width,
 //              image_height, baseline_m, avg_reprojection_error
 //   hand-eye   gripper_T_camera and base_T_target (4x4, metres), method (the refinement's start),
@@ -18,9 +25,11 @@
 // camera_matrix, distortion_model (plumb_bob: k1 k2 p1 p2 k3), distortion_coefficients,
 // rectification_matrix (the identity: one camera) and projection_matrix ([K | 0], as
 // CameraInfo's documentation gives for a monocular camera), each matrix as {rows, cols, data}.
-// The views, when given, follow as YAML comments ("# view IMAGE: N corners, RMS X px, DETECTOR"),
-// which ROS's parser skips. load_camera reads both (a file not starting with OpenCV's "%YAML:1.0" is read as ROS's,
-// with yaml-cpp); a ROS file's distortion_model must be plumb_bob.
+// With the uncertainty given, the same extra keys as OpenCV YAML's follow ({rows, cols, data}
+// matrices; camera_calibration_parsers reads the keys it knows by name and skips the rest). The
+// views, when given, follow as YAML comments ("# view IMAGE: N corners, RMS X px, DETECTOR"),
+// which ROS's parser skips. load_camera reads both (a file not starting with OpenCV's
+// "%YAML:1.0" is read as ROS's, with yaml-cpp); a ROS file's distortion_model must be plumb_bob.
 //
 // to_platform converts a camera to the firmware's camera block (shared::CameraIntrinsics, float
 // and u16, as the platform stores it), so a host calibration loads into the platform as it is.
@@ -35,6 +44,7 @@
 // float's range, or an image size of 0 or above 65535.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -47,8 +57,17 @@ namespace kincal::camera {
 
 void save_camera(const std::string& path, const IntrinsicCalibration& calibration, const std::string& board_text);
 void save_camera_ros(const std::string& path, const CameraModel& camera, const std::string& camera_name,
-                     const std::vector<ViewReport>& views = {});
+                     const std::vector<ViewReport>& views = {},
+                     const std::optional<IntrinsicsCovariance>& uncertainty = std::nullopt);
+// The camera of an OpenCV or ROS camera file, with or without the uncertainty keys.
 CameraModel load_camera(const std::string& path);
+// The intrinsics' covariance and corner sigma of a camera file (either format; `corners` and
+// `parameters` are not stored and read as 0), or nullopt when the file has no
+// intrinsics_covariance key (files of other tools, of kincal before issue #22, stereo files).
+// Errors: as load_camera's, and CalibrationError naming the key when intrinsics_covariance is
+// there but not 9x9, intrinsics_covariance_order is missing or another order, corner_sigma_px
+// is missing, or the matrix is not symmetric with a non-negative diagonal.
+std::optional<IntrinsicsCovariance> load_camera_uncertainty(const std::string& path);
 
 void save_stereo(const std::string& path, const StereoCalibration& calibration);
 // The cameras, R, T, E, F, the rectification and the RMS (per-pair reports are not stored).

@@ -42,7 +42,26 @@ cv::Mat project_with_jacobian(const CameraModel& camera, cv::InputArray points, 
   return jacobian;
 }
 
+// The camera-frame points (x, y, 1) of the rays `camera` sees at `pixels_px`.
+std::vector<cv::Point3d> rays_of(const CameraModel& camera, const std::vector<cv::Point2d>& pixels_px) {
+  std::vector<cv::Point2d> normalised;
+  cv::undistortPoints(pixels_px, normalised, cv::Mat(camera.camera_matrix), camera.distortion_mat(), cv::noArray(),
+                      cv::noArray(), cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-12));
+  std::vector<cv::Point3d> rays;
+  for (const cv::Point2d& n : normalised) rays.emplace_back(n.x, n.y, 1.0);
+  return rays;
+}
+
 }  // namespace
+
+std::vector<cv::Point2d> reproject(const CameraModel& from, const CameraModel& to,
+                                   const std::vector<cv::Point2d>& pixels_px) {
+  if (pixels_px.empty()) return {};
+  std::vector<cv::Point2d> projected;
+  cv::projectPoints(rays_of(from, pixels_px), cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(to.camera_matrix),
+                    to.distortion_mat(), projected);
+  return projected;
+}
 
 IntrinsicsCovariance intrinsics_covariance(const CameraModel& camera, const std::vector<SolvedView>& views,
                                            int flags) {
@@ -112,13 +131,9 @@ IntrinsicsCovariance intrinsics_covariance(const CameraModel& camera, const std:
 
 cv::Matx22d projection_covariance(const CameraModel& camera, const IntrinsicsCovariance& covariance,
                                   cv::Point2d pixel_px) {
-  const std::vector<cv::Point2d> pixel{pixel_px};
-  std::vector<cv::Point2d> ray;
-  cv::undistortPoints(pixel, ray, cv::Mat(camera.camera_matrix), camera.distortion_mat(), cv::noArray(), cv::noArray(),
-                      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-12));
-  const std::vector<cv::Point3d> point{cv::Point3d(ray[0].x, ray[0].y, 1.0)};
   std::vector<cv::Point2d> projected;
-  const cv::Mat jacobian = project_with_jacobian(camera, point, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), projected);
+  const cv::Mat jacobian =
+      project_with_jacobian(camera, rays_of(camera, {pixel_px}), cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), projected);
   if (!(cv::norm(projected[0] - pixel_px) <= 1e-3)) {
     const double nan = std::numeric_limits<double>::quiet_NaN();
     return {nan, nan, nan, nan};

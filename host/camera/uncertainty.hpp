@@ -69,6 +69,12 @@ IntrinsicsCovariance intrinsics_covariance(const CameraModel& camera, const std:
 cv::Matx22d projection_covariance(const CameraModel& camera, const IntrinsicsCovariance& covariance,
                                   cv::Point2d pixel_px);
 
+// Where `to` projects the rays that `from` sees at `pixels_px` (cv::undistortPoints iterated to
+// 1e-12, then cv::projectPoints): two lens models compared pixel by pixel, e.g. an estimate
+// against the truth, whose difference projection_covariance predicts.
+std::vector<cv::Point2d> reproject(const CameraModel& from, const CameraModel& to,
+                                   const std::vector<cv::Point2d>& pixels_px);
+
 // The worst-axis standard deviation (px, sqrt of the larger eigenvalue of the projection
 // covariance) on a cols x rows grid of pixels over the whole image: x_px[c] = (c + 0.5) W / cols
 // - 0.5, y_px[r] likewise (cell centres); sigma_px is rows x cols (CV_64F), NaN where the model

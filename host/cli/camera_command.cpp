@@ -58,7 +58,7 @@ int run_calibrate(const CameraArgs& a) {
   const camera::IntrinsicCalibration c = camera::calibrate_intrinsics(detect_all(board, a.images, a.min_corners));
   std::cout << camera::describe(c);
   if (a.format == "ros")
-    camera::save_camera_ros(a.out, c.camera, a.camera_name, c.views);
+    camera::save_camera_ros(a.out, c.camera, a.camera_name, c.views, c.uncertainty);
   else
     camera::save_camera(a.out, c, board.text());
   std::cout << "wrote " << a.out << "\n";

@@ -16,6 +16,10 @@
 //   camera_real_lens_model_difference_px, camera_real_lens_model_difference_max_px
 //       the two left cameras: every 8th pixel of the image unprojected by the recipe's model
 //       and projected by kincal's; RMS and largest distance
+//   camera_real_intrinsics_std_over_opencv   kincal's standard deviations of the 9 intrinsics over
+//       OpenCV's stdDeviationsIntrinsics on the same corners (the same for all 9 to 1e-6)
+//   camera_real_intrinsics_std_same_sigma_deviation   the largest |ratio - 1| once both use one
+//       sigma (the ratio is OpenCV's N - n against kincal's 2N - n degrees of freedom)
 //   camera_real_stereo_baseline_difference_pct, camera_real_stereo_rotation_difference_deg
 //       kincal's right_T_left against stereoCalibrate's on the same 13 pairs
 // The board's square is taken as 25 mm for both (the sample does not say; only ratios matter).
@@ -33,6 +37,7 @@
 #include "host/camera/board.hpp"
 #include "host/camera/intrinsics.hpp"
 #include "host/camera/stereo.hpp"
+#include "host/camera/uncertainty.hpp"
 
 using namespace kincal::camera;
 
@@ -146,6 +151,29 @@ int main() {
   figure("camera_real_opencv_rms_px", recipe_rms_px, "px");
   std::printf("kincal uses %d of %zu views\n", kincal_left.views_used, left.size());
 
+  // The intrinsics' standard deviations beside OpenCV's stdDeviationsIntrinsics on kincal's
+  // corners: OpenCV's sigma^2 divides by N - n, kincal's by 2N - n (host/camera/uncertainty.hpp).
+  {
+    const Views own = views_of(left);
+    cv::Mat k, d, opencv_std, std_extrinsics, per_view;
+    std::vector<cv::Mat> r, t;
+    cv::calibrateCamera(own.board_m, own.image_px, cv::Size(640, 480), k, d, r, t, opencv_std, std_extrinsics,
+                        per_view);
+    const double n = kincal_left.uncertainty.parameters, corners = kincal_left.uncertainty.corners;
+    const double same_sigma = std::sqrt((2 * corners - n) / (corners - n));
+    double low = 1e9, high = 0, deviation = 0;
+    for (int i = 0; i < 9; ++i) {
+      const double ratio = kincal_left.std_dev[static_cast<std::size_t>(i)] / opencv_std.at<double>(i);
+      low = std::min(low, ratio);
+      high = std::max(high, ratio);
+      deviation = std::max(deviation, std::abs(ratio * same_sigma - 1));
+    }
+    std::printf("kincal's standard deviations over OpenCV's: %.6f..%.6f; sqrt((N - n) / (2N - n)) = %.6f\n", low,
+                high, 1 / same_sigma);
+    figure("camera_real_intrinsics_std_over_opencv", 0.5 * (low + high), "ratio");
+    figure("camera_real_intrinsics_std_same_sigma_deviation", deviation, "ratio");
+  }
+
   const double kincal_held_px = held_out_rms_px(views_of(left), [&](std::size_t k) {
     std::vector<BoardDetection> others = left;
     others.erase(others.begin() + static_cast<std::ptrdiff_t>(k));
@@ -162,18 +190,10 @@ int main() {
   figure("camera_real_heldout_rms_over_opencv", kincal_held_px / recipe_held_px, "ratio");
 
   // The lens models over the whole image: rays of the recipe's model, projected by kincal's.
-  std::vector<cv::Point2f> pixels;
+  std::vector<cv::Point2d> pixels;
   for (int y = 0; y < 480; y += 8)
-    for (int x = 0; x < 640; x += 8) pixels.emplace_back(static_cast<float>(x), static_cast<float>(y));
-  std::vector<cv::Point2f> rays;
-  cv::undistortPoints(pixels, rays, cv::Mat(recipe_left_camera.camera_matrix), recipe_left_camera.distortion_mat(),
-                      cv::noArray(), cv::noArray(),
-                      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-12));
-  std::vector<cv::Point3f> points;
-  for (const cv::Point2f& p : rays) points.emplace_back(p.x, p.y, 1.0f);
-  std::vector<cv::Point2f> reprojected;
-  cv::projectPoints(points, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(kincal_left.camera.camera_matrix),
-                    kincal_left.camera.distortion_mat(), reprojected);
+    for (int x = 0; x < 640; x += 8) pixels.emplace_back(x, y);
+  const std::vector<cv::Point2d> reprojected = reproject(recipe_left_camera, kincal_left.camera, pixels);
   double sum = 0, largest = 0;
   for (std::size_t i = 0; i < pixels.size(); ++i) {
     const double e = cv::norm(reprojected[i] - pixels[i]);

@@ -2,6 +2,9 @@
 
 #include <cmath>
 
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+
 namespace kincal::camera::scenes {
 
 namespace {
@@ -73,6 +76,39 @@ cv::Mat render(const sim::CameraSpec& camera, const Eigen::Isometry3d& camera_T_
   conditions.supersampling = 2;
   conditions.seed = seed;
   return sim::render_plane(camera, camera_T_board, target, conditions);
+}
+
+CameraModel model_of(const sim::CameraSpec& s) {
+  CameraModel m;
+  m.image_size = cv::Size(s.width_px, s.height_px);
+  m.camera_matrix = cv::Matx33d(s.fx_px, 0, s.cx_px, 0, s.fy_px, s.cy_px, 0, 0, 1);
+  m.distortion = s.distortion;
+  return m;
+}
+
+BoardDetection projected(const camera::Board& board, const CameraModel& camera, const Eigen::Isometry3d& camera_T_board,
+                         const std::string& view, cv::RNG& rng, double sigma_px) {
+  BoardDetection d;
+  d.view = view;
+  d.image_size = camera.image_size;
+  d.found = true;
+  std::vector<cv::Point3f> all;
+  for (int id = 0; id < board.corner_count(); ++id) all.push_back(board.corner_m(id));
+  cv::Mat r, rvec, tvec;
+  const Eigen::Matrix3d rotation = camera_T_board.rotation();
+  cv::eigen2cv(rotation, r);
+  cv::Rodrigues(r, rvec);
+  tvec = (cv::Mat_<double>(3, 1) << camera_T_board.translation().x(), camera_T_board.translation().y(),
+          camera_T_board.translation().z());
+  std::vector<cv::Point2f> px;
+  cv::projectPoints(all, rvec, tvec, cv::Mat(camera.camera_matrix), camera.distortion_mat(), px);
+  for (std::size_t i = 0; i < px.size(); ++i) {
+    d.ids.push_back(static_cast<int>(i));
+    d.board_m.push_back(all[i]);
+    d.image_px.emplace_back(px[i].x + static_cast<float>(rng.gaussian(sigma_px)),
+                            px[i].y + static_cast<float>(rng.gaussian(sigma_px)));
+  }
+  return d;
 }
 
 Eigen::Isometry3d left_T_right() {

@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 
 #include "host/camera/board.hpp"
+#include "host/camera/intrinsics.hpp"
 #include "host/sim/render.hpp"
 
 namespace kincal::camera::scenes {
@@ -32,6 +33,14 @@ sim::PlanarTarget target_of(const camera::Board& board);
 // One rendered view (2x supersampling, mild noise; `seed` varies the noise).
 cv::Mat render(const sim::CameraSpec& camera, const Eigen::Isometry3d& camera_T_board, const sim::PlanarTarget& target,
                std::uint64_t seed);
+
+// The spec as host/camera's model.
+CameraModel model_of(const sim::CameraSpec& spec);
+
+// The board's corners projected by OpenCV at camera_T_board with Gaussian noise of sigma_px in
+// x and in y: a detection without rendering (all corners, ids in order, found).
+BoardDetection projected(const camera::Board& board, const CameraModel& camera, const Eigen::Isometry3d& camera_T_board,
+                         const std::string& view, cv::RNG& rng, double sigma_px = 0.1);
 
 // The stereo rig: the right camera 0.12 m along the left's x, turned 3 degrees about y.
 Eigen::Isometry3d left_T_right();

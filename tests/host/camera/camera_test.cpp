@@ -18,6 +18,7 @@
 #include "host/camera/intrinsics.hpp"
 #include "host/camera/robot_poses.hpp"
 #include "host/camera/stereo.hpp"
+#include "host/camera/uncertainty.hpp"
 #include "host/model/number_text.hpp"
 #include "shared/parameters.hpp"
 #include "tests/host/camera/camera_scenes.hpp"
@@ -32,13 +33,8 @@ namespace {
 constexpr double kDeg = 3.14159265358979323846 / 180;
 constexpr int kViews = 12;
 
-CameraModel model_of(const sim::CameraSpec& s) {
-  CameraModel m;
-  m.image_size = cv::Size(s.width_px, s.height_px);
-  m.camera_matrix = cv::Matx33d(s.fx_px, 0, s.cx_px, 0, s.fy_px, s.cy_px, 0, 0, 1);
-  m.distortion = s.distortion;
-  return m;
-}
+using scenes::model_of;
+using scenes::projected;
 
 sim::CameraSpec spec_of_right() {
   sim::CameraSpec s = scenes::test_camera();
@@ -69,32 +65,6 @@ const std::vector<BoardDetection>& chessboard_views() {
     return detect_rendered(board, scenes::test_camera(), scenes::board_views(board, kViews), "view");
   }();
   return views;
-}
-
-// Corners projected by OpenCV with 0.1 px noise: detections without rendering, for the checks.
-BoardDetection projected(const Board& board, const CameraModel& camera, const Eigen::Isometry3d& camera_T_board,
-                         const std::string& view, cv::RNG& rng) {
-  BoardDetection d;
-  d.view = view;
-  d.image_size = camera.image_size;
-  d.found = true;
-  std::vector<cv::Point3f> all;
-  for (int id = 0; id < board.corner_count(); ++id) all.push_back(board.corner_m(id));
-  cv::Mat r, rvec, tvec;
-  const Eigen::Matrix3d rotation = camera_T_board.rotation();
-  cv::eigen2cv(rotation, r);
-  cv::Rodrigues(r, rvec);
-  tvec = (cv::Mat_<double>(3, 1) << camera_T_board.translation().x(), camera_T_board.translation().y(),
-          camera_T_board.translation().z());
-  std::vector<cv::Point2f> px;
-  cv::projectPoints(all, rvec, tvec, cv::Mat(camera.camera_matrix), camera.distortion_mat(), px);
-  for (std::size_t i = 0; i < px.size(); ++i) {
-    d.ids.push_back(static_cast<int>(i));
-    d.board_m.push_back(all[i]);
-    d.image_px.emplace_back(px[i].x + static_cast<float>(rng.gaussian(0.1)),
-                            px[i].y + static_cast<float>(rng.gaussian(0.1)));
-  }
-  return d;
 }
 
 double rotation_error_rad(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
@@ -441,6 +411,87 @@ TEST_CASE("a camera in ROS camera_info YAML: the keys ROS reads, read back exact
   CHECK(error_of([&] { (void)load_camera(dir.file("equidistant.yaml")); }) ==
         dir.file("equidistant.yaml") +
             ": distortion_model 'equidistant': only plumb_bob (k1 k2 p1 p2 k3) is supported");
+}
+
+TEST_CASE("camera files carry the intrinsics' covariance and projection sigma; files without them still read") {
+  TempDir dir;
+  const Board board = parse_board(scenes::chessboard_text());
+  const CameraModel truth = model_of(scenes::test_camera());
+  cv::RNG rng(12);
+  std::vector<BoardDetection> detections;
+  for (const Eigen::Isometry3d& v : scenes::board_views(board, 10)) {
+    detections.push_back(projected(board, truth, v, "v" + std::to_string(detections.size()), rng));
+  }
+  const IntrinsicCalibration c = calibrate_intrinsics(detections);
+  // The corner noise is 0.1 px; sigma from the residuals finds it.
+  CHECK(c.uncertainty.corner_sigma_px == doctest::Approx(0.1).epsilon(0.1));
+  for (int i = 0; i < 9; ++i) CHECK(c.std_dev[static_cast<std::size_t>(i)] == std::sqrt(c.uncertainty.covariance(i, i)));
+  const auto same_covariance = [&](const std::optional<IntrinsicsCovariance>& loaded) {
+    REQUIRE(loaded.has_value());
+    CHECK(loaded->corner_sigma_px == doctest::Approx(c.uncertainty.corner_sigma_px).epsilon(1e-12));
+    for (int i = 0; i < 9; ++i)
+      for (int j = 0; j < 9; ++j)
+        CHECK(loaded->covariance(i, j) == doctest::Approx(c.uncertainty.covariance(i, j)).epsilon(1e-12));
+  };
+
+  // OpenCV YAML: OpenCV reads its keys and the extra ones; kincal reads both.
+  save_camera(dir.file("camera.yaml"), c, board.text());
+  cv::FileStorage fs(dir.file("camera.yaml"), cv::FileStorage::READ);
+  cv::Mat k, grid, grid_x, grid_y;
+  fs["camera_matrix"] >> k;
+  fs["projection_sigma_grid_px"] >> grid;
+  fs["projection_sigma_grid_x_px"] >> grid_x;
+  fs["projection_sigma_grid_y_px"] >> grid_y;
+  CHECK(cv::norm(k, cv::Mat(c.camera.camera_matrix)) < 1e-9);
+  CHECK(static_cast<std::string>(fs["intrinsics_covariance_order"]) == "fx fy cx cy k1 k2 p1 p2 k3");
+  REQUIRE(grid.rows == 12);
+  REQUIRE(grid.cols == 16);
+  CHECK(grid_x.cols == 16);
+  CHECK(grid_y.cols == 12);
+  CHECK(grid_x.at<double>(0) == doctest::Approx(19.5));
+  CHECK(grid_y.at<double>(11) == doctest::Approx(459.5));
+  // The grid is the projection covariance's worst axis at those pixels, and grows off the board.
+  const cv::Matx22d centre = projection_covariance(c.camera, c.uncertainty, {grid_x.at<double>(8), grid_y.at<double>(6)});
+  CHECK(grid.at<double>(6, 8) >= std::sqrt(std::max(centre(0, 0), centre(1, 1))));
+  CHECK(grid.at<double>(6, 8) <= std::sqrt(centre(0, 0) + centre(1, 1)));
+  CHECK(grid.at<double>(0, 0) > 2 * grid.at<double>(6, 8));
+  same_covariance(load_camera_uncertainty(dir.file("camera.yaml")));
+  CHECK(load_camera(dir.file("camera.yaml")).camera_matrix == c.camera.camera_matrix);
+
+  // ROS camera_info: the same keys; ROS's own keys unchanged; read back by kincal.
+  save_camera_ros(dir.file("camera_info.yaml"), c.camera, "wrist_camera", c.views, c.uncertainty);
+  std::ifstream in(dir.file("camera_info.yaml"));
+  std::ostringstream text;
+  text << in.rdbuf();
+  CHECK(contains(text.str(), "distortion_model: plumb_bob\n"));
+  CHECK(contains(text.str(), "\nprojection_sigma_grid_px:\n  rows: 12\n  cols: 16\n  data: ["));
+  same_covariance(load_camera_uncertainty(dir.file("camera_info.yaml")));
+  CHECK(cv::norm(cv::Mat(load_camera(dir.file("camera_info.yaml")).camera_matrix), cv::Mat(c.camera.camera_matrix)) <
+        1e-9);
+
+  // Files without the keys: the camera reads, the uncertainty is absent.
+  save_camera_ros(dir.file("plain_info.yaml"), c.camera, "wrist_camera");
+  CHECK_FALSE(load_camera_uncertainty(dir.file("plain_info.yaml")).has_value());
+  std::ofstream(dir.file("opencv_sample.yaml"))
+      << "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\ncamera_matrix: !!opencv-matrix\n   rows: 3\n"
+         "   cols: 3\n   dt: d\n   data: [ 600., 0., 320., 0., 600., 240., 0., 0., 1. ]\n"
+         "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n   data: [ 0., 0., 0., 0., 0. ]\n";
+  CHECK(load_camera(dir.file("opencv_sample.yaml")).camera_matrix(0, 0) == 600);
+  CHECK_FALSE(load_camera_uncertainty(dir.file("opencv_sample.yaml")).has_value());
+  // A covariance in another order, without its sigma or not symmetric is refused by name.
+  const auto with = [&](const std::string& name, const std::string& from, const std::string& to) {
+    std::string t = text.str();
+    t.replace(t.find(from), from.size(), to);
+    std::ofstream(dir.file(name)) << t;
+    return error_of([&] { (void)load_camera_uncertainty(dir.file(name)); });
+  };
+  CHECK(contains(with("order.yaml", "fx fy cx cy", "fy fx cx cy"), "key 'intrinsics_covariance_order' is 'fy fx"));
+  CHECK(contains(with("sigma.yaml", "corner_sigma_px:", "corner_noise_px:"), "key 'corner_sigma_px' missing"));
+  const auto n = [](double v) { return kincal::model::shortest_number_text(v); };
+  const cv::Matx<double, 9, 9>& cov = c.uncertainty.covariance;
+  CHECK(contains(with("asymmetric.yaml", "data: [" + n(cov(0, 0)) + ", " + n(cov(0, 1)) + ",",
+                      "data: [" + n(cov(0, 0)) + ", " + n(2 * cov(0, 1) + 1) + ","),
+                 "key 'intrinsics_covariance' is not a symmetric covariance"));
 }
 
 TEST_CASE("a host calibration converts to the platform's camera block and back") {
