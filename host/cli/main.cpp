@@ -6,6 +6,7 @@
 #include "host/cli/camera_command.hpp"
 #include "host/cli/colour_table.hpp"
 #include "host/cli/command_line.hpp"
+#include "host/cli/correct_command.hpp"
 #include "host/cli/dbc_command.hpp"
 #include "host/cli/demo.hpp"
 #include "host/cli/discover_command.hpp"
@@ -45,6 +46,7 @@ int main(int argc, char** argv) {
   kincal::cli::add_plan_command(app, status);
   kincal::cli::add_urdf_command(app, status);
   kincal::cli::add_export_command(app, status);
+  kincal::cli::add_correct_command(app, status);
   kincal::cli::add_camera_command(app, status);
 
   if (const auto stop = kincal::cli::parse_command_line(app, argc, argv)) return *stop;

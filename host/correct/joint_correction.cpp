@@ -1,5 +1,7 @@
 #include "host/correct/joint_correction.hpp"
 
+#include <numbers>
+
 #include <Eigen/Geometry>
 
 namespace kincal::correct {
@@ -19,6 +21,15 @@ JointCorrector::JointCorrector(const model::RobotModel& controller, const model:
   if (controller.joint_count() != calibrated.joint_count())
     throw model::InputError("the nominal model has " + std::to_string(controller.joint_count()) +
                             " joints, the calibrated one " + std::to_string(calibrated.joint_count()));
+  const Eigen::AngleAxisd tool_turn(
+      Eigen::Matrix3d(controller.flange_T_tool.rotation.transpose() * calibrated.flange_T_tool.rotation));
+  if (options.orientation && tool_turn.angle() > 0.05)
+    throw model::InputError("the calibrated tool frame is turned " +
+                            std::to_string(tool_turn.angle() * 180 / std::numbers::pi) +
+                            " deg from the nominal's: correcting the orientation would turn the wrist to follow it "
+                            "(usually the measuring device's convention for the tool frame, not an error of the "
+                            "arm); correct the tool point alone (--position-only), or give a --nominal with the "
+                            "calibrated tool");
   if (!options.platform_step) {
     note_ = "the platform's step is switched off";
     return;
@@ -48,7 +59,8 @@ JointCorrection JointCorrector::correct(std::span<const double> readings) {
     if (std::optional<std::vector<double>> corrected = platform_->correct(readings)) {
       out.platform_step_used = true;
       start = std::move(*corrected);
-      const Eigen::Matrix<double, 6, 1> e = pose_residual(out.goal, model::forward_kinematics(calibrated_, start));
+      Eigen::Matrix<double, 6, 1> e = pose_residual(out.goal, model::forward_kinematics(calibrated_, start));
+      if (!options_.orientation) e.tail<3>().setZero();
       if (e.head<3>().norm() <= options_.accept_m && e.tail<3>().norm() <= options_.accept_rad) {
         out.solution.q = std::move(start);
         out.solution.outcome = Outcome::reached;
@@ -59,7 +71,7 @@ JointCorrection JointCorrector::correct(std::span<const double> readings) {
     }
   }
   out.refined = true;
-  out.solution = solve_pose(calibrated_, out.goal, true, start, options_.solve);
+  out.solution = solve_pose(calibrated_, out.goal, options_.orientation, start, options_.solve);
   return out;
 }
 

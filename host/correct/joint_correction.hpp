@@ -34,6 +34,10 @@ struct JointCorrectionOptions {
   double accept_m = 1e-5;     // the platform step's result is kept when it leaves at most this ...
   double accept_rad = 1e-5;   // ... and this at the tool; else the Newton solve refines it
   bool platform_step = true;  // false: the Newton solve alone
+  // false: only the tool point is corrected (the tool's orientation left free; the Newton solve
+  // moves the joints the least it can). For a point tool, or a tool frame whose identified rotation
+  // is a measuring convention rather than the arm's (see JointCorrector's constructor).
+  bool orientation = true;
 };
 
 struct JointCorrection {
@@ -45,7 +49,11 @@ struct JointCorrection {
 
 class JointCorrector {
  public:
-  // Throws model::InputError when the joint counts differ.
+  // Throws model::InputError when the joint counts differ, or when `orientation` is set and the two
+  // tools' rotations differ by more than 0.05 rad (the platform's largest step): such a rotation is
+  // usually the measuring device's convention for the tool frame (a tracker's probe frame turned
+  // 90 degrees about its axis), and following it would turn the wrist; the message says so and
+  // names the way out (orientation = false, or a nominal model with the calibrated tool).
   JointCorrector(const model::RobotModel& controller, const model::RobotModel& calibrated,
                  const JointCorrectionOptions& options = {});
   ~JointCorrector();

@@ -30,6 +30,19 @@ bool reached(const Evaluation& at, const SolveOptions& o) {
   return at.e.head<3>().norm() <= o.tolerance_m && at.e.tail<3>().norm() <= o.tolerance_rad;
 }
 
+// No tool point of the arm is farther than this from frame 0's origin: each link translates by d
+// along one axis and a along another (Doty's beta only turns), the tool by its offset; a
+// prismatic joint's d by its variable within the limits (no bound without limits).
+double reach_bound(const model::RobotModel& model) {
+  double reach = model.flange_T_tool.translation.norm();
+  for (const model::Joint& j : model.joints) {
+    double d = std::abs(j.parameters.d_m + (j.type == core::JointType::prismatic ? j.offset : 0.0));
+    if (j.type == core::JointType::prismatic) d += std::max(std::abs(j.lower), std::abs(j.upper));
+    reach += d + std::abs(j.parameters.a_m);
+  }
+  return reach;
+}
+
 }  // namespace
 
 const char* outcome_name(Outcome outcome) {
@@ -120,6 +133,10 @@ Solution solve_pose(const model::RobotModel& model, const model::Transform& goal
   s.residual_rad = at.e.tail<3>().norm();
   if (reached(at, o)) {
     s.outcome = Outcome::reached;
+    return s;
+  }
+  if ((model.base_T_frame0.inverse() * goal).translation.norm() > reach_bound(model)) {
+    s.outcome = Outcome::out_of_reach;
     return s;
   }
   if (std::find(held.begin(), held.end(), true) != held.end()) {

@@ -15,8 +15,10 @@
 //
 // Termination and outcome (Solution::outcome):
 //   reached        position residual <= tolerance_m and (with orientation) rotation <= tolerance_rad;
+//   out_of_reach   not reached, and the goal is farther from frame 0's origin than any tool point
+//                  can be (sum of the links' |a| + |d|, prismatic travel, the tool's offset);
 //   joint_limit    not reached, and a joint is held at a limit that the descent pushes against;
-//   out_of_reach   not reached where the joints can no longer move the tool toward the goal
+//   out_of_reach   also: not reached where the joints can no longer move the tool toward the goal
 //                  (|J^T W e| below stall_cosine times |W^1/2 J|_2 |W^1/2 e|: a stationary point
 //                  off the goal, where J is singular in the residual's direction) with the goal
 //                  farther from frame 0's origin than the tool: the arm stretched toward it;

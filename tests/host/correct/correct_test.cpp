@@ -12,6 +12,7 @@
 #include "firmware/app/kinematic_correction.hpp"
 #include "host/correct/cartesian_targets.hpp"
 #include "host/correct/joint_correction.hpp"
+#include "host/correct/joint_offsets.hpp"
 #include "host/correct/platform_step.hpp"
 #include "host/correct/prediction_spread.hpp"
 #include "host/model/model_file.hpp"
@@ -281,4 +282,54 @@ TEST_CASE("nominal_from_record undoes the recorded changes; the spread is the co
   CHECK(correct::predicted_spread(calibrated, *covariance, q, false).position_m ==
         doctest::Approx(std::sqrt(without_base)));
   CHECK(correct::predicted_spread(calibrated, *covariance, q, true).orientation_rad > 0.0);
+}
+
+TEST_CASE("joint offsets: the zero errors, exact when they are all the calibration found, partial otherwise") {
+  const model::RobotModel start = robot("puma560.yaml");
+  model::RobotModel zeros = start;
+  const double error[6] = {1e-3, -2e-3, 5e-4, 0.0, 3e-3, -1e-3};
+  for (std::size_t j = 0; j < 6; ++j) zeros.joints[j].offset += error[j];
+  zeros.joints[1].parameters.theta_rad += 1e-3;  // theta and offset both count
+  const std::vector<double> offsets = correct::joint_offsets(start, zeros);
+  for (std::size_t j = 0; j < 6; ++j) CHECK(offsets[j] == doctest::Approx(error[j] + (j == 1 ? 1e-3 : 0.0)));
+  const correct::OffsetShare all = correct::offset_share(start, zeros, offsets, 200, 1);
+  CHECK(all.offsets_only.max_m < 1e-12);
+  CHECK(all.nominal.rms_m > 1e-4);
+  CHECK(all.carried == doctest::Approx(1.0));
+
+  const model::RobotModel full = perturbed(start, 1e-3, 1e-3, 8);
+  // Zero changes alone may even do harm where they compensate other changes; the fitted offsets
+  // take what offsets can carry (judged on other readings than they were fitted on).
+  const std::vector<double> raw = correct::joint_offsets(start, full);
+  const std::vector<double> some = correct::fitted_joint_offsets(start, full, 300, 2);
+  const correct::OffsetShare part = correct::offset_share(start, full, some, 200, 1);
+  MESSAGE("zero changes carry " << correct::offset_share(start, full, raw, 200, 1).carried << ", fitted offsets "
+                                << part.carried);
+  CHECK(part.carried > correct::offset_share(start, full, raw, 200, 1).carried);
+  CHECK(part.carried > 0.05);
+  CHECK(part.carried < 0.95);
+  // On measured rows (here the zero-error arm's own points): the offsets are all it takes.
+  model::Dataset data;
+  data.source = "rows";
+  data.joint_count = 6;
+  std::mt19937_64 rng(3);
+  for (int i = 0; i < 30; ++i) {
+    model::Measurement m;
+    m.q = random_readings(rng);
+    m.position = model::forward_kinematics(zeros, m.q).translation;
+    data.rows.push_back(m);
+  }
+  const correct::OffsetShare measured = correct::offset_share(start, zeros, offsets, data);
+  CHECK(measured.rows == 30);
+  CHECK(measured.calibrated.max_m < 1e-12);
+  CHECK(measured.offsets_only.max_m < 1e-12);
+  CHECK(measured.nominal.rms_m > 1e-4);
+  data.joint_count = 5;
+  CHECK_THROWS_AS(correct::offset_share(start, zeros, offsets, data), model::InputError);
+  const std::string file = correct::write_joint_offsets(full, some);
+  CHECK(file.find("joint,name,type,offset\n1,waist,revolute,") != std::string::npos);
+
+  model::RobotModel other = full;
+  other.joints[2].convention = core::LinkConvention::modified_dh;
+  CHECK_THROWS_WITH_AS(correct::joint_offsets(start, other), doctest::Contains("joint 3 differs"), model::InputError);
 }

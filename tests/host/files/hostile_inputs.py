@@ -562,6 +562,53 @@ def table_cases():
           r"cell_hex\.log:1: .*\(8388609 bytes\)|is not a valid", max_message=1000)
 
 
+# --- kincal correct (issue #24): its target tables and URScript programs at every hostile class of
+# the table above, its outputs, and its own refusals (file:line:column and the cause, nothing written)
+limits["robot program"] = 64
+C = ["correct", "--model", puma, "--nominal", puma]
+T = os.path.join(work, "targets.csv")
+write_csv("targets.csv", ["q1", "q2", "q3", "q4", "q5", "q6"], [[0.1, -0.4, 0.3, 0.2, -0.5, 0.7], [0.2, -0.3, 0.2, 0.1, -0.6, 0.5]])
+run(["predict", "--model", puma, "--joints", "targets.csv", "-o", "target_points.csv"])
+points = [[float(v) for v in r] for r in list(csv.reader(open("target_points.csv")))[1:]]
+write_csv("poses.csv", ["x", "y", "z", "q1", "q2", "q3", "q4", "q5", "q6"], [r[6:9] + r[:6] for r in points])
+write_csv("far.csv", ["x", "y", "z", "q1", "q2", "q3", "q4", "q5", "q6"], [[v * 10 for v in r[6:9]] + r[:6] for r in points])
+with open("program.script", "w") as f:
+    f.write("def p():\n  # home\n  movej([0.1, -0.4, 0.3, 0.2, -0.5, 0.7], a=1.4, v=1.05)\n"
+            "  servoj([0.2, -0.3, 0.2, 0.1, -0.6, 0.5], t=0.008)\nend\n")
+with open("variable.script", "w") as f:
+    f.write("def p():\n  movej(home_q, a=1.4)\nend\n")
+with open("nz.csv", "w") as f:
+    f.write("x,y,q1,q2,q3,q4,q5,q6\n0.1,0.2,0,0,0,0,0,0\n")
+with open("nan.csv", "w") as f:
+    f.write("q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n0.1,nan,0,0,0,0\n")
+with open("five.csv", "w") as f:
+    f.write("q1,q2,q3,q4,q5\n0,0,0,0,0\n")
+readers += [
+    ("correct --joints", "dataset", "in.csv", T, C + ["--joints", "{in}", "-o", "o.csv"], ["o.csv"], True),
+    ("correct --poses", "dataset", "in.csv", os.path.join(work, "poses.csv"),
+     C + ["--poses", "{in}", "--frame", "device", "-o", "o.csv"], ["o.csv"], True),
+    ("correct --urscript", "robot program", "in.script", os.path.join(work, "program.script"),
+     C + ["--urscript", "{in}", "-o", "o.script"], ["o.script"], True),
+]
+correct_inputs = ["targets.csv", "poses.csv", "program.script", puma]
+case("correct:missing column", C + ["--poses", "nz.csv", "-o", "o1.csv"], r"nz\.csv:1:1: header: x, y and z go together", protect=correct_inputs)
+case("correct:NaN cell", C + ["--joints", "nan.csv", "-o", "o2.csv"], r"nan\.csv:3:5: column q2: nan is not finite")
+case("correct:wrong joint count", C + ["--joints", "five.csv", "-o", "o3.csv"], r"five\.csv:1:1: header: 5 joint columns, the model has 6")
+case("correct:directory as input", C + ["--joints", "sub", "-o", "o4.csv"], r"sub: .*directory")
+case("correct:output directory missing", C + ["--joints", "targets.csv", "-o", "nodir/o.csv"], r"nodir/o\.csv", protect=correct_inputs)
+case("correct:out=joints", C + ["--joints", "targets.csv", "-o", "targets.csv"], r"-o targets\.csv is the same file as --joints",
+     protect=correct_inputs)
+case("correct:no calibration record", ["correct", "--model", puma, "--joints", "targets.csv", "-o", "o5.csv"],
+     r"no calibration record to take the nominal from \(give --nominal\)")
+case("correct:two inputs", C + ["--joints", "targets.csv", "--poses", "poses.csv"], r"give one of --joints, --poses and --urscript")
+case("correct:joints as poses", C + ["--poses", "targets.csv"], r"joint targets \(no x,y,z\) given as --poses")
+case("correct:out of reach", C + ["--poses", "far.csv", "--frame", "device", "-o", "-"], r"far\.csv:2: not reached: out-of-reach")
+case("correct:URScript variable target", C + ["--urscript", "variable.script", "-o", "o6.script"],
+     r"variable\.script:2:9: movej's target is not a literal")
+case("correct:--seed of 3", C + ["--poses", "poses.csv", "--seed", "0,0,0"], r"--seed has 3 readings, the model 6 joints")
+case("correct:-o - is standard output", C + ["--joints", "targets.csv", "-o", "-"], r"q1,q2,q3,q4,q5,q6,outcome", rc_ok=True)
+
+
 table_cases()
 only = re.compile(os.environ.get("KINCAL_HOSTILE_ONLY", ""))  # a developer's filter of the table's cases by name
 with ThreadPoolExecutor(max_workers=int(os.environ.get("KINCAL_HOSTILE_JOBS", "3"))) as pool:

@@ -1,0 +1,161 @@
+#include "host/cli/correct_command.hpp"
+
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include <Eigen/Geometry>
+
+#include "host/cli/model_option.hpp"
+#include "host/correct/target_table.hpp"
+#include "host/correct/urscript.hpp"
+#include "host/files/output_file.hpp"
+#include "host/model/model_file.hpp"
+#include "host/model/number_text.hpp"
+
+namespace kincal::cli {
+
+namespace {
+
+// Exit status when every input was good but some target was not reached (the CSV is written
+// with their outcome; a program is not).
+constexpr int kNotReached = 3;
+
+struct CorrectArgs {
+  ModelOption model;
+  std::string nominal, joints, poses, urscript, frame = "base", out;
+  std::vector<double> seed;
+  bool position_only = false;
+};
+
+std::string csv(const correct::TargetTable& table, const std::vector<correct::TargetResult>& results, int n) {
+  std::ostringstream out;
+  for (int j = 1; j <= n; ++j) out << 'q' << j << ',';
+  if (table.cartesian)
+    out << "command_x,command_y,command_z"
+        << (table.orientation ? ",command_qw,command_qx,command_qy,command_qz," : ",");
+  out << "outcome,residual_m,residual_rad";
+  const bool spread = !results.empty() && results.front().spread;
+  if (spread) out << ",position_sd_m,orientation_sd_rad";
+  out << '\n';
+  const auto number = [&out](double v) { out << model::shortest_number_text(v); };
+  for (const correct::TargetResult& r : results) {
+    for (double v : r.solution.q) number(v), out << ',';
+    if (table.cartesian) {
+      for (int k = 0; k < 3; ++k) number(r.command.translation(k)), out << ',';
+      if (table.orientation) {
+        Eigen::Quaterniond q(r.command.rotation);
+        if (q.w() < 0) q.coeffs() *= -1.0;
+        for (double v : {q.w(), q.x(), q.y(), q.z()}) number(v), out << ',';
+      }
+    }
+    out << correct::outcome_name(r.solution.outcome) << ',';
+    number(r.solution.residual_m), out << ',';
+    number(r.solution.residual_rad);
+    if (spread) out << ',', number(r.spread->position_m), out << ',', number(r.spread->orientation_rad);
+    out << '\n';
+  }
+  return out.str();
+}
+
+int run_correct(const CorrectArgs& a) {
+  try {
+    const int inputs = (a.joints.empty() ? 0 : 1) + (a.poses.empty() ? 0 : 1) + (a.urscript.empty() ? 0 : 1);
+    if (inputs != 1) throw model::InputError("give one of --joints, --poses and --urscript");
+    if (!a.urscript.empty() && a.frame != "base")
+      throw model::InputError("--urscript: a program's poses are in the robot's base frame (leave out --frame)");
+    files::refuse_overwriting({{"-o", a.out, true}}, {{"--model", a.model.path},
+                                                      {"--nominal", a.nominal},
+                                                      {"--joints", a.joints},
+                                                      {"--poses", a.poses},
+                                                      {"--urscript", a.urscript}});
+    const model::RobotModel calibrated = a.model.load();
+    const model::RobotModel nominal =
+        a.nominal.empty() ? correct::nominal_from_record(calibrated) : model::load_model(a.nominal, a.model.ends);
+    const int n = calibrated.joint_count();
+    if (nominal.joint_count() != n)
+      throw model::InputError("--nominal " + a.nominal + " has " + std::to_string(nominal.joint_count()) +
+                              " joints, --model " + std::to_string(n));
+    if (!a.seed.empty() && static_cast<int>(a.seed.size()) != n)
+      throw model::InputError("--seed has " + std::to_string(a.seed.size()) + " readings, the model " +
+                              std::to_string(n) + " joints");
+    std::vector<correct::Target> targets;
+    correct::TargetTable table;
+    correct::UrProgram program;
+    std::string source;
+    if (!a.urscript.empty()) {
+      program = correct::read_urscript(a.urscript, n);
+      source = a.urscript;
+      for (const correct::UrMotion& m : program.motions) targets.push_back(m.target);
+      if (targets.empty()) throw model::InputError(a.urscript + ": no movej, movel, movep or servoj line to correct");
+    } else {
+      source = a.joints.empty() ? a.poses : a.joints;
+      table = correct::read_target_table(source, n);
+      if (table.cartesian != a.joints.empty())
+        throw model::InputError(source + ": " +
+                                (table.cartesian ? "Cartesian targets (x,y,z) given as --joints"
+                                                 : "joint targets (no x,y,z) given as --poses"));
+      for (const correct::TargetRow& row : table.rows)
+        targets.push_back({row.line, table.cartesian, row.q, row.pose, table.orientation});
+    }
+    correct::JointCorrectionOptions options;
+    options.orientation = !a.position_only && calibrated.tool == model::ToolKind::frame;
+    correct::TargetCorrector corrector(nominal, calibrated,
+                                       a.frame == "device" ? correct::TargetFrame::device : correct::TargetFrame::base,
+                                       correct::record_covariance(calibrated), options);
+    const std::vector<correct::TargetResult> results = corrector.correct(targets, a.seed, source);
+    std::ostream& log = a.out.empty() || a.out == "-" ? std::cerr : std::cout;
+    int not_reached = 0;
+    for (std::size_t i = 0; i < results.size(); ++i) {
+      const correct::Solution& s = results[i].solution;
+      if (s.outcome == correct::Outcome::reached) continue;
+      ++not_reached;
+      std::cerr << source << ':' << targets[i].line << ": not reached: " << correct::outcome_name(s.outcome)
+                << " (residual " << s.residual_m * 1e3 << " mm, " << s.residual_rad * 1e3 << " mrad)\n";
+    }
+    if (!a.urscript.empty()) {
+      if (not_reached > 0)
+        throw model::InputError(std::to_string(not_reached) + " target(s) not reached: no program written");
+      files::write_output(a.out, correct::write_urscript(program, correct::urscript_values(program, results)));
+    } else {
+      files::write_output(a.out, csv(table, results, n));
+    }
+    if (!corrector.joints().platform_step())
+      log << "kincal correct: joint targets by the Newton solve alone: " << corrector.joints().platform_note() << '\n';
+    log << "kincal correct: " << correct::summary_line(results) << '\n';
+    return not_reached > 0 ? kNotReached : 0;
+  } catch (const std::exception& e) {
+    std::cerr << "kincal correct: " << e.what() << '\n';
+    return 1;
+  }
+}
+
+}  // namespace
+
+void add_correct_command(CLI::App& app, int& status) {
+  auto a = std::make_shared<CorrectArgs>();
+  auto* cmd = app.add_subcommand(
+      "correct", "Rewrite joint or Cartesian targets (CSV) or a URScript program for the calibrated arm");
+  add_model_option(*cmd, a->model, "the calibrated model");
+  cmd->add_option("--nominal", a->nominal,
+                  "the model the robot controller computes with (default: the calibrated model's record undone)");
+  cmd->add_option("--joints", a->joints, "joint targets (CSV: q1..qN, rad or m)");
+  cmd->add_option("--poses", a->poses,
+                  "Cartesian targets (CSV: x,y,z[,qw,qx,qy,qz][,q1..qN seed], m) -> readings by inverse kinematics");
+  cmd->add_option("--urscript", a->urscript,
+                  "a URScript program: movej/movel/movep/servoj targets rewritten, every other byte kept");
+  cmd->add_option("--frame", a->frame,
+                  "frame of --poses: base (the robot's, default) or device (the measuring device's)")
+      ->check(CLI::IsMember({"base", "device"}));
+  cmd->add_option("--seed", a->seed, "seed reading for Cartesian targets before any other (N numbers, rad or m)")
+      ->delimiter(',');
+  cmd->add_flag("--position-only", a->position_only,
+                "joint targets: correct the tool point alone, not its orientation (always so for a point tool)");
+  cmd->add_option("-o,--out", a->out, "output: the CSV or the program (default or '-': standard output)");
+  cmd->footer(
+      "Exit status: 0 every target reached; 1 bad input (nothing written); 3 some target not reached (named on "
+      "standard error; the CSV is written with its outcome, a program is not).");
+  cmd->callback([a, &status] { status = run_correct(*a); });
+}
+
+}  // namespace kincal::cli

@@ -1,0 +1,88 @@
+#include "host/correct/target_correction.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
+
+namespace kincal::correct {
+
+TargetCorrector::TargetCorrector(const model::RobotModel& nominal, const model::RobotModel& calibrated,
+                                 TargetFrame frame, std::optional<ParameterCovariance> covariance,
+                                 const JointCorrectionOptions& options)
+    : nominal_arm_(nominal),
+      calibrated_(calibrated),
+      frame_(frame),
+      covariance_(std::move(covariance)),
+      joints_(nominal, calibrated, options),
+      cartesian_(nominal, calibrated, frame, options.solve) {
+  nominal_arm_.base_T_frame0 = model::Transform{};  // commands are in the robot's base frame
+}
+
+std::vector<TargetResult> TargetCorrector::correct(const std::vector<Target>& targets,
+                                                   const std::vector<double>& first_seed, const std::string& source) {
+  std::vector<TargetResult> results;
+  results.reserve(targets.size());
+  std::vector<double> seed = first_seed;
+  for (const Target& t : targets) {
+    TargetResult r;
+    if (!t.cartesian) {
+      const JointCorrection c = joints_.correct(t.q);
+      r.solution = c.solution;
+      r.platform_step_used = c.platform_step_used;
+      r.refined = c.refined;
+      r.nominal = t.q;
+    } else {
+      const std::vector<double>& start = t.q.empty() ? seed : t.q;
+      if (start.empty())
+        model::fail_at(source, t.line,
+                       "a Cartesian target with no seed reading: give q1..qN columns, a joint target before it, or "
+                       "--seed");
+      const CartesianSolution c = cartesian_.solve(t.pose, t.orientation, start);
+      r.solution = c.calibrated;
+      r.command = model::forward_kinematics(nominal_arm_, r.solution.q);
+      r.nominal = c.nominal.outcome == Outcome::reached ? c.nominal.q : start;
+    }
+    if (covariance_)
+      r.spread =
+          predicted_spread(calibrated_, *covariance_, r.solution.q, t.cartesian && frame_ == TargetFrame::device);
+    seed = r.nominal;
+    results.push_back(std::move(r));
+  }
+  return results;
+}
+
+std::string summary_line(const std::vector<TargetResult>& results) {
+  std::map<std::string, int> outcomes;
+  int stepped = 0, refined = 0;
+  double residual_m = 0.0, residual_rad = 0.0;
+  std::vector<double> spread;
+  for (const TargetResult& r : results) {
+    ++outcomes[outcome_name(r.solution.outcome)];
+    stepped += r.platform_step_used && !r.refined ? 1 : 0;
+    refined += r.refined ? 1 : 0;
+    residual_m = std::max(residual_m, r.solution.residual_m);
+    residual_rad = std::max(residual_rad, r.solution.residual_rad);
+    if (r.spread) spread.push_back(r.spread->position_m);
+  }
+  std::string out = std::to_string(results.size()) + " targets:";
+  const char* separator = " ";
+  for (const auto& [name, count] : outcomes) {
+    out += separator + std::to_string(count) + " " + name;
+    separator = ", ";
+  }
+  char text[256];
+  std::snprintf(
+      text, sizeof text,
+      " (joint targets: %d by the platform's step alone, %d by the Newton solve); largest residual %.4f mm, %.4f mrad",
+      stepped, refined, residual_m * 1e3, residual_rad * 1e3);
+  out += text;
+  if (!spread.empty()) {
+    std::sort(spread.begin(), spread.end());
+    std::snprintf(text, sizeof text, "; predicted position sd median %.3f mm, max %.3f mm",
+                  spread[spread.size() / 2] * 1e3, spread.back() * 1e3);
+    out += text;
+  }
+  return out;
+}
+
+}  // namespace kincal::correct

@@ -1,0 +1,66 @@
+// A program's targets corrected in order (issue #24): what `kincal correct` does with a target
+// table or a URScript program, in one place so that both give the same readings.
+//
+// Joint targets go through joint_correction.hpp; Cartesian targets through cartesian_targets.hpp,
+// seeded by their own seed reading, else by the nominal readings of the target before them (a
+// joint target's own readings, a Cartesian target's nominal solution: the branch the program is
+// in), else by `first_seed`. A Cartesian target with none of these is refused (model::InputError
+// "SOURCE:LINE: ..."). Each result carries the predicted spread when a parameter covariance is
+// given (prediction_spread.hpp: base parameters counted for Cartesian targets in the device frame
+// only). Not thread-safe (the joint corrector's workspace).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "host/correct/cartesian_targets.hpp"
+#include "host/correct/joint_correction.hpp"
+#include "host/correct/prediction_spread.hpp"
+
+namespace kincal::correct {
+
+struct Target {
+  int line = 0;
+  bool cartesian = false;
+  std::vector<double> q;  // joint target, or a Cartesian target's seed (may be empty)
+  model::Transform pose;  // Cartesian target
+  bool orientation = false;
+};
+
+struct TargetResult {
+  Solution solution;                                 // the readings to send, outcome and residual (frame 0 to tool)
+  bool platform_step_used = false, refined = false;  // joint targets: as JointCorrection
+  std::optional<PoseSpread> spread;
+  std::vector<double> nominal;  // the controller's readings for the target (the next one's seed)
+  // Cartesian targets: the pose to command a controller that computes with the nominal model,
+  // FK_nominal(solution.q) in frame 0 -- its own inverse kinematics then gives solution.q, and
+  // the real arm puts the tool on the target (a movel stays a movel).
+  model::Transform command;
+};
+
+class TargetCorrector {
+ public:
+  TargetCorrector(const model::RobotModel& nominal, const model::RobotModel& calibrated, TargetFrame frame,
+                  std::optional<ParameterCovariance> covariance, const JointCorrectionOptions& options = {});
+
+  std::vector<TargetResult> correct(const std::vector<Target>& targets, const std::vector<double>& first_seed,
+                                    const std::string& source);
+
+  const JointCorrector& joints() const { return joints_; }
+
+ private:
+  model::RobotModel nominal_arm_, calibrated_;
+  TargetFrame frame_;
+  std::optional<ParameterCovariance> covariance_;
+  JointCorrector joints_;
+  CartesianSolver cartesian_;
+};
+
+// One line for a run: counts by outcome, how joint targets were corrected, the largest residual,
+// the predicted spread's median and maximum. E.g. "12 targets: 12 reached (12 by the platform's
+// step, 0 refined by the Newton solve); largest residual 0.000 mm, 0.000 mrad; predicted position
+// sd median 0.031 mm, max 0.054 mm".
+std::string summary_line(const std::vector<TargetResult>& results);
+
+}  // namespace kincal::correct

@@ -1,0 +1,152 @@
+#include "host/correct/urscript.hpp"
+
+#include <Eigen/Geometry>
+
+#include "host/correct/target_table.hpp"
+#include "host/files/input_file.hpp"
+#include "host/model/number_text.hpp"
+
+namespace kincal::correct {
+
+namespace {
+
+constexpr std::size_t kMaxLineBytes = 65536;
+constexpr const char* kCalls[] = {"movej", "movel", "movep", "servoj"};
+
+bool name_char(char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_'; }
+
+std::size_t skip_blanks(std::string_view s, std::size_t at) {
+  while (at < s.size() && (s[at] == ' ' || s[at] == '\t')) ++at;
+  return at;
+}
+
+// The motion call on a line (its text without the line end), if any: the first of kCalls that
+// stands as a whole name followed by '(' and is not behind a '#'.
+struct Call {
+  std::string name;
+  std::size_t at = std::string_view::npos, open = 0;  // the name's offset, the offset after '('
+};
+
+Call find_call(std::string_view line) {
+  Call found;
+  const std::size_t comment = line.find('#');
+  for (const char* name : kCalls) {
+    const std::string_view n(name);
+    for (std::size_t at = line.find(n); at != std::string_view::npos && at < comment; at = line.find(n, at + 1)) {
+      if ((at > 0 && name_char(line[at - 1])) || (at + n.size() < line.size() && name_char(line[at + n.size()])))
+        continue;
+      const std::size_t paren = skip_blanks(line, at + n.size());
+      if (paren >= line.size() || line[paren] != '(') continue;
+      if (at < found.at) found = {std::string(n), at, paren + 1};
+      break;
+    }
+  }
+  return found;
+}
+
+}  // namespace
+
+UrProgram read_urscript(const std::string& path, int joint_count) {
+  return parse_urscript(files::read_text_or_throw<model::InputError>(path, files::kProgramFile), path, joint_count);
+}
+
+UrProgram parse_urscript(std::string text, const std::string& source, int joint_count) {
+  UrProgram program;
+  program.source = source;
+  program.text = std::move(text);
+  const std::string_view all(program.text);
+  int number = 0;
+  for (std::size_t start = 0; start < all.size();) {
+    std::size_t end = std::min(all.find('\n', start), all.size());
+    const std::size_t next = end + 1;
+    if (end > start && all[end - 1] == '\r') --end;
+    const std::string_view line = all.substr(start, end - start);
+    ++number;
+    if (line.size() > kMaxLineBytes)
+      throw model::InputError(source + ":" + std::to_string(number) + ":1: a line of " + std::to_string(line.size()) +
+                              " bytes: not a URScript program (at most " + std::to_string(kMaxLineBytes) +
+                              " bytes a line)");
+    const Call call = find_call(line);
+    if (call.at != std::string_view::npos) {
+      const auto where = [&](std::size_t offset) { return static_cast<int>(offset + 1); };
+      const auto fail = [&](std::size_t offset, const std::string& what) {
+        throw model::InputError(source + ":" + std::to_string(number) + ":" + std::to_string(where(offset)) + ": " +
+                                what);
+      };
+      std::size_t at = skip_blanks(line, call.open);
+      const bool pose = at < line.size() && line[at] == 'p';
+      if (pose) at = skip_blanks(line, at + 1);
+      if (at >= line.size() || line[at] != '[')
+        fail(at, call.name +
+                     "'s target is not a literal [...] or p[...]: its value is not known before the program "
+                     "runs, so kincal cannot correct it (write the target out)");
+      const std::size_t close = line.find(']', at);
+      if (close == std::string_view::npos) fail(at, call.name + ": no ']' closes the target on this line");
+      UrMotion m;
+      m.call = call.name;
+      m.begin = start + at + 1;
+      m.end = start + close;
+      m.target.line = number;
+      m.target.cartesian = pose;
+      m.target.orientation = pose;
+      std::vector<double> values;
+      for (std::size_t from = at + 1; from <= close;) {
+        const std::size_t comma = std::min(line.find(',', from), close);
+        values.push_back(parse_cell(line.substr(from, comma - from),
+                                    call.name + " value " + std::to_string(values.size() + 1), source, number,
+                                    where(from)));
+        from = comma + 1;
+      }
+      if (pose && values.size() != 6)
+        fail(at, call.name + ": a pose p[x, y, z, rx, ry, rz] has 6 values, this one " + std::to_string(values.size()));
+      if (!pose && static_cast<int>(values.size()) != joint_count)
+        fail(at, call.name + ": " + std::to_string(values.size()) + " joint values, the model has " +
+                     std::to_string(joint_count) + " joints");
+      if (pose) {
+        m.target.pose.translation = {values[0], values[1], values[2]};
+        const Eigen::Vector3d r(values[3], values[4], values[5]);
+        if (r.norm() > 0.0) m.target.pose.rotation = Eigen::AngleAxisd(r.norm(), r / r.norm()).toRotationMatrix();
+      } else {
+        m.target.q = std::move(values);
+      }
+      program.motions.push_back(std::move(m));
+    }
+    start = next;
+  }
+  return program;
+}
+
+std::string write_urscript(const UrProgram& program, const std::vector<std::vector<double>>& values) {
+  if (values.size() != program.motions.size())
+    throw std::invalid_argument("write_urscript: " + std::to_string(values.size()) + " value lists for " +
+                                std::to_string(program.motions.size()) + " motions");
+  std::string out;
+  out.reserve(program.text.size() + 64 * values.size());
+  std::size_t copied = 0;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    const UrMotion& m = program.motions[i];
+    out.append(program.text, copied, m.begin - copied);
+    for (std::size_t k = 0; k < values[i].size(); ++k)
+      out += (k ? ", " : "") + model::shortest_number_text(values[i][k]);
+    copied = m.end;
+  }
+  out.append(program.text, copied, std::string::npos);
+  return out;
+}
+
+std::vector<std::vector<double>> urscript_values(const UrProgram& program, const std::vector<TargetResult>& results) {
+  std::vector<std::vector<double>> values;
+  for (std::size_t i = 0; i < program.motions.size() && i < results.size(); ++i) {
+    if (!program.motions[i].target.cartesian) {
+      values.push_back(results[i].solution.q);
+      continue;
+    }
+    const model::Transform& c = results[i].command;
+    const Eigen::AngleAxisd r{Eigen::Matrix3d(c.rotation)};
+    const Eigen::Vector3d v = r.angle() * r.axis();
+    values.push_back({c.translation.x(), c.translation.y(), c.translation.z(), v.x(), v.y(), v.z()});
+  }
+  return values;
+}
+
+}  // namespace kincal::correct

@@ -1,0 +1,51 @@
+// Universal Robots' URScript programs in and out (issue #24): the literal targets of motion lines
+// read as joint or Cartesian targets, and the program written back with corrected targets.
+//
+// Read: every call movej(, movel(, movep( or servoj( that is not behind a '#' on its line, with a
+// literal first argument -- [q1, ..., qN] (joint positions, rad) or p[x, y, z, rx, ry, rz] (a pose
+// in the robot's base frame: m, and a rotation vector in rad). One call per line is read (the
+// first). Refused (model::InputError "FILE:LINE:COLUMN: what"): a line longer than 64 KiB (no
+// program has one: the file is something else), a joint list whose length is not
+// the model's joint count, a pose without six values, a value that is not a plain finite number
+// (d2r(90), a variable inside the list), a motion call whose target is a variable (movej(home)):
+// its value is not known before the program runs, and a target left uncorrected would be silent.
+//
+// Written: the program's bytes unchanged but for the text between each target's brackets, which
+// becomes the new values (shortest exact decimal, ", " between them). Line ends (LF, CRLF),
+// comments, blank lines and every other line are kept byte for byte (a UTF-8 byte-order mark is
+// removed by files::read_text).
+// The text comes from files::read_text (kProgramFile).
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "host/correct/target_correction.hpp"
+
+namespace kincal::correct {
+
+struct UrMotion {
+  std::string call;                // movej, movel, movep, servoj
+  Target target;                   // line, cartesian, q or pose (orientation always)
+  std::size_t begin = 0, end = 0;  // byte range of the values between the brackets in the text
+};
+
+struct UrProgram {
+  std::string source;
+  std::string text;
+  std::vector<UrMotion> motions;
+};
+
+UrProgram read_urscript(const std::string& path, int joint_count);
+UrProgram parse_urscript(std::string text, const std::string& source, int joint_count);
+
+// The program with each motion's values replaced: values[i] for motions[i] (joint readings for a
+// joint target, x,y,z,rx,ry,rz for a pose). Throws std::invalid_argument when the counts differ.
+std::string write_urscript(const UrProgram& program, const std::vector<std::vector<double>>& values);
+
+// The new values of each motion from the corrector's results: the corrected readings for joint
+// targets, the commanded pose (TargetResult::command) as x,y,z,rx,ry,rz for Cartesian ones.
+std::vector<std::vector<double>> urscript_values(const UrProgram& program, const std::vector<TargetResult>& results);
+
+}  // namespace kincal::correct
