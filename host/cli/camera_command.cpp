@@ -14,6 +14,7 @@
 #include "host/camera/stereo.hpp"
 #include "host/capture/frame_source.hpp"
 #include "host/capture/stereo_source.hpp"
+#include "host/cli/camera_report.hpp"
 #include "host/cli/number_options.hpp"
 #include "host/files/input_limits.hpp"
 #include "host/files/output_file.hpp"
@@ -23,7 +24,7 @@ namespace kincal::cli {
 namespace {
 
 struct CameraArgs {
-  std::string board, out, left_camera, right_camera, camera, poses, convention = "gripper2base";
+  std::string board, out, report, left_camera, right_camera, camera, poses, convention = "gripper2base";
   std::string format = "opencv", camera_name = "camera", rotation;
   std::vector<std::string> images, left, right;
   bool refine_intrinsics = false;
@@ -40,7 +41,7 @@ void refuse_overwriting_inputs(const CameraArgs& a) {
   for (const std::string& p : a.images) inputs.push_back({"image", p});
   for (const std::string& p : a.left) inputs.push_back({"--left", p});
   for (const std::string& p : a.right) inputs.push_back({"--right", p});
-  files::refuse_overwriting({{"-o", a.out}}, inputs);
+  files::refuse_overwriting({{"-o", a.out}, {"--report", a.report}}, inputs);
 }
 
 std::vector<camera::BoardDetection> detect_all(const camera::Board& board, const std::vector<std::string>& inputs,
@@ -55,13 +56,18 @@ std::vector<camera::BoardDetection> detect_all(const camera::Board& board, const
 
 int run_calibrate(const CameraArgs& a) {
   const camera::Board board = camera::parse_board(a.board);
-  const camera::IntrinsicCalibration c = camera::calibrate_intrinsics(detect_all(board, a.images, a.min_corners));
+  const std::vector<camera::BoardDetection> detections = detect_all(board, a.images, a.min_corners);
+  const camera::IntrinsicCalibration c = camera::calibrate_intrinsics(detections);
   std::cout << camera::describe(c);
   if (a.format == "ros")
     camera::save_camera_ros(a.out, c.camera, a.camera_name, c.views, c.uncertainty);
   else
     camera::save_camera(a.out, c, board.text());
   std::cout << "wrote " << a.out << "\n";
+  if (!a.report.empty()) {
+    report::write_camera_report(camera_report(c, detections), a.report);
+    std::cout << "wrote " << a.report << "\n";
+  }
   return 0;
 }
 
@@ -156,6 +162,8 @@ void add_camera_command(CLI::App& app, int& status) {
   calibrate->add_option("--format", args->format, "opencv (OpenCV YAML, the default) or ros (ROS camera_info YAML)")
       ->check(CLI::IsMember({"opencv", "ros"}));
   calibrate->add_option("--camera-name", args->camera_name, "camera_name of a ROS file")->capture_default_str();
+  calibrate->add_option("--report", args->report,
+                        "HTML report: residuals, coverage, distortion and projection uncertainty over the image");
   calibrate->callback([args, &status] { guarded("calibrate", status, *args, [&] { return run_calibrate(*args); }); });
 
   CLI::App* stereo = camera->add_subcommand("stereo", "Stereo calibration from image pairs of a board");

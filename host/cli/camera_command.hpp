@@ -1,6 +1,6 @@
 // `kincal camera`: camera calibration from image files (host/camera, host/capture).
 //
-//   kincal camera calibrate --board BOARD IMAGES... -o camera.yaml
+//   kincal camera calibrate --board BOARD IMAGES... -o camera.yaml [--report report.html]
 //   kincal camera stereo --board BOARD --left IMAGES... --right IMAGES... -o stereo.yaml
 //                        [--left-camera L.yaml --right-camera R.yaml] [--refine-intrinsics]
 //   kincal camera hand-eye --board BOARD --camera camera.yaml --poses robot_poses.csv
@@ -21,7 +21,9 @@
 //
 // Each command prints its report (parameters, residuals, every view used or rejected and why,
 // the detector that found each view's corners, warnings) and writes OpenCV YAML
-// (host/camera/calibration_file.hpp). Any error -- a missing or unreadable file, a bad board
+// (host/camera/calibration_file.hpp); calibrate --report also writes the camera report (HTML:
+// residuals, coverage, distortion field, projection uncertainty; host/cli/camera_report.hpp).
+// Every output path is checked before any work (host/files/output_file.hpp). Any error -- a missing or unreadable file, a bad board
 // text, a board of another size than the one given, images of another size, outlier views
 // beyond the gates, stereo pairs that disagree (a list shifted by one), too few usable views, a
 // refused hand-eye pose set -- is a message on stderr naming the file or what was wrong, and

@@ -634,11 +634,7 @@ std::string render_html(const Report& report) {
     runs.emplace_back(report.runs[i], i);
     validate(runs.back());
   }
-  std::string html = "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" +
-                     escape_html(report.title) + "</title><style>" + kStyle + plot_style() +
-                     "</style></head><body><header><h1>" + escape_html(report.title) + "</h1>";
-  if (!report.date.empty()) html += "<p class=\"date\">" + escape_html(report.date) + "</p>";
-  html += "</header>";
+  std::string html;
   if (runs.size() > 1) {
     html += "<nav><ul>";
     for (const RunContext& c : runs)
@@ -652,11 +648,20 @@ std::string render_html(const Report& report) {
       c.fail(e.what());
     }
   }
-  return html + "</body></html>\n";
+  return html_page(report.title, report.date, html);
 }
 
-void write_html(const Report& report, const std::string& path) {
-  const std::string html = render_html(report);
+std::string html_page(const std::string& title, const std::string& date, const std::string& body_html) {
+  std::string html = "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" +
+                     escape_html(title) + "</title><style>" + kStyle + plot_style() +
+                     "</style></head><body><header><h1>" + escape_html(title) + "</h1>";
+  if (!date.empty()) html += "<p class=\"date\">" + escape_html(date) + "</p>";
+  return html + "</header>" + body_html + "</body></html>\n";
+}
+
+void write_html(const Report& report, const std::string& path) { write_page(render_html(report), path); }
+
+void write_page(const std::string& html, const std::string& path) {
   try {
     files::write_file_atomically(path, html);
   } catch (const files::OutputError& e) {

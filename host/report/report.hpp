@@ -177,6 +177,11 @@ std::string utc_date_now();
 
 // The whole HTML document. Throws ReportError (see above).
 std::string render_html(const Report& report);
+// A page in the report's style around `body_html` (already escaped): title, date and the CSS;
+// the camera report (camera_report.hpp) shares it.
+std::string html_page(const std::string& title, const std::string& date, const std::string& body_html);
+// `html` written whole to `path` (host/files/output_file.hpp); ReportError naming the path.
+void write_page(const std::string& html, const std::string& path);
 // render_html() written whole to `path`, replacing it (host/files/output_file.hpp).
 void write_html(const Report& report, const std::string& path);
 
