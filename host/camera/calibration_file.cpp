@@ -28,19 +28,26 @@ cv::FileStorage open_for_reading(const std::string& path, const std::string& tex
   cv::FileStorage fs;
   try {
     fs.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
-  } catch (const cv::Exception& e) {
+  } catch (const std::exception& e) {  // cv::Exception, and std::length_error from OpenCV 4.6's parser
     throw CalibrationError(path + ": not an OpenCV YAML file (" + e.what() + ")");
   }
   if (!fs.isOpened()) throw CalibrationError(path + ": cannot read");
+  // fs[key] asserts (cv::Exception) on a document that is not a map of keys.
+  if (!fs.root().isMap()) throw CalibrationError(path + ": not an OpenCV YAML file of keys (its top is not a map)");
   return fs;
 }
 
 cv::Mat read_matrix(const cv::FileStorage& fs, const std::string& path, const std::string& key, int rows, int cols) {
   cv::Mat m;
   const cv::FileNode node = fs[key];
+  // The shape is checked before OpenCV reads the matrix: it allocates rows x cols as the file
+  // says (a damaged "cols:" became 2^31 and 64 GiB, found by fuzz.camera_inputs).
+  const auto is = [&](const char* field, int value) { return node[field].isInt() && static_cast<int>(node[field]) == value; };
+  const bool shaped = node.isMap() && is("rows", rows) && is("cols", cols) && node["data"].isSeq() &&
+                      node["data"].size() == static_cast<std::size_t>(rows * cols);
   try {
-    if (node.isMap()) node >> m;
-  } catch (const cv::Exception&) {
+    if (shaped) node >> m;
+  } catch (const std::exception&) {  // cv::Exception, and the std exceptions OpenCV's parser lets out
     m.release();
   }
   if (m.rows != rows || m.cols != cols) {
@@ -202,11 +209,15 @@ void save_camera_ros(const std::string& path, const CameraModel& camera, const s
 
 // A ROS camera_info file's YAML (no "%YAML:1.0" line, which OpenCV needs and yaml-cpp refuses).
 YAML::Node parse_ros(const std::string& path, const std::string& text) {
+  YAML::Node root;
   try {
-    return YAML::Load(text);
+    root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
     throw CalibrationError(path + ": not a YAML file (" + e.what() + ")");
   }
+  // root[key] throws on a scalar or a list: the class is refused here, once.
+  if (!root.IsMap()) throw CalibrationError(path + ": not a camera file (its top is not a map of keys)");
+  return root;
 }
 
 // A {rows, cols, data} matrix of a ROS file (CV_64F); throws YAML::Exception for a bad scalar.
@@ -271,7 +282,7 @@ std::optional<IntrinsicsCovariance> load_camera_uncertainty(const std::string& p
     out.corner_sigma_px = read_number(fs, path, "corner_sigma_px");
   }
   if (order != kIntrinsicsOrder) {
-    throw CalibrationError(path + ": key 'intrinsics_covariance_order' is '" + order + "', not '" + kIntrinsicsOrder +
+    throw CalibrationError(path + ": key 'intrinsics_covariance_order' is '" + files::excerpt(order) + "', not '" + kIntrinsicsOrder +
                            "'");
   }
   out.covariance = cv::Matx<double, 9, 9>(covariance);
