@@ -21,15 +21,9 @@ JointCorrector::JointCorrector(const model::RobotModel& controller, const model:
   if (controller.joint_count() != calibrated.joint_count())
     throw model::InputError("the nominal model has " + std::to_string(controller.joint_count()) +
                             " joints, the calibrated one " + std::to_string(calibrated.joint_count()));
-  const Eigen::AngleAxisd tool_turn(
-      Eigen::Matrix3d(controller.flange_T_tool.rotation.transpose() * calibrated.flange_T_tool.rotation));
-  if (options.orientation && tool_turn.angle() > 0.05)
-    throw model::InputError("the calibrated tool frame is turned " +
-                            std::to_string(tool_turn.angle() * 180 / std::numbers::pi) +
-                            " deg from the nominal's: correcting the orientation would turn the wrist to follow it "
-                            "(usually the measuring device's convention for the tool frame, not an error of the "
-                            "arm); correct the tool point alone (--position-only), or give a --nominal with the "
-                            "calibrated tool");
+  tool_turn_rad_ = Eigen::AngleAxisd(Eigen::Matrix3d(controller.flange_T_tool.rotation.transpose() *
+                                                     calibrated.flange_T_tool.rotation))
+                       .angle();
   if (!options.platform_step) {
     note_ = "the platform's step is switched off";
     return;
@@ -52,6 +46,13 @@ JointCorrection JointCorrector::correct(std::span<const double> readings) {
   if (static_cast<int>(readings.size()) != n)
     throw std::invalid_argument("JointCorrector::correct: " + std::to_string(readings.size()) +
                                 " readings for a model of " + std::to_string(n) + " joints");
+  if (options_.orientation && tool_turn_rad_ > 0.05)
+    throw model::InputError("the calibrated tool frame is turned " +
+                            std::to_string(tool_turn_rad_ * 180 / std::numbers::pi) +
+                            " deg from the nominal's: correcting the orientation would turn the wrist to follow it "
+                            "(usually the measuring device's convention for the tool frame, not an error of the "
+                            "arm); correct the tool point alone (--position-only), or give a --nominal with the "
+                            "calibrated tool");
   JointCorrection out;
   out.goal = model::forward_kinematics(controller_, readings);
   std::vector<double> start(readings.begin(), readings.end());

@@ -49,18 +49,19 @@ struct JointCorrection {
 
 class JointCorrector {
  public:
-  // Throws model::InputError when the joint counts differ, or when `orientation` is set and the two
-  // tools' rotations differ by more than 0.05 rad (the platform's largest step): such a rotation is
-  // usually the measuring device's convention for the tool frame (a tracker's probe frame turned
-  // 90 degrees about its axis), and following it would turn the wrist; the message says so and
-  // names the way out (orientation = false, or a nominal model with the calibrated tool).
+  // Throws model::InputError when the joint counts differ.
   JointCorrector(const model::RobotModel& controller, const model::RobotModel& calibrated,
                  const JointCorrectionOptions& options = {});
   ~JointCorrector();
   JointCorrector(const JointCorrector&) = delete;
   JointCorrector& operator=(const JointCorrector&) = delete;
 
-  // Throws std::invalid_argument when readings.size() is not the joint count.
+  // Throws std::invalid_argument when readings.size() is not the joint count, and model::InputError
+  // when `orientation` is set and the two tools' rotations differ by more than 0.05 rad (the
+  // platform's largest step): such a rotation is usually the measuring device's convention for the
+  // tool frame (a tracker's probe frame turned 90 degrees about its axis), and following it would
+  // turn the wrist; the message says so and names the way out (orientation = false, or a nominal
+  // model with the calibrated tool).
   JointCorrection correct(std::span<const double> readings);
 
   // Whether the platform's step is in use, and if not why not (empty when it is).
@@ -73,6 +74,7 @@ class JointCorrector {
  private:
   model::RobotModel controller_, calibrated_;
   JointCorrectionOptions options_;
+  double tool_turn_rad_ = 0.0;  // the angle between the two tools' rotations
   std::unique_ptr<PlatformStep> platform_;
   std::string note_;
 };

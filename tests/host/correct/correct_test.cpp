@@ -170,6 +170,20 @@ TEST_CASE("joint targets: models the block cannot carry get the Newton solve alo
   CHECK(c.refined);
   CHECK(c.solution.outcome == correct::Outcome::reached);
   CHECK_THROWS_AS(pc.correct(std::vector<double>{0.1, 0.2}), std::invalid_argument);
+
+  // A tool frame turned by more than the platform's largest step: orientation refused, the point
+  // corrected.
+  model::RobotModel turned = calibrated;
+  turned.joints[3].mass_kg = 0.0;
+  turned.flange_T_tool.rotation = Eigen::AngleAxisd(0.1, model::Vector3::UnitZ()).toRotationMatrix();
+  const std::vector<double> q = {0.1, -0.4, 0.3, 0.2, -0.5, 0.7};
+  CHECK_THROWS_WITH_AS(correct::JointCorrector(start, turned).correct(q), doctest::Contains("--position-only"),
+                       model::InputError);
+  correct::JointCorrectionOptions point;
+  point.orientation = false;
+  const correct::JointCorrection p = correct::JointCorrector(start, turned, point).correct(q);
+  CHECK(p.solution.outcome == correct::Outcome::reached);
+  CHECK((tool_in_frame0(turned, p.solution.q) - p.goal.translation).norm() < 1e-5);
 }
 
 TEST_CASE("solve_pose: reachable poses reached within the limits, from a seed in the same branch") {
