@@ -67,6 +67,16 @@ const std::vector<BoardDetection>& chessboard_views() {
   return views;
 }
 
+// n board views of the test camera projected with 0.1 px noise drawn from `rng`, named v0, v1, ...
+std::vector<BoardDetection> projected_views(const Board& board, int n, cv::RNG& rng) {
+  const CameraModel truth = model_of(scenes::test_camera());
+  std::vector<BoardDetection> detections;
+  for (const Eigen::Isometry3d& v : scenes::board_views(board, n)) {
+    detections.push_back(projected(board, truth, v, "v" + std::to_string(detections.size()), rng));
+  }
+  return detections;
+}
+
 double rotation_error_rad(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
   return Eigen::AngleAxisd(a.rotation().transpose() * b.rotation()).angle();
 }
@@ -321,10 +331,7 @@ TEST_CASE("calibration files round-trip in OpenCV YAML and name bad keys") {
   const Board board = parse_board(scenes::chessboard_text());
   const CameraModel truth = model_of(scenes::test_camera());
   cv::RNG rng(11);
-  std::vector<BoardDetection> detections;
-  for (const Eigen::Isometry3d& v : scenes::board_views(board, 6)) {
-    detections.push_back(projected(board, truth, v, "v" + std::to_string(detections.size()), rng));
-  }
+  const std::vector<BoardDetection> detections = projected_views(board, 6, rng);
   const IntrinsicCalibration c = calibrate_intrinsics(detections);
   save_camera(dir.file("camera.yaml"), c, board.text());
   const CameraModel loaded = load_camera(dir.file("camera.yaml"));
@@ -416,12 +423,8 @@ TEST_CASE("a camera in ROS camera_info YAML: the keys ROS reads, read back exact
 TEST_CASE("camera files carry the intrinsics' covariance and projection sigma; files without them still read") {
   TempDir dir;
   const Board board = parse_board(scenes::chessboard_text());
-  const CameraModel truth = model_of(scenes::test_camera());
   cv::RNG rng(12);
-  std::vector<BoardDetection> detections;
-  for (const Eigen::Isometry3d& v : scenes::board_views(board, 10)) {
-    detections.push_back(projected(board, truth, v, "v" + std::to_string(detections.size()), rng));
-  }
+  const std::vector<BoardDetection> detections = projected_views(board, 10, rng);
   const IntrinsicCalibration c = calibrate_intrinsics(detections);
   // The corner noise is 0.1 px; sigma from the residuals finds it.
   CHECK(c.uncertainty.corner_sigma_px == doctest::Approx(0.1).epsilon(0.1));
