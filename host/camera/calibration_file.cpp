@@ -42,7 +42,9 @@ cv::Mat read_matrix(const cv::FileStorage& fs, const std::string& path, const st
   const cv::FileNode node = fs[key];
   // The shape is checked before OpenCV reads the matrix: it allocates rows x cols as the file
   // says (a damaged "cols:" became 2^31 and 64 GiB, found by fuzz.camera_inputs).
-  const auto is = [&](const char* field, int value) { return node[field].isInt() && static_cast<int>(node[field]) == value; };
+  const auto is = [&](const char* field, int value) {
+    return node[field].isInt() && static_cast<int>(node[field]) == value;
+  };
   const bool shaped = node.isMap() && is("rows", rows) && is("cols", cols) && node["data"].isSeq() &&
                       node["data"].size() == static_cast<std::size_t>(rows * cols);
   try {
@@ -278,12 +280,13 @@ std::optional<IntrinsicsCovariance> load_camera_uncertainty(const std::string& p
     cv::FileStorage fs = open_for_reading(path, text);
     if (fs["intrinsics_covariance"].empty()) return std::nullopt;
     covariance = read_matrix(fs, path, "intrinsics_covariance", 9, 9);
-    if (fs["intrinsics_covariance_order"].isString()) order = static_cast<std::string>(fs["intrinsics_covariance_order"]);
+    if (fs["intrinsics_covariance_order"].isString())
+      order = static_cast<std::string>(fs["intrinsics_covariance_order"]);
     out.corner_sigma_px = read_number(fs, path, "corner_sigma_px");
   }
   if (order != kIntrinsicsOrder) {
-    throw CalibrationError(path + ": key 'intrinsics_covariance_order' is '" + files::excerpt(order) + "', not '" + kIntrinsicsOrder +
-                           "'");
+    throw CalibrationError(path + ": key 'intrinsics_covariance_order' is '" + files::excerpt(order) + "', not '" +
+                           kIntrinsicsOrder + "'");
   }
   out.covariance = cv::Matx<double, 9, 9>(covariance);
   bool valid = std::isfinite(out.corner_sigma_px) && out.corner_sigma_px >= 0;

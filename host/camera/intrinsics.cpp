@@ -180,7 +180,8 @@ IntrinsicCalibration calibrate_intrinsics(const std::vector<BoardDetection>& det
   std::vector<SolvedView> solved;
   for (std::size_t k = 0; k < used.size(); ++k) {
     const ViewReport& v = result.views[used[k]];
-    solved.push_back({&detections[used[k]].board_m, &detections[used[k]].image_px, v.camera_r_board, v.camera_t_board_m});
+    solved.push_back(
+        {&detections[used[k]].board_m, &detections[used[k]].image_px, v.camera_r_board, v.camera_t_board_m});
   }
   result.uncertainty = intrinsics_covariance(result.camera, solved, options.flags);
   for (int i = 0; i < 9; ++i)
@@ -244,8 +245,9 @@ std::string describe(const IntrinsicCalibration& c) {
   if (!sigmas.empty()) {
     std::nth_element(sigmas.begin(), sigmas.begin() + static_cast<std::ptrdiff_t>(sigmas.size() / 2), sigmas.end());
     out << "projection sigma over the image (worst axis, 16x12 grid): median " << fixed(sigmas[sigmas.size() / 2], 3)
-        << " px, largest " << fixed(largest_px, 3) << " px at (" << fixed(grid.x_px[static_cast<std::size_t>(largest_at.x)], 0)
-        << ", " << fixed(grid.y_px[static_cast<std::size_t>(largest_at.y)], 0) << ")\n";
+        << " px, largest " << fixed(largest_px, 3) << " px at ("
+        << fixed(grid.x_px[static_cast<std::size_t>(largest_at.x)], 0) << ", "
+        << fixed(grid.y_px[static_cast<std::size_t>(largest_at.y)], 0) << ")\n";
   }
   out << "coverage: " << fixed(100 * c.coverage, 0) << " %\n";
   for (const ViewReport& v : c.views) {

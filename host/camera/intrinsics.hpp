@@ -86,7 +86,7 @@ struct IntrinsicOptions {
 
 struct IntrinsicCalibration {
   CameraModel camera;
-  std::array<double, 9> std_dev{};  // fx fy cx cy (px), k1 k2 p1 p2 k3: sqrt of uncertainty's diagonal
+  std::array<double, 9> std_dev{};   // fx fy cx cy (px), k1 k2 p1 p2 k3: sqrt of uncertainty's diagonal
   IntrinsicsCovariance uncertainty;  // host/camera/uncertainty.hpp: poses marginalised, sigma from residuals
   double rms_px = 0;
   double coverage = 0;  // fraction of the 8 x 6 cells holding a corner

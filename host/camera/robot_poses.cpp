@@ -5,9 +5,9 @@
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
-#include <sstream>
 #include <map>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 
 #include "host/camera/intrinsics.hpp"

@@ -29,14 +29,21 @@ std::array<bool, 9> free_parameters(int flags) {
   const auto is_free = [&](int flag) { return (flags & flag) == 0; };
   const bool focal = is_free(cv::CALIB_FIX_FOCAL_LENGTH), centre = is_free(cv::CALIB_FIX_PRINCIPAL_POINT);
   const bool tangential = is_free(cv::CALIB_ZERO_TANGENT_DIST);
-  return {focal,         focal,      centre,     centre, is_free(cv::CALIB_FIX_K1), is_free(cv::CALIB_FIX_K2),
-          tangential, tangential, is_free(cv::CALIB_FIX_K3)};
+  return {focal,
+          focal,
+          centre,
+          centre,
+          is_free(cv::CALIB_FIX_K1),
+          is_free(cv::CALIB_FIX_K2),
+          tangential,
+          tangential,
+          is_free(cv::CALIB_FIX_K3)};
 }
 
 // projectPoints of `points` at the pose with its Jacobian: columns rotation (3), translation (3),
 // fx fy cx cy (4), k1 k2 p1 p2 k3 (5), two rows per point.
-cv::Mat project_with_jacobian(const CameraModel& camera, cv::InputArray points, cv::Vec3d r,
-                              cv::Vec3d t, std::vector<cv::Point2d>& projected) {
+cv::Mat project_with_jacobian(const CameraModel& camera, cv::InputArray points, cv::Vec3d r, cv::Vec3d t,
+                              std::vector<cv::Point2d>& projected) {
   cv::Mat jacobian;
   cv::projectPoints(points, r, t, cv::Mat(camera.camera_matrix), camera.distortion_mat(), projected, jacobian);
   return jacobian;
@@ -63,8 +70,7 @@ std::vector<cv::Point2d> reproject(const CameraModel& from, const CameraModel& t
   return projected;
 }
 
-IntrinsicsCovariance intrinsics_covariance(const CameraModel& camera, const std::vector<SolvedView>& views,
-                                           int flags) {
+IntrinsicsCovariance intrinsics_covariance(const CameraModel& camera, const std::vector<SolvedView>& views, int flags) {
   const std::array<bool, 9> free = free_parameters(flags);
   Matrix9d schur = Matrix9d::Zero();
   double ssr = 0;
@@ -118,10 +124,10 @@ IntrinsicsCovariance intrinsics_covariance(const CameraModel& camera, const std:
   if (!(smallest > largest * 1e-14)) {
     throw CalibrationError("intrinsics covariance: the views do not determine the intrinsics (J^T J singular)");
   }
-  const Eigen::MatrixXd inverse = scale.asDiagonal() *
-                                  (eigen.eigenvectors() * eigen.eigenvalues().cwiseInverse().asDiagonal() *
-                                   eigen.eigenvectors().transpose()) *
-                                  scale.asDiagonal();
+  const Eigen::MatrixXd inverse =
+      scale.asDiagonal() *
+      (eigen.eigenvectors() * eigen.eigenvalues().cwiseInverse().asDiagonal() * eigen.eigenvectors().transpose()) *
+      scale.asDiagonal();
   const double sigma2 = out.corner_sigma_px * out.corner_sigma_px;
   for (Eigen::Index i = 0; i < m; ++i)
     for (Eigen::Index j = 0; j < m; ++j)
@@ -150,8 +156,8 @@ ProjectionSigmaGrid projection_sigma_grid(const CameraModel& camera, const Intri
   g.sigma_px.create(rows, cols, CV_64F);
   for (int r = 0; r < rows; ++r) {
     for (int c = 0; c < cols; ++c) {
-      const cv::Matx22d q = projection_covariance(camera, covariance,
-                                                  {g.x_px[static_cast<std::size_t>(c)], g.y_px[static_cast<std::size_t>(r)]});
+      const cv::Matx22d q = projection_covariance(
+          camera, covariance, {g.x_px[static_cast<std::size_t>(c)], g.y_px[static_cast<std::size_t>(r)]});
       // The larger eigenvalue of a symmetric 2 x 2.
       const double mean = 0.5 * (q(0, 0) + q(1, 1)), half = 0.5 * (q(0, 0) - q(1, 1));
       g.sigma_px.at<double>(r, c) = std::sqrt(mean + std::sqrt(half * half + q(0, 1) * q(0, 1)));

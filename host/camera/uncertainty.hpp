@@ -60,8 +60,7 @@ struct SolvedView {
   cv::Vec3d camera_r_board, camera_t_board_m;
 };
 
-IntrinsicsCovariance intrinsics_covariance(const CameraModel& camera, const std::vector<SolvedView>& views,
-                                           int flags);
+IntrinsicsCovariance intrinsics_covariance(const CameraModel& camera, const std::vector<SolvedView>& views, int flags);
 
 // The 2 x 2 covariance (px^2) of the projection of the ray seen at `pixel_px`; NaN entries when
 // the model does not invert there (its round trip misses the pixel by more than 1e-3 px: a

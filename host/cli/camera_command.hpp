@@ -23,11 +23,10 @@
 // the detector that found each view's corners, warnings) and writes OpenCV YAML
 // (host/camera/calibration_file.hpp); calibrate --report also writes the camera report (HTML:
 // residuals, coverage, distortion field, projection uncertainty; host/cli/camera_report.hpp).
-// Every output path is checked before any work (host/files/output_file.hpp). Any error -- a missing or unreadable file, a bad board
-// text, a board of another size than the one given, images of another size, outlier views
-// beyond the gates, stereo pairs that disagree (a list shifted by one), too few usable views, a
-// refused hand-eye pose set -- is a message on stderr naming the file or what was wrong, and
-// exit status 1.
+// Every output path is checked before any work (host/files/output_file.hpp). Any error -- a missing or unreadable file,
+// a bad board text, a board of another size than the one given, images of another size, outlier views beyond the gates,
+// stereo pairs that disagree (a list shifted by one), too few usable views, a refused hand-eye pose set -- is a message
+// on stderr naming the file or what was wrong, and exit status 1.
 #pragma once
 
 #include <CLI/App.hpp>

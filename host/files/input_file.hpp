@@ -4,8 +4,8 @@
 //
 // Accepted: a regular file, or a symbolic link to one; "-" is standard input only where the
 // caller passes StandardInput::allowed (a command that documents it). Text must be UTF-8: a
-// UTF-8 byte-order mark is accepted and removed (kept for kOriginalUrdfFile); CRLF line ends are kept as they are (every
-// reader takes them).
+// UTF-8 byte-order mark is accepted and removed (kept for kOriginalUrdfFile); CRLF line ends are kept as they are
+// (every reader takes them).
 //
 // Refused, by name, before anything is read (InputFileError "PATH: what"):
 //   - a path that does not exist ("PATH: no such file") or cannot be opened (the system's reason);

@@ -13,7 +13,7 @@ namespace kincal::report {
 namespace {
 
 constexpr std::array<const char*, 8> kViewColours = {"#d95f02", "#7570b3", "#1b9e77", "#e7298a",
-                                                 "#66a61e", "#e6ab02", "#a6761d", "#666666"};
+                                                     "#66a61e", "#e6ab02", "#a6761d", "#666666"};
 
 std::string fixed_text(double v, int decimals) {
   char text[48];
@@ -43,9 +43,10 @@ void add_vectors(PlotSpec& p, const std::string& name, const char* colour, const
                  const std::vector<double>& y, const std::vector<double>& dx, const std::vector<double>& dy,
                  double scale) {
   require_that(x.size() == y.size() && x.size() == dx.size() && x.size() == dy.size(),
-          name + ": positions and vectors differ in number");
+               name + ": positions and vectors differ in number");
   for (std::size_t i = 0; i < x.size(); ++i) {
-    p.series.push_back({i == 0 ? name : "", colour, {x[i], x[i] + scale * dx[i]}, {-y[i], -(y[i] + scale * dy[i])}, true});
+    p.series.push_back(
+        {i == 0 ? name : "", colour, {x[i], x[i] + scale * dx[i]}, {-y[i], -(y[i] + scale * dy[i])}, true});
   }
 }
 
@@ -71,14 +72,14 @@ std::string residual_section(const CameraReport& r) {
   PlotSpec p = image_plot(r, "Residuals of every corner, all views");
   for (std::size_t k = 0; k < r.views.size(); ++k) {
     const CameraReportView& v = r.views[k];
-    add_vectors(p, v.name + " (" + fixed_text(v.rms_px, 3) + " px)", kViewColours[k % kViewColours.size()], v.x_px, v.y_px,
-                v.dx_px, v.dy_px, scale);
+    add_vectors(p, v.name + " (" + fixed_text(v.rms_px, 3) + " px)", kViewColours[k % kViewColours.size()], v.x_px,
+                v.y_px, v.dx_px, v.dy_px, scale);
   }
   p.notes.push_back("vectors magnified " + fixed_text(scale, 0) + " times");
   return camera_section("residuals", "Residuals",
-                 "Each corner's residual (detected minus projected) drawn from the corner. Vectors that line up "
-                 "across a region or a view point to a lens the model does not follow or a bad detection.",
-                 svg_plot(p));
+                        "Each corner's residual (detected minus projected) drawn from the corner. Vectors that line up "
+                        "across a region or a view point to a lens the model does not follow or a bad detection.",
+                        svg_plot(p));
 }
 
 std::string coverage_section(const CameraReport& r) {
@@ -91,10 +92,11 @@ std::string coverage_section(const CameraReport& r) {
     }
   }
   p.series.push_back(std::move(dots));
-  return camera_section("coverage", "Coverage",
-                 "Where the corners were. The lens model is extrapolated in empty regions: add views with the board "
-                 "there.",
-                 svg_plot(p));
+  return camera_section(
+      "coverage", "Coverage",
+      "Where the corners were. The lens model is extrapolated in empty regions: add views with the board "
+      "there.",
+      svg_plot(p));
 }
 
 std::string distortion_section(const CameraReport& r) {
@@ -106,7 +108,7 @@ std::string distortion_section(const CameraReport& r) {
   add_vectors(p, "displacement", "#7570b3", r.field_x_px, r.field_y_px, r.field_dx_px, r.field_dy_px, scale);
   p.notes.push_back("largest displacement " + fixed_text(largest, 1) + " px, drawn " + fixed_text(scale, 2) + " times");
   return camera_section("distortion", "Distortion",
-                 "How far the lens moves each point from where a pinhole camera would see it.", svg_plot(p));
+                        "How far the lens moves each point from where a pinhole camera would see it.", svg_plot(p));
 }
 
 std::string uncertainty_section(const CameraReport& r) {
@@ -116,7 +118,7 @@ std::string uncertainty_section(const CameraReport& r) {
   std::array<PlotSeries, 6> bins;
   for (std::size_t b = 0; b < bins.size(); ++b) {
     bins[b].colour = kColours[b];
-    bins[b].name = b == 5 ? "model does not invert"
+    bins[b].name = b == 5   ? "model does not invert"
                    : b == 0 ? "below " + fixed_text(kBounds[0], 2) + " px"
                    : b == 4 ? fixed_text(kBounds[3], 2) + " px and more"
                             : fixed_text(kBounds[b - 1], 2) + " to " + fixed_text(kBounds[b], 2) + " px";
@@ -142,13 +144,14 @@ std::string uncertainty_section(const CameraReport& r) {
   for (PlotSeries& b : bins) {
     if (!b.x.empty()) p.series.push_back(std::move(b));
   }
-  p.notes.push_back("largest " + fixed_text(largest, 3) + " px at (" + fixed_text(largest_x, 0) + ", " + fixed_text(largest_y, 0) +
-                    ")");
-  return camera_section("uncertainty", "Projection uncertainty",
-                 "How well the ray of each pixel is known: the intrinsics' covariance (view poses marginalised, corner "
-                 "noise from the residuals) propagated to the projection. Large values show where more views are "
-                 "needed.",
-                 svg_plot(p));
+  p.notes.push_back("largest " + fixed_text(largest, 3) + " px at (" + fixed_text(largest_x, 0) + ", " +
+                    fixed_text(largest_y, 0) + ")");
+  return camera_section(
+      "uncertainty", "Projection uncertainty",
+      "How well the ray of each pixel is known: the intrinsics' covariance (view poses marginalised, corner "
+      "noise from the residuals) propagated to the projection. Large values show where more views are "
+      "needed.",
+      svg_plot(p));
 }
 
 }  // namespace

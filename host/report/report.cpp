@@ -652,9 +652,9 @@ std::string render_html(const Report& report) {
 }
 
 std::string html_page(const std::string& title, const std::string& date, const std::string& body_html) {
-  std::string html = "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" +
-                     escape_html(title) + "</title><style>" + kStyle + plot_style() +
-                     "</style></head><body><header><h1>" + escape_html(title) + "</h1>";
+  std::string html = "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" + escape_html(title) +
+                     "</title><style>" + kStyle + plot_style() + "</style></head><body><header><h1>" +
+                     escape_html(title) + "</h1>";
   if (!date.empty()) html += "<p class=\"date\">" + escape_html(date) + "</p>";
   return html + "</header>" + body_html + "</body></html>\n";
 }

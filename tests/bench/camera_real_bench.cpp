@@ -168,8 +168,8 @@ int main() {
       high = std::max(high, ratio);
       deviation = std::max(deviation, std::abs(ratio * same_sigma - 1));
     }
-    std::printf("kincal's standard deviations over OpenCV's: %.6f..%.6f; sqrt((N - n) / (2N - n)) = %.6f\n", low,
-                high, 1 / same_sigma);
+    std::printf("kincal's standard deviations over OpenCV's: %.6f..%.6f; sqrt((N - n) / (2N - n)) = %.6f\n", low, high,
+                1 / same_sigma);
     figure("camera_real_intrinsics_std_over_opencv", 0.5 * (low + high), "ratio");
     figure("camera_real_intrinsics_std_same_sigma_deviation", deviation, "ratio");
   }

@@ -156,7 +156,8 @@ int main() {
   for (int t = 0; t < kRenderedTrials; ++t) {
     std::vector<BoardDetection> views;
     for (const Eigen::Isometry3d& pose : scenes::board_views(board, 10 + t % 11)) {
-      const cv::Mat image = scenes::render(spec, pose, target, static_cast<std::uint64_t>(5000 + 100 * t) + views.size());
+      const cv::Mat image =
+          scenes::render(spec, pose, target, static_cast<std::uint64_t>(5000 + 100 * t) + views.size());
       views.push_back(detect_board(board, image, "view" + std::to_string(views.size())));
     }
     const IntrinsicCalibration c = calibrate_intrinsics(views);

@@ -28,16 +28,16 @@ void require(bool condition) {
 
 bool same(const can::LoggedFrame& a, const can::LoggedFrame& b) {
   return a.time_us == b.time_us && a.interface == b.interface && a.remote == b.remote && a.frame.id == b.frame.id &&
-         a.frame.extended == b.frame.extended && a.frame.fd == b.frame.fd && a.frame.brs == b.frame.brs && a.frame.length == b.frame.length &&
-         a.frame.data == b.frame.data;
+         a.frame.extended == b.frame.extended && a.frame.fd == b.frame.fd && a.frame.brs == b.frame.brs &&
+         a.frame.length == b.frame.length && a.frame.data == b.frame.data;
 }
 
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string path = "/tmp/kincal_candump_fuzz_" + std::to_string(::getpid()) + ".log";
-  std::ofstream(path, std::ios::binary | std::ios::trunc).write(reinterpret_cast<const char*>(data),
-                                                                static_cast<std::streamsize>(size));
+  std::ofstream(path, std::ios::binary | std::ios::trunc)
+      .write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
   try {
     can::CandumpReader reader(path);
     for (std::optional<can::LoggedFrame> f = reader.next(); f; f = reader.next())

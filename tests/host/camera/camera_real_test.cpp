@@ -88,7 +88,8 @@ TEST_CASE("the intrinsics' standard deviations agree with OpenCV's stdDeviations
   CHECK(c.uncertainty.parameters == 9 + 6 * 13);
   const double dof_ratio = std::sqrt((2 * corners - n) / (corners - n));
   // calibrateCamera's RMS is per corner: SSR = N rms^2.
-  CHECK(c.uncertainty.corner_sigma_px == doctest::Approx(c.rms_px * std::sqrt(corners / (2 * corners - n))).epsilon(1e-6));
+  CHECK(c.uncertainty.corner_sigma_px ==
+        doctest::Approx(c.rms_px * std::sqrt(corners / (2 * corners - n))).epsilon(1e-6));
   for (int i = 0; i < 9; ++i) {
     const double ratio = c.std_dev[static_cast<std::size_t>(i)] * dof_ratio / opencv_std.at<double>(i);
     MESSAGE("parameter " << i << ": kincal " << c.std_dev[static_cast<std::size_t>(i)] << ", OpenCV "

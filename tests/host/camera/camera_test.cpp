@@ -428,7 +428,8 @@ TEST_CASE("camera files carry the intrinsics' covariance and projection sigma; f
   const IntrinsicCalibration c = calibrate_intrinsics(detections);
   // The corner noise is 0.1 px; sigma from the residuals finds it.
   CHECK(c.uncertainty.corner_sigma_px == doctest::Approx(0.1).epsilon(0.1));
-  for (int i = 0; i < 9; ++i) CHECK(c.std_dev[static_cast<std::size_t>(i)] == std::sqrt(c.uncertainty.covariance(i, i)));
+  for (int i = 0; i < 9; ++i)
+    CHECK(c.std_dev[static_cast<std::size_t>(i)] == std::sqrt(c.uncertainty.covariance(i, i)));
   const auto same_covariance = [&](const std::optional<IntrinsicsCovariance>& loaded) {
     REQUIRE(loaded.has_value());
     CHECK(loaded->corner_sigma_px == doctest::Approx(c.uncertainty.corner_sigma_px).epsilon(1e-12));
@@ -454,7 +455,8 @@ TEST_CASE("camera files carry the intrinsics' covariance and projection sigma; f
   CHECK(grid_x.at<double>(0) == doctest::Approx(19.5));
   CHECK(grid_y.at<double>(11) == doctest::Approx(459.5));
   // The grid is the projection covariance's worst axis at those pixels, and grows off the board.
-  const cv::Matx22d centre = projection_covariance(c.camera, c.uncertainty, {grid_x.at<double>(8), grid_y.at<double>(6)});
+  const cv::Matx22d centre =
+      projection_covariance(c.camera, c.uncertainty, {grid_x.at<double>(8), grid_y.at<double>(6)});
   CHECK(grid.at<double>(6, 8) >= std::sqrt(std::max(centre(0, 0), centre(1, 1))));
   CHECK(grid.at<double>(6, 8) <= std::sqrt(centre(0, 0) + centre(1, 1)));
   CHECK(grid.at<double>(0, 0) > 2 * grid.at<double>(6, 8));
@@ -478,7 +480,8 @@ TEST_CASE("camera files carry the intrinsics' covariance and projection sigma; f
   std::ofstream(dir.file("opencv_sample.yaml"))
       << "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\ncamera_matrix: !!opencv-matrix\n   rows: 3\n"
          "   cols: 3\n   dt: d\n   data: [ 600., 0., 320., 0., 600., 240., 0., 0., 1. ]\n"
-         "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n   data: [ 0., 0., 0., 0., 0. ]\n";
+         "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n   data: [ 0., 0., 0., 0., 0. "
+         "]\n";
   CHECK(load_camera(dir.file("opencv_sample.yaml")).camera_matrix(0, 0) == 600);
   CHECK_FALSE(load_camera_uncertainty(dir.file("opencv_sample.yaml")).has_value());
   // A covariance in another order, without its sigma or not symmetric is refused by name.
