@@ -1,16 +1,20 @@
-// libFuzzer target for the files the camera commands and the stereo rig read (issue #25): robot
-// poses (camera::parse_robot_poses, `camera hand-eye --poses`), camera, stereo and hand-eye files
-// (camera::load_camera, load_camera_uncertainty, load_stereo, load_hand_eye, OpenCV YAML or ROS camera_info, through a
-// temporary file and the input layer) and colour tables (core::parse_colour_table,
-// `--colour-table`). The first input byte chooses the reader (and for poses the rotation
-// columns' meaning); the rest is the file. Robot poses: CalibrationError "FILE:LINE: what" with
-// a short message, or poses with a finite translation within reach and a rotation matrix
-// orthonormal to 1e-9. Camera files: CalibrationError naming the file, or a camera with finite
-// numbers that the writer writes and the reader reads back to the same matrix. Colour tables:
-// the fuzzer signs the block with its CRC (so mutations reach the checks behind it); a block
-// parsed is serialized back to the same bytes. Any other exception, a crash, a leak or undefined
-// behaviour is a finding. Runs standalone too, and as the ctest fuzz.camera_inputs for a bounded
-// time; seeds in camera_inputs_seeds/.
+// libFuzzer target for the files the camera commands, the stereo rig and `platform load` read
+// (issue #25), each through a temporary file and the input layer where the reader takes a path:
+//   - robot poses (camera::parse_robot_poses, `camera hand-eye --poses`): CalibrationError
+//     "FILE:LINE: what" with a short message, or poses with a finite translation within reach
+//     and a rotation orthonormal to 1e-9;
+//   - camera files (camera::load_camera, load_camera_uncertainty; OpenCV YAML or ROS
+//     camera_info) and the platform's camera block (session::read_camera_block): an error naming
+//     the file, or a camera that the writer writes and the reader reads back to the same matrix;
+//   - stereo and hand-eye files, the platform's geometry (session::read_geometry_block): an
+//     error naming the file, or a value;
+//   - colour tables (core::parse_colour_table, `--colour-table`): the fuzzer signs the block with
+//     its CRC (so mutations reach the checks behind it); a block parsed serializes back to the
+//     same bytes.
+// The first input byte chooses the reader: 0-1 poses (bits 3-4: the rotation columns' meaning),
+// 2-3 camera, 4 stereo, 5 hand-eye, 6 geometry, 7 colour table; the rest is the file. Any other
+// exception, a crash, a leak or undefined behaviour is a finding. Runs standalone too, and as the
+// ctest fuzz.camera_inputs for a bounded time; seeds in camera_inputs_seeds/.
 #include <unistd.h>
 
 #include <algorithm>
@@ -28,6 +32,7 @@
 #include "firmware/core/colour_class.hpp"
 #include "host/camera/calibration_file.hpp"
 #include "host/camera/robot_poses.hpp"
+#include "host/session/platform_files.hpp"
 #include "shared/crc32.hpp"
 
 using namespace kincal;
@@ -59,21 +64,28 @@ void robot_poses(const std::string& text, std::uint8_t choice) {
   }
 }
 
-void camera_file(const std::string& text, std::uint8_t choice) {
+// Reader `which`: 0 a camera (and its uncertainty keys, and the platform's camera block), 1 a
+// stereo pair, 2 hand-eye, 3 the platform's geometry (platform.yaml).
+void settings_file(const std::string& text, int which) {
   const std::string path = "/tmp/kincal_camera_fuzz_" + std::to_string(::getpid()) + ".yaml";
   std::ofstream(path, std::ios::binary | std::ios::trunc) << text;
   try {
-    if ((choice & 6) == 0) {
+    if (which == 0) {
       (void)camera::load_camera_uncertainty(path);
       const camera::CameraModel c = camera::load_camera(path);
+      (void)session::read_camera_block(path);
       camera::save_camera_ros(path, c, "fuzz");
       require(camera::load_camera(path).camera_matrix == c.camera_matrix);
-    } else if ((choice & 6) == 2) {
+    } else if (which == 1) {
       (void)camera::load_stereo(path);
-    } else {
+    } else if (which == 2) {
       (void)camera::load_hand_eye(path);
+    } else {
+      (void)session::read_geometry_block(path);
     }
   } catch (const camera::CalibrationError& e) {
+    short_message_naming(e, path);
+  } catch (const session::PlatformSetupError& e) {
     short_message_naming(e, path);
   }
   std::remove(path.c_str());
@@ -102,11 +114,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     case 1:
       robot_poses(text, data[0]);
       break;
+    case 2:
+    case 3:
+      settings_file(text, 0);
+      break;
     case 7:
       colour_table(text);
       break;
     default:
-      camera_file(text, static_cast<std::uint8_t>(data[0] - 2));
+      settings_file(text, (data[0] & 7) - 3);
   }
   return 0;
 }
