@@ -1,7 +1,7 @@
 // Doty's calibration square (ARID report sections 5 and 7): the fiducial layout that Doty's FID
 // identifies (firmware/core/fiducial_id.hpp), in metres, for the host code that needs it as
 // numbers: the simulator draws it (host/sim/strip.hpp), the platform setup loads its centres into
-// the platform's geometry block (host/session/platform_setup.hpp).
+// the platform's geometry block (host/session/platform_files.hpp).
 //
 // The square frame (that of fiducial_id.hpp and of the platform's pose report): origin at the
 // centre fiducial p4, x toward p5, y toward p2, z out of the printed side. With s the small
