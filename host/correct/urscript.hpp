@@ -12,8 +12,8 @@
 //
 // Written: the program's bytes unchanged but for the text between each target's brackets, which
 // becomes the new values (shortest exact decimal, ", " between them). Line ends (LF, CRLF),
-// comments, blank lines and every other line are kept byte for byte (a UTF-8 byte-order mark is
-// removed by files::read_text).
+// comments, blank lines and every other line are kept byte for byte, a UTF-8 byte-order mark
+// too (files::kProgramFile keeps it).
 // The text comes from files::read_text (kProgramFile).
 #pragma once
 

@@ -4,7 +4,8 @@
 //
 // Accepted: a regular file, or a symbolic link to one; "-" is standard input only where the
 // caller passes StandardInput::allowed (a command that documents it). Text must be UTF-8: a
-// UTF-8 byte-order mark is accepted and removed (kept for kOriginalUrdfFile); CRLF line ends are kept as they are
+// UTF-8 byte-order mark is accepted and removed (kept for files written back byte for byte:
+// kOriginalUrdfFile, kProgramFile); CRLF line ends are kept as they are
 // (every reader takes them).
 //
 // Refused, by name, before anything is read (InputFileError "PATH: what"):
@@ -35,7 +36,7 @@ class InputFileError : public std::runtime_error {
 // What a file holds (for messages), how large it may be, and whether its text is decoded: a
 // journal checks every line's CRC itself, and a journal torn by a crash may end in NUL bytes;
 // utf8_keeping_mark checks as utf8 but keeps a byte-order mark, for a file written back byte for
-// byte (`urdf --original`); none reads the bytes as they are (a binary colour table).
+// byte (`urdf --original`, a URScript program); none reads the bytes as they are (a binary colour table).
 enum class Decoding { utf8, utf8_keeping_mark, none };
 struct InputKind {
   const char* what;
@@ -52,7 +53,7 @@ inline constexpr InputKind kJournalFile{"journal", 256 * kMiB, Decoding::none};
 inline constexpr InputKind kCandumpFile{"candump log", 256 * kMiB};
 inline constexpr InputKind kSettingsFile{"settings file (YAML)", 16 * kMiB};  // platform, camera
 inline constexpr InputKind kImageFile{"image", 512 * kMiB};
-inline constexpr InputKind kProgramFile{"robot program", 64 * kMiB};  // URScript (kincal correct)
+inline constexpr InputKind kProgramFile{"robot program", 64 * kMiB, Decoding::utf8_keeping_mark};  // URScript (correct)
 inline constexpr InputKind kOriginalUrdfFile{"URDF", 64 * kMiB, Decoding::utf8_keeping_mark};
 inline constexpr InputKind kColourTableFile{"colour table", kMiB, Decoding::none};
 

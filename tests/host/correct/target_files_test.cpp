@@ -3,6 +3,10 @@
 // targets equal to the CSV path's.
 #include <doctest.h>
 
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include <Eigen/Geometry>
@@ -181,4 +185,16 @@ TEST_CASE("URScript round trip: other lines byte for byte, CRLF kept, targets eq
     // pose's readings reaches the target.
     CHECK((want.translation - (k == 0 ? p1 : p2).translation).norm() > 1e-4);
   }
+}
+
+TEST_CASE("URScript from a file: a byte-order mark is kept, the rest read as without it") {
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("kincal_bom_" + std::to_string(::getpid()) + ".script")).string();
+  std::ofstream(path, std::ios::binary) << "\xEF\xBB\xBFmovej([0.1, -1.2, 1.4, -1.6, -1.5, 0.3])\r\nend\r\n";
+  const correct::UrProgram p = correct::read_urscript(path, 6);
+  std::filesystem::remove(path);
+  REQUIRE(p.motions.size() == 1);
+  CHECK(p.motions[0].target.q == std::vector<double>{0.1, -1.2, 1.4, -1.6, -1.5, 0.3});
+  CHECK(correct::write_urscript(p, {{0.5, -1.2, 1.4, -1.6, -1.5, 0.3}}) ==
+        "\xEF\xBB\xBFmovej([0.5, -1.2, 1.4, -1.6, -1.5, 0.3])\r\nend\r\n");
 }
