@@ -32,16 +32,24 @@ bool same_block(const shared::CorrectionParameters& a, const shared::CorrectionP
 
 }  // namespace
 
+PrepareStatus prepare_block(const shared::CorrectionParameters& block, PreparedCorrection& out) noexcept {
+  if (correction_chain(block, out.nominal, out.parameter_ids, out.errors) != ChainStatus::kOk)
+    return PrepareStatus::kNotAChain;
+  if (core::prepare_correction(out.nominal, out.parameter_ids, out.errors, core::CorrectionOptions{}, out.model) !=
+      core::CorrectionStatus::ok)
+    return PrepareStatus::kModelRefused;
+  core::JointMapModel& map = out.joint_map;
+  if (correction_joint_maps(block, map.nominal, map.identified, map.masses) != ChainStatus::kOk ||
+      core::prepare_joint_map(out.model, map.nominal, map.identified, map.masses, out.workspace, map) !=
+          core::CorrectionStatus::ok)
+    return PrepareStatus::kJointMapRefused;
+  return PrepareStatus::kOk;
+}
+
 void KinematicCorrection::load(const shared::CorrectionParameters& parameters) noexcept {
   loaded_block_ = parameters;
   loaded_ = true;
-  usable_ = correction_chain(parameters, nominal_, parameter_ids_, errors_) == ChainStatus::kOk &&
-            core::prepare_correction(nominal_, parameter_ids_, errors_, core::CorrectionOptions{}, model_) ==
-                core::CorrectionStatus::ok &&
-            correction_joint_maps(parameters, joint_map_.nominal, joint_map_.identified, joint_map_.masses) ==
-                ChainStatus::kOk &&
-            core::prepare_joint_map(model_, joint_map_.nominal, joint_map_.identified, joint_map_.masses, workspace_,
-                                    joint_map_) == core::CorrectionStatus::ok;
+  usable_ = prepare_block(parameters, prepared_) == PrepareStatus::kOk;
 }
 
 CorrectStatus KinematicCorrection::correct(const shared::CorrectionParameters& parameters, const JointRaw& in,
@@ -49,10 +57,11 @@ CorrectStatus KinematicCorrection::correct(const shared::CorrectionParameters& p
   if (parameters.joint_count == 0) return CorrectStatus::kNoParameters;
   if (!loaded_ || !same_block(parameters, loaded_block_)) load(parameters);
   if (!usable_) return CorrectStatus::kNoParameters;
-  const int n = model_.nominal.joint_count;
+  PreparedCorrection& p = prepared_;
+  const int n = p.model.nominal.joint_count;
   core::JointVector<float> q = core::JointVector<float>::Zero();
   for (int i = 0; i < n; ++i) q(i) = shared::joint_angle_rad<float>(in[static_cast<std::size_t>(i)]);
-  if (core::correct_joint_readings(model_, joint_map_, workspace_, q, correction_, corrected_) !=
+  if (core::correct_joint_readings(p.model, p.joint_map, p.workspace, q, p.correction, corrected_) !=
       core::CorrectionStatus::ok)
     return CorrectStatus::kNotCorrectable;
   out = in;

@@ -26,10 +26,32 @@
 // statically, not on a small stack. Thread/ISR safety: main loop only (one workspace).
 #pragma once
 
+#include <cstdint>
+
 #include "firmware/app/ports.hpp"
 #include "firmware/core/correction.hpp"
 
 namespace kincal::app {
+
+// A correction block read as two chains (correction_chain.hpp) and prepared for
+// core::correct_joint_readings(model, joint_map, workspace, q, correction, out): the one reading of
+// a block the platform and the host's copy of its step (host/correct/platform_step.hpp) share.
+struct PreparedCorrection {
+  core::ChainModel<float> nominal{};
+  core::ParameterSet parameter_ids{};
+  core::ErrorVector<float> errors{};
+  core::CorrectionModel model{};
+  core::CorrectionWorkspace workspace{};
+  core::Correction correction{};
+  core::JointMapModel joint_map{};  // read from the block in place, then prepared
+};
+
+// Which step refused the block: kNotAChain (correction_chain: no joints, or a beta on a DH link),
+// kModelRefused (core::prepare_correction), kJointMapRefused (correction_joint_maps or
+// core::prepare_joint_map: a coupling beyond the joints, a scale not above 0, a singular coupling).
+// `out` is only usable on kOk.
+enum class [[nodiscard]] PrepareStatus : std::uint8_t{kOk, kNotAChain, kModelRefused, kJointMapRefused};
+PrepareStatus prepare_block(const shared::CorrectionParameters& block, PreparedCorrection& out) noexcept;
 
 class KinematicCorrection {
  public:
@@ -41,13 +63,7 @@ class KinematicCorrection {
   bool loaded_ = false;  // loaded_block_ is the block the model was built from
   bool usable_ = false;  // ... and it gave a model
   shared::CorrectionParameters loaded_block_{};
-  core::ChainModel<float> nominal_{};
-  core::ParameterSet parameter_ids_{};
-  core::ErrorVector<float> errors_{};
-  core::CorrectionModel model_{};
-  core::CorrectionWorkspace workspace_{};
-  core::Correction correction_{};
-  core::JointMapModel joint_map_{};  // read from the block in place, then prepared
+  PreparedCorrection prepared_{};
   core::JointVector<float> corrected_ = core::JointVector<float>::Zero();
 };
 
