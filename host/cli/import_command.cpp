@@ -17,7 +17,7 @@ namespace kincal::cli {
 namespace {
 
 struct ImportArgs {
-  std::string in, out, separator, position_unit, angle_unit = "deg", euler;
+  std::string in, out, separator, position_unit, angle_unit = "deg", euler, id;
   std::vector<std::string> joints, joint_units, position, position_std, orientation, orientation_std;
   ModelOption model;
 };
@@ -54,6 +54,7 @@ int run_import(const ImportArgs& a) {
       o.angle_unit = model::parse_angle_unit(a.angle_unit);
     }
     if (!a.orientation_std.empty()) o.angle_std = three(a.orientation_std, "--orientation-std");
+    if (!a.id.empty()) o.id = a.id;
     files::refuse_overwriting({{"--out", a.out}}, {{"export", a.in}, {"--model", a.model.path}});
     // Everything is read and checked before the dataset is written: a failed run leaves no file.
     std::optional<model::RobotModel> nominal;
@@ -77,7 +78,12 @@ int run_import(const ImportArgs& a) {
       std::cout << "; median orientation std " << r.median_angle_std_rad * 180.0 / std::numbers::pi
                 << " deg (not written: the dataset format has no orientation covariance; identify estimates the "
                    "orientation noise)";
+    if (o.id) std::cout << "; " << r.distinct_ids << " distinct ids in column '" << a.id << "' (kept as id)";
     std::cout << "\nwrote " << a.out << '\n';
+    if (o.id && r.distinct_ids < r.data.rows.size())
+      std::cerr << "kincal import: warning: the " << r.data.rows.size() << " rows have only " << r.distinct_ids
+                << " distinct values of '" << a.id
+                << "': an id does not tell its rows apart (messages name the dataset's line too)\n";
     for (const std::string& f : findings) std::cerr << "kincal import: warning: " << f << '\n';
     if (nominal && findings.empty()) std::cout << "plausible for " << nominal->name << " (units, limits, distances)\n";
     return 0;
@@ -119,6 +125,9 @@ void add_import_command(CLI::App& app, int& status) {
   cmd->add_option("--orientation-std", a->orientation_std,
                   "header names of the Euler angles' std (checked, summarized)")
       ->delimiter(',');
+  cmd->add_option("--id", a->id,
+                  "header name of a row id or time stamp column, kept per row (the dataset's id column) and named "
+                  "in messages about the row");
   add_model_option(*cmd, a->model, "check the data against this model and warn (units, limits, distances)", false);
   cmd->callback([a, &status] { status = run_import(*a); });
 }

@@ -1,8 +1,11 @@
 // The field split of a text line, shared by the dataset reader (dataset.cpp) and the import of
 // measurement exports (measurement_import.cpp): fields between separators, each trimmed of
-// spaces, tabs and carriage returns; an export's fields may also stand in double quotes.
+// spaces, tabs and carriage returns; an export's fields may also stand in double quotes. The
+// dataset's fields may be quoted as RFC 4180 says (split_quoted_fields), which its text column
+// (a row id that holds a comma) needs.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -28,6 +31,45 @@ inline std::vector<std::string> split_fields(const std::string& line, char separ
         std::string_view(line).substr(start, at == std::string::npos ? std::string::npos : at - start), unquote));
     if (at == std::string::npos) break;
     start = at + 1;
+  }
+  return fields;
+}
+
+// RFC 4180 fields of `line`: a field that starts (after blanks) with a double quote runs to the
+// matching quote, "" inside it standing for one quote, and may hold separators; other fields as
+// split_fields(). nullopt when a quote is not closed or text follows a closing quote.
+inline std::optional<std::vector<std::string>> split_quoted_fields(const std::string& line, char separator) {
+  if (line.find('"') == std::string::npos) return split_fields(line, separator);
+  std::vector<std::string> fields;
+  std::size_t at = 0;
+  while (true) {
+    while (at < line.size() && (line[at] == ' ' || line[at] == '\t')) ++at;
+    std::string field;
+    if (at < line.size() && line[at] == '"') {
+      bool closed = false;
+      for (++at; at < line.size() && !closed; ++at) {
+        if (line[at] != '"') {
+          field += line[at];
+        } else if (at + 1 < line.size() && line[at + 1] == '"') {
+          field += '"';
+          ++at;
+        } else {
+          closed = true;
+        }
+      }
+      if (!closed) return std::nullopt;
+      while (at < line.size() && line[at] != separator) {
+        if (line[at] != ' ' && line[at] != '\t' && line[at] != '\r') return std::nullopt;
+        ++at;
+      }
+    } else {
+      const std::size_t end = line.find(separator, at);
+      field = trim_field(std::string_view(line).substr(at, end == std::string::npos ? std::string::npos : end - at));
+      at = end == std::string::npos ? line.size() : end;
+    }
+    fields.push_back(std::move(field));
+    if (at >= line.size()) break;
+    ++at;  // the separator
   }
   return fields;
 }

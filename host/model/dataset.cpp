@@ -16,6 +16,14 @@ namespace kincal::model {
 
 namespace {
 
+// An id as a field of the file: quoted (RFC 4180) when it holds what the split would change.
+std::string quoted_field(const std::string& text) {
+  if (!text.empty() && text.find_first_of(",\"") == std::string::npos && trim_field(text) == text) return text;
+  std::string out = "\"";
+  for (char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + '"';
+}
+
 bool skipped(const std::string& line) {
   const std::string t = trim_field(line);
   return t.empty() || t[0] == '#';
@@ -54,8 +62,8 @@ Header parse_header(const std::string& line, const std::string& source, int numb
   while (h.index.count("q" + std::to_string(h.joints + 1))) ++h.joints;
   if (h.joints == 0) fail_at(source, number, "header: no joint columns (expected q1, q2, ...)");
   if (joints_only) return h;
-  static const char* const kKnown[] = {"x",   "y",   "z",   "qw",  "qx",  "qy",  "qz",
-                                       "cxx", "cxy", "cxz", "cyy", "cyz", "czz", "sigma"};
+  static const char* const kKnown[] = {"x",   "y",   "z",   "qw",  "qx",  "qy",    "qz", "cxx",
+                                       "cxy", "cxz", "cyy", "cyz", "czz", "sigma", "id"};
   for (const auto& [name, i] : h.index) {
     bool known = false;
     for (const char* k : kKnown) known = known || name == k;
@@ -113,7 +121,9 @@ void read_table(std::istream& in, const std::string& source, bool joints_only, O
       on_header(*h, number);
       continue;
     }
-    const std::vector<std::string> fields = split_fields(line, ',');
+    const std::optional<std::vector<std::string>> split = split_quoted_fields(line, ',');
+    if (!split) fail_at(source, number, "a double quote is not closed, or text follows a closing quote");
+    const std::vector<std::string>& fields = *split;
     if (fields.size() != h->fields)
       fail_at(
           source, number,
@@ -130,6 +140,7 @@ void read_table(std::istream& in, const std::string& source, bool joints_only, O
 Dataset parse_dataset(std::istream& in, const std::string& source) {
   Dataset data;
   data.source = source;
+  bool has_id = false;
   const auto on_header = [&](const Header& h, int number) {
     data.joint_count = h.joints;
     const int quaternion = count_of(h, {"qw", "qx", "qy", "qz"});
@@ -144,11 +155,10 @@ Dataset parse_dataset(std::istream& in, const std::string& source) {
     data.noise = covariance == 6          ? NoiseColumns::covariance
                  : h.index.count("sigma") ? NoiseColumns::sigma
                                           : NoiseColumns::none;
+    has_id = h.index.count("id") != 0;
   };
-  const auto on_row = [&](const Row& row) {
+  const auto values = [&](const Row& row, Measurement& m) {
     const auto value = [&](const char* column) { return row.value(column); };
-    Measurement m;
-    m.line = row.line;
     m.q = row.joints();
     m.position = Vector3(value("x"), value("y"), value("z"));
     if (data.has_orientation) {
@@ -171,6 +181,20 @@ Dataset parse_dataset(std::istream& in, const std::string& source) {
       const double s = value("sigma");
       if (!(s > 0.0)) fail_at(source, row.line, "sigma must be positive");
       m.covariance = Matrix3::Identity() * (s * s);
+    }
+  };
+  const auto on_row = [&](const Row& row) {
+    Measurement m;
+    m.line = row.line;
+    if (has_id) {
+      m.id = row.fields[row.header.index.at("id")];
+      if (m.id.empty()) fail_at(source, row.line, "column id is empty");
+    }
+    try {
+      values(row, m);
+    } catch (const InputError& e) {
+      if (m.id.empty()) throw;
+      throw InputError(e.what() + id_suffix(m));
     }
     data.rows.push_back(std::move(m));
   };
@@ -201,13 +225,21 @@ void check_joint_count(const RobotModel& model, int data_joints, const std::stri
                      model.name + "' has " + std::to_string(model.joint_count()) + " joints");
 }
 
+std::string id_suffix(const Measurement& row) {
+  return row.id.empty() ? std::string() : " (id " + files::excerpt(row.id) + ")";
+}
+
 void write_dataset(std::ostream& out, const Dataset& data) {
-  bool covariance = !data.rows.empty();
-  for (const Measurement& m : data.rows) covariance = covariance && m.covariance.has_value();
+  bool covariance = !data.rows.empty(), id = !data.rows.empty();
+  for (const Measurement& m : data.rows) {
+    covariance = covariance && m.covariance.has_value();
+    id = id && !m.id.empty();
+  }
   for (int j = 1; j <= data.joint_count; ++j) out << 'q' << j << ',';
   out << "x,y,z";
   if (data.has_orientation) out << ",qw,qx,qy,qz";
   if (covariance) out << ",cxx,cxy,cxz,cyy,cyz,czz";
+  if (id) out << ",id";
   out << '\n';
   for (const Measurement& m : data.rows) {
     for (double q : m.q) out << shortest_number_text(q) << ',';
@@ -224,6 +256,7 @@ void write_dataset(std::ostream& out, const Dataset& data) {
           << shortest_number_text(c(0, 2)) << ',' << shortest_number_text(c(1, 1)) << ','
           << shortest_number_text(c(1, 2)) << ',' << shortest_number_text(c(2, 2));
     }
+    if (id) out << ',' << quoted_field(m.id);
     out << '\n';
   }
 }

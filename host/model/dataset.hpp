@@ -1,13 +1,16 @@
 // Measurement datasets (CSV): joint readings and what the measuring device saw, in the
 // device's frame.
 //
-//   q1,q2,...,qN,x,y,z[,qw,qx,qy,qz][,cxx,cxy,cxz,cyy,cyz,czz | ,sigma]
+//   q1,q2,...,qN,x,y,z[,qw,qx,qy,qz][,cxx,cxy,cxz,cyy,cyz,czz | ,sigma][,id]
 //
 // One header row naming the columns (any order; q1..qN contiguous from q1), then one row per
 // measurement: joint readings (rad or m), the tool point (m), optionally the tool orientation
 // as a unit quaternion (device_R_tool), optionally the point's covariance (m^2, upper triangle)
-// or a scalar standard deviation per axis (m). Blank lines and lines starting with '#' are
-// skipped. Numbers are plain decimal (std::from_chars).
+// or a scalar standard deviation per axis (m), optionally the row's id: the export's time stamp
+// or record number as text (`kincal import --id`), which messages naming the row quote. Blank
+// lines and lines starting with '#' are skipped. Numbers are plain decimal (std::from_chars);
+// fields may stand in double quotes as RFC 4180 says ("" for a quote), which an id holding a
+// comma needs (write_dataset quotes it).
 //
 // Why a small reader of our own: the format is numbers only (no quoting, no embedded commas),
 // and every error must carry its line number and the column at fault. Debian's C++ CSV
@@ -15,9 +18,10 @@
 // libcsv is a C tokenizer with callbacks that would still leave number parsing and the line
 // bookkeeping to us.
 //
-// Errors (InputError "FILE:LINE: what"): missing/unknown/duplicate columns, a row with the wrong
-// number of fields, a field that is not a finite number, a quaternion whose norm is not 1
-// within 1e-3, a covariance that is not positive definite, sigma <= 0.
+// Errors (InputError "FILE:LINE: what", ending "(id TEXT)" on a row with an id): missing/unknown/
+// duplicate columns, a row with the wrong number of fields, a quote that is not closed, a field
+// that is not a finite number, an empty id, a quaternion whose norm is not 1 within 1e-3, a
+// covariance that is not positive definite, sigma <= 0.
 #pragma once
 
 #include <iosfwd>
@@ -37,6 +41,7 @@ struct Measurement {
   std::optional<Eigen::Quaterniond> orientation;  // device_R_tool
   std::optional<Matrix3> covariance;              // of position, m^2
   int line = 0;                                   // 1-based line in the source
+  std::string id;                                 // the export's row id or time stamp; empty: none
 };
 
 enum class NoiseColumns { none, sigma, covariance };
@@ -60,8 +65,11 @@ std::vector<std::vector<double>> parse_joints(std::istream& in, const std::strin
 // Throws InputError when the data's joint count differs from the model's.
 void check_joint_count(const RobotModel& model, int data_joints, const std::string& source);
 
+// " (id TEXT)" for a row with an id, else "": what a message naming the row appends.
+std::string id_suffix(const Measurement& row);
+
 // Writes a dataset in the format above (orientation if the rows have it; covariance if every
-// row has one). Numbers in their shortest exact form.
+// row has one; the id column if every row has an id). Numbers in their shortest exact form.
 void write_dataset(std::ostream& out, const Dataset& data);
 
 }  // namespace kincal::model

@@ -6,6 +6,7 @@
 #include <istream>
 #include <map>
 #include <numbers>
+#include <set>
 #include <sstream>
 
 #include "host/files/input_file.hpp"
@@ -40,6 +41,11 @@ struct Table {
   std::vector<std::string> names;
   int header_line = 0;
   char decimal = '.';
+  std::string row_id;  // of the row being read, for its messages
+
+  [[noreturn]] void fail_row(int line, std::size_t column, const std::string& what) const {
+    fail(source, line, column, row_id.empty() ? what : what + " (id " + files::excerpt(row_id) + ")");
+  }
 
   std::size_t column(const std::string& name) const {
     const auto it = index.find(name);
@@ -63,11 +69,11 @@ struct Table {
     const char* last = text.data() + text.size();
     if (first != last && *first == '+') ++first;
     const auto [end, ec] = std::from_chars(first, last, v);
-    if (text.empty()) fail(source, line, c, "column '" + names[c] + "' is empty");
+    if (text.empty()) fail_row(line, c, "column '" + names[c] + "' is empty");
     if (ec != std::errc() || end != last)
-      fail(source, line, c,
-           "column '" + files::excerpt(names[c]) + "': '" + files::excerpt(fields[c]) + "' is not a number");
-    if (!std::isfinite(v)) fail(source, line, c, "column '" + names[c] + "' is not finite");
+      fail_row(line, c,
+               "column '" + files::excerpt(names[c]) + "': '" + files::excerpt(fields[c]) + "' is not a number");
+    if (!std::isfinite(v)) fail_row(line, c, "column '" + names[c] + "' is not finite");
     return v;
   }
 };
@@ -174,7 +180,7 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   }
   const double angle = o.angle_unit == AngleUnit::deg ? kRadPerDeg : 1.0;
 
-  Table t{source, {}, {}, 0, '.'};
+  Table t{source, {}, {}, 0, '.', {}};
   std::string line;
   int number = 0;
   while (std::getline(in, line)) {
@@ -194,6 +200,7 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   const auto position_std = o.position_std ? std::optional(columns(t, *o.position_std)) : std::nullopt;
   const auto angles = o.angles ? std::optional(columns(t, *o.angles)) : std::nullopt;
   const auto angle_std = o.angle_std ? std::optional(columns(t, *o.angle_std)) : std::nullopt;
+  const auto id = o.id ? std::optional(t.column(*o.id)) : std::nullopt;
   if (angle_std && !angles) throw InputError(source + ": orientation standard deviations without orientation columns");
   // Every header column feeds one value: a column named for two roles is a typing slip.
   std::map<std::size_t, std::string> role_of;
@@ -213,8 +220,10 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   use_three(position_std, "--position-std");
   use_three(angles, "--orientation");
   use_three(angle_std, "--orientation-std");
+  if (id) use(*id, "the row id (--id)");
 
   std::vector<double> position_stds, angle_stds;
+  std::set<std::string> ids;
   while (std::getline(in, line)) {
     ++number;
     if (trim_field(line, true).empty()) continue;
@@ -228,6 +237,12 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
         if (f.find(',') != std::string::npos) t.decimal = ',';
     Measurement m;
     m.line = number;
+    if (id) {
+      m.id = fields[*id];
+      if (m.id.empty()) fail(source, number, *id, "column '" + files::excerpt(t.names[*id]) + "' (--id) is empty");
+      ids.insert(m.id);
+      t.row_id = m.id;
+    }
     for (std::size_t j = 0; j < joint_columns.size(); ++j)
       m.q.push_back(t.number(fields, joint_columns[j], number) * joint_scale[j]);
     for (int k = 0; k < 3; ++k)
@@ -237,7 +252,7 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
       for (int k = 0; k < 3; ++k) {
         const std::size_t col = (*position_std)[static_cast<std::size_t>(k)];
         const double s = t.number(fields, col, number) * length;
-        if (!(s > 0.0)) fail(source, number, col, "column '" + t.names[col] + "': a standard deviation must be > 0");
+        if (!(s > 0.0)) t.fail_row(number, col, "column '" + t.names[col] + "': a standard deviation must be > 0");
         c(k, k) = s * s;
         position_stds.push_back(s);
       }
@@ -250,7 +265,7 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
       if (angle_std) {
         for (std::size_t col : *angle_std) {
           const double s = t.number(fields, col, number) * angle;
-          if (!(s > 0.0)) fail(source, number, col, "column '" + t.names[col] + "': a standard deviation must be > 0");
+          if (!(s > 0.0)) t.fail_row(number, col, "column '" + t.names[col] + "': a standard deviation must be > 0");
           angle_stds.push_back(s);
         }
       }
@@ -261,6 +276,7 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   result.decimal_comma = t.decimal == ',';
   result.median_position_std_m = median_of(position_stds);
   result.median_angle_std_rad = median_of(angle_stds);
+  result.distinct_ids = ids.size();
   return result;
 }
 

@@ -18,6 +18,11 @@
 // dataset format carries no orientation covariance, so orientation standard deviations are read,
 // checked and summarized (ImportResult) but not written; identify estimates the orientation noise.
 //
+// Row ids: the column named by `id` (a time stamp, a record number) is kept per row as text,
+// trimmed and unquoted, in the dataset's id column; it must not be empty. Ids need not differ
+// (ImportResult counts the distinct ones: an export whose time stamps a spreadsheet rounded to one
+// value tells no row apart, and the dataset's line still does).
+//
 // Joint units: one for every joint, or one per joint (a mixed arm: deg,deg,m,deg,...); rad or deg
 // for a revolute joint, m or mm for a prismatic one (check_joint_units() holds them against a
 // model).
@@ -29,8 +34,9 @@
 // Errors (InputError "FILE:LINE:COLUMN: what", COLUMN 1-based, the header name in the message):
 // a named column missing or named twice in the header, one header column named for two roles
 // (twice in --joints, or as a joint and a coordinate), a row with the wrong number of fields, a
-// field that is not a finite number, a standard deviation <= 0, a bad unit or convention name, a
-// unit count that is neither 1 nor the joint count.
+// field that is not a finite number, an empty id, a standard deviation <= 0, a bad unit or convention name, a
+// unit count that is neither 1 nor the joint count. A message about a row with an id ends with
+// "(id TEXT)".
 #pragma once
 
 #include <array>
@@ -73,6 +79,7 @@ struct ImportOptions {
   EulerConvention convention;
   AngleUnit angle_unit = AngleUnit::rad;  // also the unit of angle_std
   std::optional<std::array<std::string, 3>> angle_std;
+  std::optional<std::string> id;  // header name of the row id or time stamp column
 };
 
 struct ImportResult {
@@ -81,6 +88,7 @@ struct ImportResult {
   bool decimal_comma = false;
   double median_position_std_m = 0.0;  // over rows and components; 0 without std columns
   double median_angle_std_rad = 0.0;   // read, not written (see above)
+  std::size_t distinct_ids = 0;        // 0 without an id column
 };
 
 ImportResult import_measurements(std::istream& in, const std::string& source, const ImportOptions& options);
