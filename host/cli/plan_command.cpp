@@ -9,6 +9,7 @@
 
 #include "host/cli/model_option.hpp"
 #include "host/cli/number_options.hpp"
+#include "host/correct/target_table.hpp"
 #include "host/files/output_file.hpp"
 #include "host/identify/plan.hpp"
 #include "host/model/model_file.hpp"
@@ -19,7 +20,7 @@ namespace {
 
 struct PlanArgs {
   ModelOption model;
-  std::string out;
+  std::string out, candidates, constraints;
   int count = 30, pool = 1000;
   std::uint64_t seed = 1;
   bool orientation = false;
@@ -34,6 +35,28 @@ std::string figure(double value, int digits) {
   return text;
 }
 
+// The candidates and what each constraint did to them.
+void constraint_lines(std::ostream& out, const PlanArgs& a, const model::RobotModel& m, const identify::PlanOptions& o,
+                      const identify::PlanResult& r, const std::vector<int>& candidate_lines) {
+  out << "# candidates: " << r.considered << (a.candidates.empty() ? " drawn" : " from " + a.candidates) << ", "
+      << r.feasible << " meet every constraint\n";
+  for (const identify::ConstraintOutcome& c : r.constraints) {
+    out << "# constraint " << identify::describe(c.constraint, o.constraints, m) << ": rejected " << c.rejected
+        << " of " << r.considered;
+    if (c.active)
+      out << "; active: a candidate it alone rejects would raise O1 " << figure(c.index_gain, 4) << "x";
+    else if (c.constraint == identify::Constraint::joint_ranges && a.candidates.empty())
+      out << "; the candidates are drawn within the ranges";
+    else
+      out << "; not active";
+    out << '\n';
+  }
+  if (candidate_lines.empty()) return;
+  out << "# chosen candidates (lines of " << a.candidates << "):";
+  for (std::size_t k : r.chosen) out << ' ' << candidate_lines[k];
+  out << '\n';
+}
+
 // The summary as comment lines, which the dataset reader skips.
 std::string summary(const PlanArgs& a, const model::RobotModel& m, const identify::PlanResult& r) {
   const identify::PlanOptions defaults;
@@ -42,7 +65,7 @@ std::string summary(const PlanArgs& a, const model::RobotModel& m, const identif
       << " identifiable parameters (" << r.held_fixed.size() << " held fixed)\n";
   if (r.random_full_rank == 0) {
     out << "# observability index O1: planned " << figure(r.index, 6) << "; none of " << defaults.random_sets
-        << " random plans of " << a.count << " of the " << a.pool
+        << " random plans of " << a.count << " of the " << r.feasible
         << " candidates identifies every parameter (no comparison; a larger --pool gives one)\n"
         << "# predicted position rms over the workspace per unit sigma: planned " << figure(r.prediction_rms, 4)
         << '\n';
@@ -59,9 +82,23 @@ std::string summary(const PlanArgs& a, const model::RobotModel& m, const identif
 
 int run_plan(const PlanArgs& a) {
   try {
-    files::refuse_overwriting({{"-o", a.out, true}}, {{"--model", a.model.path}});
+    files::refuse_overwriting(
+        {{"-o", a.out, true}},
+        {{"--model", a.model.path}, {"--candidates", a.candidates}, {"--constraints", a.constraints}});
     const model::RobotModel m = a.model.load();
     identify::PlanOptions options;
+    if (!a.constraints.empty()) options.constraints = identify::read_plan_constraints(a.constraints, m);
+    std::vector<int> candidate_lines;
+    if (!a.candidates.empty()) {
+      const correct::TargetTable table = correct::read_target_table(a.candidates, m.joint_count());
+      if (table.cartesian)
+        throw model::InputError(a.candidates + ": the candidates are Cartesian targets; give joint readings q1..q" +
+                                std::to_string(m.joint_count()));
+      for (const correct::TargetRow& row : table.rows) {
+        options.candidates.push_back(row.q);
+        candidate_lines.push_back(row.line);
+      }
+    }
     options.count = a.count;
     options.pool = a.pool;
     options.seed = a.seed;
@@ -71,7 +108,9 @@ int run_plan(const PlanArgs& a) {
     };
     const identify::PlanResult r = identify::plan_configurations(m, options);
     std::ostringstream out;
-    const std::string lines = summary(a, m, r);
+    std::ostringstream constraints;
+    constraint_lines(constraints, a, m, options, r, candidate_lines);
+    const std::string lines = summary(a, m, r) + constraints.str();
     const bool to_file = !a.out.empty() && a.out != "-";
     out << lines;
     if (to_file) std::cout << lines;
@@ -98,9 +137,17 @@ void add_plan_command(CLI::App& app, int& status) {
   auto* cmd = app.add_subcommand("plan", "Propose calibration configurations that maximize observability");
   add_model_option(*cmd, a->model, "model with joint limits");
   cmd->add_option("-n,--count", a->count, "number of configurations (default 30)")->check(whole_in(1, 100000));
-  cmd->add_option("--pool", a->pool, "random candidate configurations to choose from (default 1000)")
-      ->check(whole_in(1, 1000000));
+  auto* pool = cmd->add_option("--pool", a->pool,
+                               "random candidate configurations to choose from (default 1000; not with --candidates)")
+                   ->check(whole_in(1, 1000000));
   cmd->add_option("--seed", a->seed, "random seed (default 1)");
+  cmd->add_option("--candidates", a->candidates,
+                  "choose from these configurations (CSV q1..qN: ones the robot reaches and the device sees) "
+                  "instead of a random pool")
+      ->excludes(pool);
+  cmd->add_option("--constraints", a->constraints,
+                  "YAML: workspace box, floor plane, joint ranges, line-of-sight cone (plan_constraints.hpp); "
+                  "no planned configuration violates them");
   cmd->add_flag("--orientation", a->orientation, "plan for pose measurements (tool frame) instead of points");
   cmd->add_option("-o,--out", a->out, "output CSV q1..qN (default or '-': standard output)");
   cmd->callback([a, &status] { status = run_plan(*a); });

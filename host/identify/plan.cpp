@@ -1,6 +1,7 @@
 #include "host/identify/plan.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -43,6 +44,12 @@ double prediction_rms(const Eigen::MatrixXd& info, const std::vector<Candidate>&
   return std::sqrt(sum / static_cast<double>(pool.size()));
 }
 
+// det(reduced + J^T J) / det(reduced) = det(I + J reduced^-1 J^T): what exchanging J into a plan
+// whose information without the leaving configuration is `reduced` multiplies its determinant by.
+double exchange_gain(const Eigen::LDLT<Eigen::MatrixXd>& reduced, const Eigen::MatrixXd& j) {
+  return (Eigen::MatrixXd::Identity(j.rows(), j.rows()) + j * reduced.solve(j.transpose())).determinant();
+}
+
 }  // namespace
 
 PlanResult plan_configurations(const model::RobotModel& m, const PlanOptions& options) {
@@ -60,23 +67,86 @@ PlanResult plan_configurations(const model::RobotModel& m, const PlanOptions& op
   if (options.orientation && m.tool != model::ToolKind::frame)
     throw InputError("plan: pose measurements need a tool frame in the model");
   std::mt19937_64 rng(options.seed);
+  const PlanConstraints& limits = options.constraints;
+  for (const JointRange& r : limits.joint_ranges) {
+    lower[static_cast<std::size_t>(r.joint)] = std::max(lower[static_cast<std::size_t>(r.joint)], r.lower);
+    upper[static_cast<std::size_t>(r.joint)] = std::min(upper[static_cast<std::size_t>(r.joint)], r.upper);
+  }
   const auto random_q = [&] {
     std::vector<double> q(static_cast<std::size_t>(n));
     for (std::size_t i = 0; i < q.size(); ++i) q[i] = std::uniform_real_distribution<double>(lower[i], upper[i])(rng);
     return q;
   };
+  // Candidates: the given ones or random draws, split into those meeting every constraint (the
+  // pool) and those rejected (kept, a random pool's up to `pool` of them, for the active test).
+  std::array<int, kConstraints.size()> rejected_by{};
+  std::vector<Candidate> pool, rejected;
+  std::vector<unsigned> rejected_mask;
+  std::vector<std::size_t> pool_source;  // index into options.candidates
+  int considered = 0;
+  const auto consider = [&](std::vector<double> q, std::size_t source) {
+    ++considered;
+    const unsigned mask = violated_constraints(m, limits, q);
+    for (std::size_t c = 0; c < kConstraints.size(); ++c) rejected_by[c] += ((mask >> c) & 1u) != 0 ? 1 : 0;
+    if (mask == 0) {
+      pool.push_back({std::move(q), {}});
+      pool_source.push_back(source);
+    } else if (!options.candidates.empty() || rejected.size() < static_cast<std::size_t>(options.pool)) {
+      rejected.push_back({std::move(q), {}});
+      rejected_mask.push_back(mask);
+    }
+  };
+  if (!options.candidates.empty()) {
+    for (std::size_t k = 0; k < options.candidates.size(); ++k) {
+      if (options.candidates[k].size() != static_cast<std::size_t>(n))
+        throw InputError("plan: candidate " + std::to_string(k + 1) + " has " +
+                         std::to_string(options.candidates[k].size()) + " joint values, the model " +
+                         std::to_string(n));
+      consider(options.candidates[k], k);
+    }
+  } else {
+    const auto wanted = static_cast<std::size_t>(std::max(options.pool, options.count));
+    for (int draw = 0; pool.size() < wanted && draw < 100 * options.pool; ++draw) consider(random_q(), 0);
+  }
+  PlanResult result;
+  result.considered = considered;
+  result.feasible = static_cast<int>(pool.size());
+  const auto applies = [&](Constraint c) {
+    switch (c) {
+      case Constraint::joint_limits:
+        return true;
+      case Constraint::joint_ranges:
+        return !limits.joint_ranges.empty();
+      case Constraint::workspace:
+        return limits.workspace.has_value();
+      case Constraint::floor:
+        return limits.floor.has_value();
+      case Constraint::sight:
+        return limits.sight.has_value();
+    }
+    return false;
+  };
+  for (const Constraint c : kConstraints)
+    if (applies(c)) result.constraints.push_back({c, rejected_by[static_cast<std::size_t>(c)], false, 1.0});
+  if (pool.size() < static_cast<std::size_t>(options.count)) {
+    std::string alone, counts;
+    for (const ConstraintOutcome& o : result.constraints) {
+      if (o.rejected == considered) alone += "; no candidate meets " + describe(o.constraint, limits, m);
+      counts += std::string(counts.empty() ? "" : ", ") + constraint_name(o.constraint) + " rejects " +
+                std::to_string(o.rejected);
+    }
+    throw InputError("plan: " + std::to_string(pool.size()) + " of " + std::to_string(considered) +
+                     " candidate configurations meet the constraints, " + std::to_string(options.count) +
+                     " are asked for" + (alone.empty() ? " (" + counts + ")" : alone));
+  }
   // Pool and identifiable parameters.
   const RobotModel start = reparameterize_for_identification(m, 0.1, nullptr);
   const ParameterIds candidates = candidate_parameters(start);
-  std::vector<Candidate> pool(static_cast<std::size_t>(std::max(options.pool, options.count)));
   Eigen::MatrixXd all(static_cast<Eigen::Index>(pool.size()) * rows, static_cast<Eigen::Index>(candidates.size()));
-  for (std::size_t k = 0; k < pool.size(); ++k) {
-    pool[k].q = random_q();
+  for (std::size_t k = 0; k < pool.size(); ++k)
     all.middleRows(static_cast<Eigen::Index>(k) * rows, rows) =
         model::parameter_jacobian(start, pool[k].q, candidates).topRows(rows);
-  }
   const Identifiability ident = analyze_identifiability(all, candidates);
-  PlanResult result;
   result.identified = ident.identified;
   result.held_fixed = ident.held_fixed;
   const auto p = static_cast<Eigen::Index>(ident.identified.size());
@@ -98,6 +168,11 @@ PlanResult plan_configurations(const model::RobotModel& m, const PlanOptions& op
     for (Eigen::Index c = 0; c < p; ++c)
       pool[k].j.col(c) =
           all.block(static_cast<Eigen::Index>(k) * rows, columns[static_cast<std::size_t>(c)], rows, 1) / scale(c);
+  }
+  for (Candidate& r : rejected) {
+    const Eigen::MatrixXd j = model::parameter_jacobian(start, r.q, candidates).topRows(rows);
+    r.j.resize(rows, p);
+    for (Eigen::Index c = 0; c < p; ++c) r.j.col(c) = j.col(columns[static_cast<std::size_t>(c)]) / scale(c);
   }
   const auto information = [&](const std::vector<std::size_t>& set) {
     Eigen::MatrixXd info = Eigen::MatrixXd::Zero(p, p);
@@ -124,9 +199,14 @@ PlanResult plan_configurations(const model::RobotModel& m, const PlanOptions& op
   const double none = std::numeric_limits<double>::quiet_NaN();
   result.random_index_mean = result.random_full_rank > 0 ? random_sum / result.random_full_rank : none;
   result.random_prediction_rms = result.random_full_rank > 0 ? random_pred / result.random_full_rank : none;
-  // Fedorov exchange from a random start.
-  std::vector<std::size_t> set;
-  for (int k = 0; k < options.count; ++k) set.push_back(static_cast<std::size_t>(k));
+  // Fedorov exchange from a random start of distinct candidates (a drawn pool is in random order;
+  // given candidates are sampled).
+  std::vector<std::size_t> set(pool.size());
+  for (std::size_t k = 0; k < set.size(); ++k) set[k] = k;
+  if (!options.candidates.empty()) std::shuffle(set.begin(), set.end(), rng);
+  set.resize(static_cast<std::size_t>(options.count));
+  std::vector<bool> in_set(pool.size(), false);
+  for (std::size_t k : set) in_set[k] = true;
   Eigen::MatrixXd info = information(set);
   const Eigen::MatrixXd ridge = Eigen::MatrixXd::Identity(p, p) * 1e-9;
   const std::size_t tried = std::min(pool.size(), std::max<std::size_t>(64, kExchangeBudget / set.size()));
@@ -141,16 +221,12 @@ PlanResult plan_configurations(const model::RobotModel& m, const PlanOptions& op
             tried == pool.size() ? t : std::uniform_int_distribution<std::size_t>(0, pool.size() - 1)(rng);
       const Eigen::MatrixXd reduced = info - pool[set[i]].j.transpose() * pool[set[i]].j + ridge;
       const Eigen::LDLT<Eigen::MatrixXd> ldlt(reduced);
-      // det(reduced + J^T J) = det(reduced) det(I + J reduced^-1 J^T): compare the small factor.
-      const auto gain = [&](std::size_t c) {
-        const Eigen::MatrixXd& j = pool[c].j;
-        const Eigen::MatrixXd s = Eigen::MatrixXd::Identity(rows, rows) + j * ldlt.solve(j.transpose());
-        return s.determinant();
-      };
+      const auto gain = [&](std::size_t c) { return exchange_gain(ldlt, pool[c].j); };
       const double current = gain(set[i]);
       double best = current;
       std::size_t best_c = set[i];
       for (const std::size_t c : candidates_tried) {
+        if (in_set[c]) continue;
         const double g = gain(c);
         if (g > best) {
           best = g;
@@ -159,6 +235,8 @@ PlanResult plan_configurations(const model::RobotModel& m, const PlanOptions& op
       }
       if (best > current * (1.0 + 1e-9)) {
         info = reduced - ridge + pool[best_c].j.transpose() * pool[best_c].j;
+        in_set[set[i]] = false;
+        in_set[best_c] = true;
         set[i] = best_c;
         improved = true;
       }
@@ -168,7 +246,25 @@ PlanResult plan_configurations(const model::RobotModel& m, const PlanOptions& op
   }
   result.index = o1(info, m_rows);
   result.prediction_rms = prediction_rms(info, pool, options.count);
-  for (std::size_t k : set) result.configurations.push_back(pool[k].q);
+  for (std::size_t k : set) {
+    result.configurations.push_back(pool[k].q);
+    if (!options.candidates.empty()) result.chosen.push_back(pool_source[k]);
+  }
+  // Active constraints: would a candidate rejected by one constraint alone enter the plan?
+  for (std::size_t i = 0; i < set.size(); ++i) {
+    const Eigen::MatrixXd reduced = info - pool[set[i]].j.transpose() * pool[set[i]].j + ridge;
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(reduced);
+    const double current = exchange_gain(ldlt, pool[set[i]].j);
+    for (ConstraintOutcome& o : result.constraints) {
+      const unsigned alone = 1u << static_cast<unsigned>(o.constraint);
+      for (std::size_t r = 0; r < rejected.size(); ++r) {
+        if (rejected_mask[r] != alone) continue;
+        const double ratio = std::pow(exchange_gain(ldlt, rejected[r].j) / current, 0.5 / static_cast<double>(p));
+        if (ratio > 1.0 + 1e-9) o.active = true;
+        o.index_gain = std::max(o.index_gain, ratio);
+      }
+    }
+  }
   return result;
 }
 

@@ -1,6 +1,18 @@
 // Calibration planning (`kincal plan`): N joint configurations within the limits that make the
 // identification Jacobian well conditioned, compared with random configurations.
 //
+// Candidates: options.candidates when given (configurations the user knows the robot reaches and
+// the device sees, `plan --candidates`), else a pool drawn uniformly within the joint limits and
+// options.constraints' joint ranges. Either way a candidate that violates a constraint
+// (plan_constraints.hpp, the model's joint limits included) is left out before the exchange, so
+// no planned configuration violates one; the plan holds N distinct candidates. A random pool
+// draws up to 100 x pool configurations to find `pool` that pass. Fewer passing candidates than
+// N: InputError naming each constraint that no candidate meets, or the rejections of each.
+// Which constraints bind the plan: a constraint is active when a candidate that violates it alone
+// would raise the index if exchanged into the final plan (relaxing it would change the plan);
+// its rejections and the largest such gain are reported (PlanResult::constraints). Joint ranges
+// of a random pool shape the draws and reject none.
+//
 // Index: Borm and Menq's O1 = (s_1 s_2 ... s_P)^(1/P) / sqrt(m), the geometric mean of the
 // singular values of the identification Jacobian (m rows) of the identifiable parameters
 // (chosen as `kincal identify` chooses them), with each parameter's column scaled by its RMS
@@ -26,6 +38,7 @@
 #include <vector>
 
 #include "host/identify/identifiability.hpp"
+#include "host/identify/plan_constraints.hpp"
 #include "host/model/robot_model.hpp"
 
 namespace kincal::identify {
@@ -36,14 +49,28 @@ struct PlanOptions {
   int random_sets = 50;      // random plans to compare with
   bool orientation = false;  // pose measurements (the tool must be a frame)
   std::uint64_t seed = 1;
+  std::vector<std::vector<double>> candidates;  // non-empty: choose from these (pool unused)
+  PlanConstraints constraints;
   // (sweep from 1, configurations visited in this sweep, N): progress of the exchange.
   std::function<void(int, std::size_t, std::size_t)> progress;
 };
 
 inline constexpr std::size_t kExchangeBudget = 200000;
 
+// One constraint's effect on the plan.
+struct ConstraintOutcome {
+  Constraint constraint = Constraint::joint_limits;
+  int rejected = 0;         // candidates that violate it (whatever else they violate)
+  bool active = false;      // a candidate rejected by it alone would improve the plan
+  double index_gain = 1.0;  // the best such exchange's O1 ratio (1: none)
+};
+
 struct PlanResult {
   std::vector<std::vector<double>> configurations;
+  std::vector<std::size_t> chosen;             // with options.candidates: their indices, in plan order
+  int considered = 0;                          // candidates given or drawn
+  int feasible = 0;                            // of them, those meeting every constraint (the exchange's pool)
+  std::vector<ConstraintOutcome> constraints;  // the model's joint limits and those given
   ParameterIds identified;
   std::vector<HeldFixed> held_fixed;
   double index = 0.0;  // O1 of the plan
@@ -57,7 +84,8 @@ struct PlanResult {
   int random_full_rank = 0;
 };
 
-// Throws model::InputError (prismatic joint without limits, count too small for the parameters).
+// Throws model::InputError (prismatic joint without limits, count too small for the parameters,
+// fewer feasible candidates than count, a candidate with the wrong number of joints).
 PlanResult plan_configurations(const model::RobotModel& model, const PlanOptions& options);
 
 }  // namespace kincal::identify

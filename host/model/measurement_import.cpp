@@ -200,7 +200,8 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   const auto position_std = o.position_std ? std::optional(columns(t, *o.position_std)) : std::nullopt;
   const auto angles = o.angles ? std::optional(columns(t, *o.angles)) : std::nullopt;
   const auto angle_std = o.angle_std ? std::optional(columns(t, *o.angle_std)) : std::nullopt;
-  const auto id = o.id ? std::optional(t.column(*o.id)) : std::nullopt;
+  // A plain index with o.id as its flag: GCC 12 at -O3 takes an optional's value as maybe unset.
+  const std::size_t id_column = o.id ? t.column(*o.id) : 0;
   if (angle_std && !angles) throw InputError(source + ": orientation standard deviations without orientation columns");
   // Every header column feeds one value: a column named for two roles is a typing slip.
   std::map<std::size_t, std::string> role_of;
@@ -220,7 +221,7 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   use_three(position_std, "--position-std");
   use_three(angles, "--orientation");
   use_three(angle_std, "--orientation-std");
-  if (id) use(*id, "the row id (--id)");
+  if (o.id) use(id_column, "the row id (--id)");
 
   std::vector<double> position_stds, angle_stds;
   std::set<std::string> ids;
@@ -237,9 +238,10 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
         if (f.find(',') != std::string::npos) t.decimal = ',';
     Measurement m;
     m.line = number;
-    if (id) {
-      m.id = fields[*id];
-      if (m.id.empty()) fail(source, number, *id, "column '" + files::excerpt(t.names[*id]) + "' (--id) is empty");
+    if (o.id) {
+      m.id = fields[id_column];
+      if (m.id.empty())
+        fail(source, number, id_column, "column '" + files::excerpt(t.names[id_column]) + "' (--id) is empty");
       ids.insert(m.id);
       t.row_id = m.id;
     }

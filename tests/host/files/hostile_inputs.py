@@ -609,6 +609,35 @@ case("correct:--seed of 3", C + ["--poses", "poses.csv", "--seed", "0,0,0"], r"-
 case("correct:-o - is standard output", C + ["--joints", "targets.csv", "-o", "-"], r"q1,q2,q3,q4,q5,q6,outcome", rc_ok=True)
 
 
+# --- kincal plan (issue #23): its candidates table and constraints file at every hostile class of
+# the table above, and its own refusals (file:line:column or file:line and the key, nothing written)
+run(["plan", "--model", puma, "-n", "40", "--pool", "200", "-o", "plan_candidates.csv"])
+with open("plan_constraints.yaml", "w") as f:
+    f.write("floor:\n  point: [0, 0, -2]\n  normal: [0, 0, 1]\njoints:\n  q2: [-2, 2]\n")
+with open("plan_nan.csv", "w") as f:
+    f.write("q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n0.1,nan,0,0,0,0\n")
+with open("plan_key.yaml", "w") as f:
+    f.write("floor:\n  pointt: [0, 0, 0]\n  normal: [0, 0, 1]\n")
+with open("plan_high.yaml", "w") as f:
+    f.write("floor:\n  point: [0, 0, 10]\n  normal: [0, 0, 1]\n")
+P = ["plan", "--model", puma, "-n", "12"]
+readers += [
+    ("plan --candidates", "dataset", "in.csv", os.path.join(work, "plan_candidates.csv"),
+     P + ["--candidates", "{in}", "-o", "o.csv"], ["o.csv"], True),
+    ("plan --constraints", "platform", "in.yaml", os.path.join(work, "plan_constraints.yaml"),
+     P + ["--pool", "40", "--constraints", "{in}", "-o", "o.csv"], ["o.csv"], True),
+]
+plan_inputs = ["plan_candidates.csv", "plan_constraints.yaml", puma]
+case("plan:candidates NaN cell", P + ["--candidates", "plan_nan.csv", "-o", "p1.csv"], r"plan_nan\.csv:3:5: column q2: nan is not finite")
+case("plan:constraints unknown key", P + ["--constraints", "plan_key.yaml", "-o", "p2.csv"],
+     r"plan_key\.yaml:2:3: floor\.pointt: unknown key \(expected point, normal\)")
+case("plan:infeasible constraints", P + ["--constraints", "plan_high.yaml", "-o", "p3.csv"],
+     r"0 of [0-9]+ candidate configurations meet the constraints, 12 are asked for; no candidate meets floor")
+case("plan:--candidates and --pool", P + ["--candidates", "plan_candidates.csv", "--pool", "40"], r"excludes")
+case("plan:out=candidates", P + ["--candidates", "plan_candidates.csv", "-o", "plan_candidates.csv"],
+     r"-o plan_candidates\.csv is the same file as --candidates", protect=plan_inputs)
+case("plan:Cartesian candidates", P + ["--candidates", "target_points.csv"], r"the candidates are Cartesian targets")
+
 table_cases()
 only = re.compile(os.environ.get("KINCAL_HOSTILE_ONLY", ""))  # a developer's filter of the table's cases by name
 with ThreadPoolExecutor(max_workers=int(os.environ.get("KINCAL_HOSTILE_JOBS", "3"))) as pool:

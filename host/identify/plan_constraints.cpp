@@ -1,0 +1,251 @@
+#include "host/identify/plan_constraints.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <numbers>
+#include <set>
+#include <sstream>
+
+#include <yaml-cpp/yaml.h>
+
+#include "host/files/input_file.hpp"
+#include "host/model/number_text.hpp"
+
+namespace kincal::identify {
+
+namespace {
+
+using model::InputError;
+using model::Vector3;
+
+// Values of one constraints file, each failure naming the key and where it stands.
+struct Values {
+  const std::string& source;
+
+  [[noreturn]] void fail(const YAML::Node& node, const std::string& key, const std::string& what) const {
+    const YAML::Mark mark = node.Mark();
+    std::string where = source;
+    if (!mark.is_null()) where += ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
+    throw InputError(where + ": " + key + ": " + what);
+  }
+
+  void keys(const YAML::Node& map, const std::string& key, std::initializer_list<const char*> allowed) const {
+    if (!map.IsMap()) fail(map, key.empty() ? "the file" : key, "expected a mapping");
+    for (const auto& entry : map) {
+      const std::string name = entry.first.Scalar();
+      bool known = false;
+      std::string list;
+      for (const char* k : allowed) {
+        known = known || name == k;
+        list += std::string(list.empty() ? "" : ", ") + k;
+      }
+      if (!known)
+        fail(entry.first, key.empty() ? files::excerpt(name) : key + "." + files::excerpt(name),
+             "unknown key (expected " + list + ")");
+    }
+  }
+
+  double number(const YAML::Node& node, const std::string& key) const {
+    if (!node.IsScalar()) fail(node, key, "expected a number");
+    const std::string& text = node.Scalar();
+    const char* first = text.data() + (!text.empty() && text[0] == '+' ? 1 : 0);
+    double v = 0.0;
+    const auto [end, ec] = std::from_chars(first, text.data() + text.size(), v);
+    if (ec != std::errc() || end != text.data() + text.size() || text.empty())
+      fail(node, key, "'" + files::excerpt(text) + "' is not a number");
+    if (!std::isfinite(v)) fail(node, key, "not finite");
+    return v;
+  }
+
+  std::vector<double> list(const YAML::Node& node, const std::string& key, std::size_t size) const {
+    if (!node.IsSequence() || node.size() != size)
+      fail(node, key, "expected a list of " + std::to_string(size) + " numbers");
+    std::vector<double> out;
+    for (std::size_t i = 0; i < size; ++i) out.push_back(number(node[i], key));
+    return out;
+  }
+
+  Vector3 vector3(const YAML::Node& map, const std::string& parent, const char* name) const {
+    const YAML::Node node = map[name];
+    const std::string key = parent + "." + name;
+    if (!node) fail(map, key, "missing");
+    const std::vector<double> v = list(node, key, 3);
+    return Vector3(v[0], v[1], v[2]);
+  }
+
+  Vector3 direction(const YAML::Node& map, const std::string& parent, const char* name) const {
+    const Vector3 v = vector3(map, parent, name);
+    if (!(v.norm() > 0.0)) fail(map[name], parent + "." + name, "a zero vector has no direction");
+    return v.normalized();
+  }
+};
+
+int joint_of(const model::RobotModel& model, const std::string& name) {
+  for (int j = 0; j < model.joint_count(); ++j)
+    if (model.joints[static_cast<std::size_t>(j)].name == name || name == "q" + std::to_string(j + 1)) return j;
+  return -1;
+}
+
+std::string point_text(const Vector3& v) {
+  return "(" + model::shortest_number_text(v.x()) + ", " + model::shortest_number_text(v.y()) + ", " +
+         model::shortest_number_text(v.z()) + ")";
+}
+
+PlanConstraints read_root(const YAML::Node& root, const Values& r, const model::RobotModel& model) {
+  PlanConstraints c;
+  if (!root || root.IsNull())
+    throw InputError(r.source + ": no constraints (expected workspace, floor, joints or sight)");
+  r.keys(root, "", {"angles", "workspace", "floor", "joints", "sight"});
+  double angle_scale = 1.0;
+  if (const YAML::Node a = root["angles"]) {
+    if (!a.IsScalar() || (a.Scalar() != "deg" && a.Scalar() != "rad")) r.fail(a, "angles", "expected deg or rad");
+    angle_scale = a.Scalar() == "deg" ? std::numbers::pi / 180.0 : 1.0;
+  }
+  if (const YAML::Node w = root["workspace"]) {
+    r.keys(w, "workspace", {"min", "max"});
+    WorkspaceBox box{r.vector3(w, "workspace", "min"), r.vector3(w, "workspace", "max")};
+    if (!(box.min_m.array() < box.max_m.array()).all())
+      r.fail(w["max"], "workspace", "min must be below max on every axis");
+    c.workspace = box;
+  }
+  if (const YAML::Node f = root["floor"]) {
+    r.keys(f, "floor", {"point", "normal"});
+    c.floor = FloorPlane{r.vector3(f, "floor", "point"), r.direction(f, "floor", "normal")};
+  }
+  if (const YAML::Node j = root["joints"]) {
+    if (!j.IsMap()) r.fail(j, "joints", "expected a mapping of joint names (or q1..qN) to [lower, upper]");
+    std::set<int> named;
+    for (const auto& entry : j) {
+      const std::string name = entry.first.Scalar();
+      const std::string key = "joints." + files::excerpt(name);
+      const int joint = joint_of(model, name);
+      if (joint < 0) r.fail(entry.first, key, "the model '" + model.name + "' has no such joint");
+      if (!named.insert(joint).second) r.fail(entry.first, key, "the joint is named twice");
+      const model::Joint& mj = model.joints[static_cast<std::size_t>(joint)];
+      const double scale = mj.type == core::JointType::revolute ? angle_scale : 1.0;
+      const std::vector<double> range = r.list(entry.second, key, 2);
+      const JointRange jr{joint, range[0] * scale, range[1] * scale};
+      if (!(jr.lower < jr.upper)) r.fail(entry.second, key, "the lower end must be below the upper end");
+      if (jr.lower < mj.lower || jr.upper > mj.upper)
+        r.fail(entry.second, key,
+               "the range leaves the joint's limits [" + model::shortest_number_text(mj.lower) + ", " +
+                   model::shortest_number_text(mj.upper) + "] (rad or m)");
+      c.joint_ranges.push_back(jr);
+    }
+  }
+  if (const YAML::Node s = root["sight"]) {
+    r.keys(s, "sight", {"apex", "axis", "half_angle"});
+    SightCone cone{r.vector3(s, "sight", "apex"), r.direction(s, "sight", "axis"), 0.0};
+    if (!s["half_angle"]) r.fail(s, "sight.half_angle", "missing");
+    cone.half_angle_rad = r.number(s["half_angle"], "sight.half_angle") * angle_scale;
+    if (!(cone.half_angle_rad > 0.0 && cone.half_angle_rad < std::numbers::pi))
+      r.fail(s["half_angle"], "sight.half_angle", "expected more than 0 and less than 180 deg (pi rad)");
+    c.sight = cone;
+  }
+  if (!c.workspace && !c.floor && c.joint_ranges.empty() && !c.sight)
+    r.fail(root, "the file", "no constraints (expected workspace, floor, joints or sight)");
+  return c;
+}
+
+}  // namespace
+
+const char* constraint_name(Constraint c) {
+  switch (c) {
+    case Constraint::joint_limits:
+      return "joint limits";
+    case Constraint::joint_ranges:
+      return "joint ranges";
+    case Constraint::workspace:
+      return "workspace";
+    case Constraint::floor:
+      return "floor";
+    case Constraint::sight:
+      return "sight";
+  }
+  return "";
+}
+
+std::string describe(Constraint c, const PlanConstraints& k, const model::RobotModel& model) {
+  switch (c) {
+    case Constraint::joint_limits:
+      return "joint limits: the model's (" + std::to_string(model.joint_count()) + " joints)";
+    case Constraint::joint_ranges: {
+      std::string text = "joint ranges:";
+      for (const JointRange& r : k.joint_ranges)
+        text += " " + model.joints[static_cast<std::size_t>(r.joint)].name + " [" +
+                model::shortest_number_text(r.lower) + ", " + model::shortest_number_text(r.upper) + "]";
+      return text;
+    }
+    case Constraint::workspace:
+      return "workspace: tool point in the box " + point_text(k.workspace->min_m) + " to " +
+             point_text(k.workspace->max_m) + " m";
+    case Constraint::floor:
+      return "floor: tool point and frame origins on the side of " + point_text(k.floor->normal) +
+             " of the plane through " + point_text(k.floor->point_m) + " m";
+    case Constraint::sight:
+      return "sight: tool point within " +
+             model::shortest_number_text(k.sight->half_angle_rad * 180.0 / std::numbers::pi) + " deg of the axis " +
+             point_text(k.sight->axis) + " from " + point_text(k.sight->apex_m) + " m";
+  }
+  return {};
+}
+
+unsigned violated_constraints(const model::RobotModel& model, const PlanConstraints& k, std::span<const double> q) {
+  unsigned violated = 0;
+  const auto mark = [&](Constraint c) { violated |= 1u << static_cast<unsigned>(c); };
+  for (std::size_t j = 0; j < q.size(); ++j) {
+    const model::Joint& joint = model.joints[j];
+    if (q[j] < joint.lower || q[j] > joint.upper) mark(Constraint::joint_limits);
+  }
+  for (const JointRange& r : k.joint_ranges) {
+    const double v = q[static_cast<std::size_t>(r.joint)];
+    if (v < r.lower || v > r.upper) mark(Constraint::joint_ranges);
+  }
+  if (!k.workspace && !k.floor && !k.sight) return violated;
+  // Positions in frame 0: the chain's frames are in the device frame.
+  const model::ChainAtJoints at = model::chain_at_joints(model, q);
+  const model::Transform frame0_T_device = model.base_T_frame0.inverse();
+  const auto in_frame0 = [&](const model::Transform& device_T_x) -> Vector3 {
+    return (frame0_T_device * device_T_x).translation;
+  };
+  const Vector3 tool = in_frame0(at.frames.base_T_tool);
+  if (k.workspace &&
+      !((tool.array() >= k.workspace->min_m.array()).all() && (tool.array() <= k.workspace->max_m.array()).all()))
+    mark(Constraint::workspace);
+  if (k.floor) {
+    const auto above = [&](const Vector3& p) { return k.floor->normal.dot(p - k.floor->point_m) >= 0.0; };
+    bool all_above = above(tool);
+    for (int i = 1; i <= model.joint_count(); ++i)
+      all_above = all_above && above(in_frame0(at.frames.base_T_frame[static_cast<std::size_t>(i)]));
+    if (!all_above) mark(Constraint::floor);
+  }
+  if (k.sight) {
+    const Vector3 ray = tool - k.sight->apex_m;
+    const double angle = std::atan2(ray.cross(k.sight->axis).norm(), ray.dot(k.sight->axis));
+    if (!(angle <= k.sight->half_angle_rad)) mark(Constraint::sight);
+  }
+  return violated;
+}
+
+PlanConstraints parse_plan_constraints(const std::string& text, const std::string& source,
+                                       const model::RobotModel& model) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw InputError(source + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) +
+                     ": YAML syntax: " + e.msg);
+  }
+  const Values r{source};
+  try {
+    return read_root(root, r, model);
+  } catch (const YAML::Exception& e) {  // a conversion deep inside yaml-cpp
+    throw InputError(source + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+}
+
+PlanConstraints read_plan_constraints(const std::string& path, const model::RobotModel& model) {
+  return parse_plan_constraints(files::read_text_or_throw<InputError>(path, files::kSettingsFile), path, model);
+}
+
+}  // namespace kincal::identify

@@ -1,0 +1,251 @@
+// kincal plan's candidates and constraints (issue #23): plans chosen only from the given
+// configurations, no planned configuration violating a constraint over random constraint sets
+// (checked here from the kinematics, not through violated_constraints), infeasible sets refused
+// naming the constraint, and the constraints file's errors naming the key and line.
+#include "host/identify/plan.hpp"
+#include "host/identify/plan_constraints.hpp"
+#include "host/model/model_file.hpp"
+
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+namespace identify = kincal::identify;
+namespace model = kincal::model;
+
+namespace {
+
+using model::Vector3;
+
+model::RobotModel ur10() { return model::load_model(KINCAL_ROBOTS_DIR "/ur10.yaml"); }
+
+// Frame origins 1..N and the tool point in frame 0, from the chain's frames.
+std::vector<Vector3> points_in_frame0(const model::RobotModel& m, const std::vector<double>& q) {
+  const model::ChainAtJoints at = model::chain_at_joints(m, q);
+  const Eigen::Matrix3d r = m.base_T_frame0.rotation;
+  const Vector3 t = m.base_T_frame0.translation;
+  std::vector<Vector3> points;
+  for (int i = 1; i <= m.joint_count(); ++i)
+    points.push_back(r.transpose() * (at.frames.base_T_frame[static_cast<std::size_t>(i)].translation - t));
+  points.push_back(r.transpose() * (model::forward_kinematics(m, q).translation - t));  // the tool point, last
+  return points;
+}
+
+// Whether q meets every constraint, written from the definitions.
+bool meets(const model::RobotModel& m, const identify::PlanConstraints& c, const std::vector<double>& q) {
+  for (std::size_t j = 0; j < q.size(); ++j)
+    if (q[j] < m.joints[j].lower || q[j] > m.joints[j].upper) return false;
+  for (const identify::JointRange& r : c.joint_ranges)
+    if (q[static_cast<std::size_t>(r.joint)] < r.lower || q[static_cast<std::size_t>(r.joint)] > r.upper) return false;
+  const std::vector<Vector3> p = points_in_frame0(m, q);
+  const Vector3& tool = p.back();
+  if (c.workspace)
+    for (int k = 0; k < 3; ++k)
+      if (tool(k) < c.workspace->min_m(k) || tool(k) > c.workspace->max_m(k)) return false;
+  if (c.floor)
+    for (const Vector3& x : p)
+      if ((x - c.floor->point_m).dot(c.floor->normal) < 0.0) return false;
+  if (c.sight) {
+    const Vector3 ray = (tool - c.sight->apex_m).normalized();
+    if (std::acos(std::clamp(ray.dot(c.sight->axis), -1.0, 1.0)) > c.sight->half_angle_rad + 1e-12) return false;
+  }
+  return true;
+}
+
+std::vector<std::vector<double>> random_configurations(const model::RobotModel& m, int count, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> angle(-std::numbers::pi, std::numbers::pi);
+  std::vector<std::vector<double>> out(static_cast<std::size_t>(count));
+  for (auto& q : out)
+    for (int j = 0; j < m.joint_count(); ++j) q.push_back(angle(rng));
+  return out;
+}
+
+// A random constraint set around the UR10's reach: any of a floor, a box, a cone and two joint
+// ranges, some of them infeasible with a few hundred candidates.
+identify::PlanConstraints random_constraints(std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  identify::PlanConstraints c;
+  if (u(rng) < 0.7) c.floor = identify::FloorPlane{Vector3(0, 0, -0.3 + 0.5 * u(rng)), Vector3::UnitZ()};
+  if (u(rng) < 0.5) {
+    const Vector3 centre(u(rng) - 0.5, u(rng) - 0.5, 0.5 * u(rng));
+    const Vector3 half = Vector3::Constant(0.4 + 0.8 * u(rng));
+    c.workspace = identify::WorkspaceBox{centre - half, centre + half};
+  }
+  if (u(rng) < 0.5) {
+    const Vector3 apex(0.4, -3.0, 0.3);
+    c.sight = identify::SightCone{apex, (Vector3(0, 0, 0.5) - apex).normalized(),
+                                  (10.0 + 20.0 * u(rng)) * std::numbers::pi / 180.0};
+  }
+  if (u(rng) < 0.5) {
+    c.joint_ranges.push_back({1, -std::numbers::pi * u(rng), 0.5});
+    c.joint_ranges.push_back({4, -2.0, -2.0 + 4.0 * u(rng) + 0.1});
+  }
+  return c;
+}
+
+std::string plan_error(const model::RobotModel& m, const identify::PlanOptions& o) {
+  try {
+    (void)identify::plan_configurations(m, o);
+  } catch (const model::InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string constraints_error(const std::string& text) {
+  try {
+    (void)identify::parse_plan_constraints(text, "c.yaml", ur10());
+  } catch (const model::InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST_CASE("plan --candidates: the plan holds distinct configurations of the given ones") {
+  const model::RobotModel m = ur10();
+  std::mt19937_64 rng(7);
+  identify::PlanOptions o;
+  o.count = 15;
+  o.random_sets = 5;
+  o.candidates = random_configurations(m, 100, rng);
+  const identify::PlanResult r = identify::plan_configurations(m, o);
+  REQUIRE(r.configurations.size() == 15);
+  REQUIRE(r.chosen.size() == 15);
+  std::vector<std::size_t> chosen = r.chosen;
+  std::sort(chosen.begin(), chosen.end());
+  CHECK(std::adjacent_find(chosen.begin(), chosen.end()) == chosen.end());
+  for (std::size_t k = 0; k < r.chosen.size(); ++k) CHECK(r.configurations[k] == o.candidates[r.chosen[k]]);
+  CHECK(r.considered == 100);
+  CHECK(r.feasible == 100);
+  // The exchange improves on random choices from the same candidates.
+  CHECK(r.index > r.random_index_mean);
+  // A candidate of the wrong length is refused.
+  o.candidates[3].pop_back();
+  CHECK(plan_error(m, o) == "plan: candidate 4 has 5 joint values, the model 6");
+}
+
+TEST_CASE("no planned configuration violates a constraint, over random constraint sets and seeds") {
+  const model::RobotModel m = ur10();
+  int planned = 0, refused = 0;
+  for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+    CAPTURE(seed);
+    std::mt19937_64 rng(seed);
+    identify::PlanOptions o;
+    o.count = 12;
+    o.random_sets = 3;
+    o.seed = seed;
+    o.constraints = random_constraints(rng);
+    o.candidates = random_configurations(m, 100, rng);
+    int feasible = 0, floor_rejects = 0;
+    for (const auto& q : o.candidates) {
+      feasible += meets(m, o.constraints, q) ? 1 : 0;
+      if (o.constraints.floor) {
+        identify::PlanConstraints floor_only;
+        floor_only.floor = o.constraints.floor;
+        floor_only.joint_ranges.clear();
+        floor_rejects += meets(m, floor_only, q) ? 0 : 1;
+      }
+    }
+    if (feasible < o.count) {
+      CHECK(plan_error(m, o).find("meet the constraints, 12 are asked for") != std::string::npos);
+      ++refused;
+      continue;
+    }
+    const identify::PlanResult r = identify::plan_configurations(m, o);
+    CHECK(r.feasible == feasible);
+    for (const identify::ConstraintOutcome& c : r.constraints)
+      if (c.constraint == identify::Constraint::floor) CHECK(c.rejected == floor_rejects);
+    for (const auto& q : r.configurations) CHECK(meets(m, o.constraints, q));
+    ++planned;
+    // The random pool is drawn and filtered within the same constraints.
+    o.candidates.clear();
+    o.pool = 60;
+    const std::string error = plan_error(m, o);
+    if (!error.empty()) {
+      CHECK(error.find("meet the constraints") != std::string::npos);
+      continue;
+    }
+    for (const auto& q : identify::plan_configurations(m, o).configurations) CHECK(meets(m, o.constraints, q));
+  }
+  // Both outcomes occur over these seeds.
+  CHECK(planned >= 2);
+  CHECK(refused >= 1);
+}
+
+TEST_CASE("an infeasible constraint is refused by name; a binding one is reported active") {
+  const model::RobotModel m = ur10();
+  std::mt19937_64 rng(3);
+  identify::PlanOptions o;
+  o.count = 12;
+  o.random_sets = 3;
+  o.candidates = random_configurations(m, 200, rng);
+  o.constraints.floor = identify::FloorPlane{Vector3(0, 0, 3.0), Vector3::UnitZ()};  // above the UR10's reach
+  CHECK(
+      plan_error(m, o) ==
+      "plan: 0 of 200 candidate configurations meet the constraints, 12 are asked for; no candidate meets floor: tool "
+      "point and frame origins on the side of (0, 0, 1) of the plane through (0, 0, 3) m");
+  o.candidates.clear();
+  o.pool = 20;  // 2000 draws
+  CHECK(plan_error(m, o).starts_with("plan: 0 of 2000 candidate configurations meet the constraints"));
+  // The table at the base: half the candidates are below it, and the plan would take some.
+  o.candidates = random_configurations(m, 120, rng);
+  o.constraints.floor = identify::FloorPlane{Vector3(0, 0, 0.0), Vector3::UnitZ()};
+  const identify::PlanResult r = identify::plan_configurations(m, o);
+  REQUIRE(r.constraints.size() == 2);
+  CHECK(r.constraints[0].constraint == identify::Constraint::joint_limits);
+  CHECK(r.constraints[0].rejected == 0);
+  CHECK_FALSE(r.constraints[0].active);
+  CHECK(r.constraints[1].constraint == identify::Constraint::floor);
+  CHECK(r.constraints[1].rejected > 40);
+  CHECK(r.constraints[1].active);
+  CHECK(r.constraints[1].index_gain > 1.0);
+}
+
+TEST_CASE("the constraints file: read in SI or degrees; errors name the key and line") {
+  const identify::PlanConstraints c = identify::parse_plan_constraints(
+      "angles: deg\nworkspace:\n  min: [-1, -1, 0.05]\n  max: [1, 1, 1.5]\nfloor:\n  point: [0, 0, 0.02]\n"
+      "  normal: [0, 0, 2]\njoints:\n  shoulder_lift: [-180, 0]\n  q5: [-90, 90]\nsight:\n  apex: [0.4, -3.2, 0.2]\n"
+      "  axis: [0, 1, 0]\n  half_angle: 30\n",
+      "c.yaml", ur10());
+  REQUIRE(c.workspace);
+  CHECK(c.workspace->min_m == Vector3(-1, -1, 0.05));
+  CHECK(c.floor->normal == Vector3::UnitZ());
+  REQUIRE(c.joint_ranges.size() == 2);
+  CHECK(c.joint_ranges[0].joint == 1);
+  CHECK(c.joint_ranges[0].lower == doctest::Approx(-std::numbers::pi));
+  CHECK(c.joint_ranges[1].joint == 4);
+  CHECK(c.sight->half_angle_rad == doctest::Approx(std::numbers::pi / 6));
+  CHECK(constraints_error("") == "c.yaml: no constraints (expected workspace, floor, joints or sight)");
+  CHECK(constraints_error("angles: deg\n") ==
+        "c.yaml:1:1: the file: no constraints (expected workspace, floor, joints or sight)");
+
+  CHECK(constraints_error("flor:\n  point: [0, 0, 0]\n") ==
+        "c.yaml:1:1: flor: unknown key (expected angles, workspace, floor, joints, sight)");
+  CHECK(constraints_error("floor:\n  point: [0, 0]\n  normal: [0, 0, 1]\n") ==
+        "c.yaml:2:10: floor.point: expected a list of 3 numbers");
+  CHECK(constraints_error("floor:\n  point: [0, 0, 0]\n") == "c.yaml:2:3: floor.normal: missing");
+  CHECK(constraints_error("floor:\n  point: [0, 0, 0]\n  normal: [0, 0, 0]\n") ==
+        "c.yaml:3:11: floor.normal: a zero vector has no direction");
+  CHECK(constraints_error("workspace:\n  min: [0, 0, 0]\n  max: [1, 1, x]\n") ==
+        "c.yaml:3:15: workspace.max: 'x' is not a number");
+  CHECK(constraints_error("workspace:\n  min: [0, 0, 0]\n  max: [1, -1, 1]\n") ==
+        "c.yaml:3:8: workspace: min must be below max on every axis");
+  CHECK(constraints_error("joints:\n  elbo: [0, 1]\n") ==
+        "c.yaml:2:3: joints.elbo: the model 'ur10' has no such joint");
+  CHECK(constraints_error("joints:\n  elbow: [0, 1]\n  q3: [0, 1]\n") ==
+        "c.yaml:3:3: joints.q3: the joint is named twice");
+  CHECK(constraints_error("joints:\n  elbow: [1, 0]\n") ==
+        "c.yaml:2:10: joints.elbow: the lower end must be below the upper end");
+  CHECK(constraints_error("joints:\n  elbow: [0, 7]\n")
+            .starts_with("c.yaml:2:10: joints.elbow: the range leaves the joint's limits [-6.28"));
+  CHECK(constraints_error("sight:\n  apex: [0, 0, 0]\n  axis: [0, 1, 0]\n  half_angle: 4\n") ==
+        "c.yaml:4:15: sight.half_angle: expected more than 0 and less than 180 deg (pi rad)");
+  CHECK(constraints_error("angles: grad\n") == "c.yaml:1:9: angles: expected deg or rad");
+  CHECK(constraints_error("floor: [1, 2\n").starts_with("c.yaml:2:1: YAML syntax:"));
+  CHECK(constraints_error("- 1\n") == "c.yaml:1:1: the file: expected a mapping");
+}
