@@ -191,16 +191,10 @@ class StereoRig : public SimulatedRig {
   StereoRig(const model::RobotModel& file, const RigOptions& options)
       : options_(options), robot_(file, options.seed, {}, sim::typical_imperfections(sim::reach_m(file))) {
     beacon_.radius_m = 0.015;
-    // The rendered pair as a calibrated one: identical pinholes without distortion, the right
-    // camera one baseline along the left camera's x.
+    // The rendered pair as a calibrated one: both cameras as rendered (sim::stereo_pair_of), the
+    // right camera one baseline along the left camera's x.
     StereoSetup setup;
-    core::CameraIntrinsics camera;
-    camera.fx_px = static_cast<float>(spec_.camera.fx_px);
-    camera.fy_px = static_cast<float>(spec_.camera.fy_px);
-    camera.cx_px = static_cast<float>(spec_.camera.cx_px);
-    camera.cy_px = static_cast<float>(spec_.camera.cy_px);
-    setup.pair.left = setup.pair.right = camera;
-    setup.pair.left_T_right.translation = core::Vector3<float>(static_cast<float>(spec_.baseline_m), 0, 0);
+    setup.pair = sim::stereo_pair_of(spec_);
     setup.left_size_px = setup.right_size_px = cv::Size(spec_.camera.width_px, spec_.camera.height_px);
     // Their camera frame has y up: the right camera's OpenCV frame turned half a turn about z.
     model::Transform device_T_right;

@@ -5,6 +5,7 @@
 #include <string>
 
 #include <Eigen/Geometry>
+#include <opencv2/core.hpp>
 
 namespace kincal::sim {
 
@@ -36,6 +37,42 @@ StereoFrame render_beacon(const StereoRigSpec& rig, const BeaconSpec& beacon, co
   frame.right_px = project_points(rig.camera, right_T_disc, std::span(&centre, 1))[0];
   frame.left_px = project_points(rig.camera, left_T_disc, std::span(&centre, 1))[0];
   return frame;
+}
+
+StereoFrame render_colour_beacon(const StereoRigSpec& rig, double radius_m, const Eigen::Vector3d& beacon_device_m,
+                                 const ImagingConditions& conditions, bool lit) {
+  BeaconSpec red, green_blue;
+  red.radius_m = green_blue.radius_m = radius_m;
+  red.background = green_blue.background = 0.3;
+  red.beacon = lit ? 0.95 : red.background;
+  green_blue.beacon = lit ? 0.08 : green_blue.background;
+  const StereoFrame r = render_beacon(rig, red, beacon_device_m, conditions);
+  ImagingConditions other = conditions;
+  other.seed = conditions.seed * 7919 + 17;
+  const StereoFrame gb = render_beacon(rig, green_blue, beacon_device_m, other);
+  StereoFrame out;
+  cv::merge(std::vector<cv::Mat>{gb.left, gb.left, r.left}, out.left);
+  cv::merge(std::vector<cv::Mat>{gb.right, gb.right, r.right}, out.right);
+  out.left_px = r.left_px;
+  out.right_px = r.right_px;
+  return out;
+}
+
+core::StereoPair stereo_pair_of(const StereoRigSpec& rig) {
+  core::CameraIntrinsics camera;
+  camera.fx_px = static_cast<float>(rig.camera.fx_px);
+  camera.fy_px = static_cast<float>(rig.camera.fy_px);
+  camera.cx_px = static_cast<float>(rig.camera.cx_px);
+  camera.cy_px = static_cast<float>(rig.camera.cy_px);
+  camera.distortion.k1 = static_cast<float>(rig.camera.distortion[0]);
+  camera.distortion.k2 = static_cast<float>(rig.camera.distortion[1]);
+  camera.distortion.p1 = static_cast<float>(rig.camera.distortion[2]);
+  camera.distortion.p2 = static_cast<float>(rig.camera.distortion[3]);
+  camera.distortion.k3 = static_cast<float>(rig.camera.distortion[4]);
+  core::StereoPair pair;
+  pair.left = pair.right = camera;
+  pair.left_T_right.translation = core::Vector3<float>(static_cast<float>(rig.baseline_m), 0, 0);
+  return pair;
 }
 
 }  // namespace kincal::sim

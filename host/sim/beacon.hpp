@@ -23,6 +23,7 @@
 
 #include <Eigen/Core>
 
+#include "firmware/core/stereo.hpp"
 #include "host/sim/render.hpp"
 
 namespace kincal::sim {
@@ -39,7 +40,7 @@ struct BeaconSpec {
 };
 
 struct StereoFrame {
-  cv::Mat left, right;            // CV_8UC1
+  cv::Mat left, right;            // CV_8UC1 (render_beacon) or CV_8UC3 BGR (render_colour_beacon)
   cv::Point2d left_px, right_px;  // true projections of the beacon's centre
 };
 
@@ -47,5 +48,16 @@ struct StereoFrame {
 // conditions.seed, the left's with a seed derived from it (independent noise, reproducible).
 StereoFrame render_beacon(const StereoRigSpec& rig, const BeaconSpec& beacon, const Eigen::Vector3d& beacon_device_m,
                           const ImagingConditions& conditions);
+
+// A crimson beacon of radius_m on a grey background, as colour frames: each frame is two
+// renders, the red channel with the disc bright (0.95 on 0.3), green and blue with it dark (0.08
+// on 0.3), each with its own noise. lit = false renders the background alone (a beacon that is
+// off or hidden). Errors: render_beacon's.
+StereoFrame render_colour_beacon(const StereoRigSpec& rig, double radius_m, const Eigen::Vector3d& beacon_device_m,
+                                 const ImagingConditions& conditions, bool lit = true);
+
+// The rendered pair as a calibrated one (firmware/core/stereo.hpp): both cameras' intrinsics and
+// distortion, the right camera one baseline along the left camera's x.
+core::StereoPair stereo_pair_of(const StereoRigSpec& rig);
 
 }  // namespace kincal::sim

@@ -94,34 +94,6 @@ void write_plan(const std::string& path, const session::Configurations& poses) {
   }
 }
 
-// Both cameras' colour frames of a beacon at p (device frame): red channel bright, green and
-// blue dark on the disc.
-struct ColourPair {
-  cv::Mat left, right;
-  cv::Point2d left_px, right_px;
-};
-
-ColourPair render_colour(const sim::StereoRigSpec& spec, double radius_m, const model::Vector3& p, std::uint64_t seed,
-                         bool beacon_on) {
-  sim::BeaconSpec red, green_blue;
-  red.radius_m = green_blue.radius_m = radius_m;
-  red.background = green_blue.background = 0.3;
-  red.beacon = beacon_on ? 0.95 : red.background;
-  green_blue.beacon = beacon_on ? 0.08 : green_blue.background;
-  sim::ImagingConditions conditions;
-  conditions.supersampling = 2;
-  conditions.seed = seed;
-  const sim::StereoFrame r = sim::render_beacon(spec, red, p, conditions);
-  conditions.seed = seed * 7919 + 17;
-  const sim::StereoFrame gb = sim::render_beacon(spec, green_blue, p, conditions);
-  ColourPair out;
-  cv::merge(std::vector<cv::Mat>{gb.left, gb.left, r.left}, out.left);
-  cv::merge(std::vector<cv::Mat>{gb.right, gb.right, r.right}, out.right);
-  out.left_px = r.left_px;
-  out.right_px = r.right_px;
-  return out;
-}
-
 camera::StereoCalibration calibration_of(const sim::StereoRigSpec& spec) {
   camera::StereoCalibration c;
   camera::CameraModel cam;
@@ -194,10 +166,16 @@ int run(const Options& o) {
     const model::Vector3 p = robot.visit_pose(all[i], i).translation;
     if (!in_view(spec, p)) throw std::runtime_error("pose " + std::to_string(i) + " is out of view");
     const std::uint64_t seed = o.seed * 1000003 + i;
-    ColourPair frames = render_colour(spec, o.radius_m, p, seed, true);
-    if (pose == o.missing_right) frames.right = render_colour(spec, o.radius_m, p, seed, false).right;
+    sim::ImagingConditions conditions;
+    conditions.supersampling = 2;
+    conditions.seed = seed;
+    sim::StereoFrame frames = sim::render_colour_beacon(spec, o.radius_m, p, conditions);
+    if (pose == o.missing_right) frames.right = sim::render_colour_beacon(spec, o.radius_m, p, conditions, false).right;
     if (pose == o.doubled_left) {
-      const ColourPair second = render_colour(spec, o.radius_m, p + model::Vector3(0.2, 0, 0), seed + 1, true);
+      sim::ImagingConditions second_conditions = conditions;
+      ++second_conditions.seed;
+      const sim::StereoFrame second =
+          sim::render_colour_beacon(spec, o.radius_m, p + model::Vector3(0.2, 0, 0), second_conditions);
       // Each pixel from the render in which it is redder: both discs, one background.
       for (int y = 0; y < frames.left.rows; ++y)
         for (int x = 0; x < frames.left.cols; ++x) {

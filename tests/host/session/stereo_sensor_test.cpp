@@ -16,15 +16,7 @@ namespace {
 // The rendered pair (sim/beacon.hpp) as the sensor's calibrated pair, in the left camera's frame.
 session::StereoSetup setup_of(const sim::StereoRigSpec& spec) {
   session::StereoSetup setup;
-  core::CameraIntrinsics camera;
-  camera.fx_px = static_cast<float>(spec.camera.fx_px);
-  camera.fy_px = static_cast<float>(spec.camera.fy_px);
-  camera.cx_px = static_cast<float>(spec.camera.cx_px);
-  camera.cy_px = static_cast<float>(spec.camera.cy_px);
-  camera.distortion.k1 = static_cast<float>(spec.camera.distortion[0]);
-  camera.distortion.k2 = static_cast<float>(spec.camera.distortion[1]);
-  setup.pair.left = setup.pair.right = camera;
-  setup.pair.left_T_right.translation = core::Vector3<float>(static_cast<float>(spec.baseline_m), 0, 0);
+  setup.pair = sim::stereo_pair_of(spec);
   setup.left_size_px = setup.right_size_px = cv::Size(spec.camera.width_px, spec.camera.height_px);
   setup.pixel_sigma_px = 0.05;
   return setup;
