@@ -613,7 +613,7 @@ case("correct:-o - is standard output", C + ["--joints", "targets.csv", "-o", "-
 # the table above, and its own refusals (file:line:column or file:line and the key, nothing written)
 run(["plan", "--model", puma, "-n", "40", "--pool", "200", "-o", "plan_candidates.csv"])
 with open("plan_constraints.yaml", "w") as f:
-    f.write("floor:\n  point: [0, 0, -2]\n  normal: [0, 0, 1]\njoints:\n  q2: [-2, 2]\n")
+    f.write("floor:\n  point: [0, 0, -2]\n  normal: [0, 0, 1]\njoints:\n  q2: [-2, 0.5]\n")
 with open("plan_nan.csv", "w") as f:
     f.write("q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n0.1,nan,0,0,0,0\n")
 with open("plan_key.yaml", "w") as f:
@@ -631,7 +631,7 @@ plan_inputs = ["plan_candidates.csv", "plan_constraints.yaml", puma]
 case("plan:candidates NaN cell", P + ["--candidates", "plan_nan.csv", "-o", "p1.csv"], r"plan_nan\.csv:3:5: column q2: nan is not finite")
 case("plan:constraints unknown key", P + ["--constraints", "plan_key.yaml", "-o", "p2.csv"],
      r"plan_key\.yaml:2:3: floor\.pointt: unknown key \(expected point, normal\)")
-case("plan:infeasible constraints", P + ["--constraints", "plan_high.yaml", "-o", "p3.csv"],
+case("plan:infeasible constraints", P + ["--pool", "40", "--constraints", "plan_high.yaml", "-o", "p3.csv"],
      r"0 of [0-9]+ candidate configurations meet the constraints, 12 are asked for; no candidate meets floor")
 case("plan:--candidates and --pool", P + ["--candidates", "plan_candidates.csv", "--pool", "40"], r"excludes")
 case("plan:out=candidates", P + ["--candidates", "plan_candidates.csv", "-o", "plan_candidates.csv"],
