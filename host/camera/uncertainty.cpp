@@ -166,4 +166,86 @@ ProjectionSigmaGrid projection_sigma_grid(const CameraModel& camera, const Intri
   return g;
 }
 
+StereoPoseCovariance stereo_pose_covariance(const CameraModel& left, const CameraModel& right,
+                                            const cv::Matx33d& right_R_left, const cv::Vec3d& right_t_left_m,
+                                            const std::vector<StereoView>& views,
+                                            const IntrinsicsCovariance* left_intrinsics,
+                                            const IntrinsicsCovariance* right_intrinsics) {
+  if (views.size() < 3) throw CalibrationError("stereo pose covariance: fewer than 3 pairs");
+  if ((left_intrinsics == nullptr) != (right_intrinsics == nullptr))
+    throw CalibrationError("stereo pose covariance: give both cameras' intrinsics covariances or neither");
+  using Matrix6d = Eigen::Matrix<double, 6, 6>;
+  using Matrix6x18 = Eigen::Matrix<double, 6, 18>;
+  cv::Vec3d rig_r;
+  cv::Rodrigues(right_R_left, rig_r);
+  Matrix6d schur = Matrix6d::Zero();      // the rig pose's block, board poses marginalised
+  Matrix6x18 cross = Matrix6x18::Zero();  // its rows of J^T J_intrinsics, likewise
+  double ssr = 0;
+  int corners = 0;
+  for (const StereoView& v : views) {
+    if (v.board_m->size() != v.left_px->size() || v.board_m->size() != v.right_px->size())
+      throw CalibrationError("stereo pose covariance: a pair's board and image corners differ in number");
+    cv::Vec3d board_r, board_t;
+    cv::solvePnP(*v.board_m, *v.left_px, cv::Mat(left.camera_matrix), left.distortion_mat(), board_r, board_t);
+    cv::Mat r3, t3, dr3dr1, dr3dt1, dr3dr2, dr3dt2, dt3dr1, dt3dt1, dt3dr2, dt3dt2;
+    cv::composeRT(board_r, board_t, rig_r, right_t_left_m, r3, t3, dr3dr1, dr3dt1, dr3dr2, dr3dt2, dt3dr1, dt3dt1,
+                  dt3dr2, dt3dt2);
+    const std::vector<cv::Point3d> board_m(v.board_m->begin(), v.board_m->end());
+    std::vector<cv::Point2d> left_proj, right_proj;
+    Eigen::MatrixXd jl, jr;
+    cv::cv2eigen(project_with_jacobian(left, board_m, board_r, board_t, left_proj), jl);
+    cv::cv2eigen(project_with_jacobian(right, board_m, cv::Vec3d(r3), cv::Vec3d(t3), right_proj), jr);
+    // d(r3, t3) / d(board pose) and / d(rig pose), 6 x 6 each.
+    Eigen::Matrix3d a, b, c, d, e, f, g, h;
+    cv::cv2eigen(dr3dr1, a), cv::cv2eigen(dr3dt1, b), cv::cv2eigen(dt3dr1, c), cv::cv2eigen(dt3dt1, d);
+    cv::cv2eigen(dr3dr2, e), cv::cv2eigen(dr3dt2, f), cv::cv2eigen(dt3dr2, g), cv::cv2eigen(dt3dt2, h);
+    Matrix6d d_board, d_rig;
+    d_board << a, b, c, d;
+    d_rig << e, f, g, h;
+    const Eigen::Index n = static_cast<Eigen::Index>(board_m.size());
+    // Rows: the left image's residuals, then the right's. Columns: rig pose, board pose, intrinsics.
+    Eigen::MatrixXd rig = Eigen::MatrixXd::Zero(4 * n, 6), board(4 * n, 6),
+                    intrinsics = Eigen::MatrixXd::Zero(4 * n, 18);
+    board.topRows(2 * n) = jl.leftCols(6);
+    board.bottomRows(2 * n) = jr.leftCols(6) * d_board;
+    rig.bottomRows(2 * n) = jr.leftCols(6) * d_rig;
+    intrinsics.topLeftCorner(2 * n, 9) = jl.middleCols(6, 9);
+    intrinsics.bottomRightCorner(2 * n, 9) = jr.middleCols(6, 9);
+    const Matrix6d board_block = board.transpose() * board;
+    const Eigen::LDLT<Matrix6d> board_solve(board_block);
+    const Matrix6d rig_board = rig.transpose() * board;
+    schur += rig.transpose() * rig - rig_board * board_solve.solve(rig_board.transpose());
+    cross += rig.transpose() * intrinsics - rig_board * board_solve.solve(board.transpose() * intrinsics);
+    for (std::size_t i = 0; i < board_m.size(); ++i) {
+      const cv::Point2d l = left_proj[i] - cv::Point2d((*v.left_px)[i]);
+      const cv::Point2d r = right_proj[i] - cv::Point2d((*v.right_px)[i]);
+      ssr += l.dot(l) + r.dot(r);
+    }
+    corners += static_cast<int>(n);
+  }
+  const int dof = 4 * corners - 6 - 6 * static_cast<int>(views.size());
+  if (dof <= 0) throw CalibrationError("stereo pose covariance: fewer residuals than parameters");
+  StereoPoseCovariance out;
+  out.corner_sigma_px = std::sqrt(ssr / dof);
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(schur);
+  if (!(eigen.eigenvalues().minCoeff() > eigen.eigenvalues().maxCoeff() * 1e-14))
+    throw CalibrationError("stereo pose covariance: the pairs do not determine right_T_left (J^T J singular)");
+  const Matrix6d inverse =
+      eigen.eigenvectors() * eigen.eigenvalues().cwiseInverse().asDiagonal() * eigen.eigenvectors().transpose();
+  Matrix6d covariance = out.corner_sigma_px * out.corner_sigma_px * inverse;
+  if (left_intrinsics != nullptr) {
+    Eigen::Matrix<double, 18, 18> intrinsics_covariance = Eigen::Matrix<double, 18, 18>::Zero();
+    Eigen::Matrix<double, 9, 9> l, r;
+    cv::cv2eigen(left_intrinsics->covariance, l);
+    cv::cv2eigen(right_intrinsics->covariance, r);
+    intrinsics_covariance.topLeftCorner<9, 9>() = l;
+    intrinsics_covariance.bottomRightCorner<9, 9>() = r;
+    const Matrix6x18 sensitivity = -inverse * cross;
+    covariance += sensitivity * intrinsics_covariance * sensitivity.transpose();
+  }
+  covariance = 0.5 * (covariance + covariance.transpose());
+  cv::eigen2cv(covariance, out.covariance);
+  return out;
+}
+
 }  // namespace kincal::camera

@@ -62,6 +62,33 @@ struct SolvedView {
 
 IntrinsicsCovariance intrinsics_covariance(const CameraModel& camera, const std::vector<SolvedView>& views, int flags);
 
+// The covariance of a stereo pair's right_T_left (right_r_left, the rotation vector in rad, then
+// right_t_left in m: x_right = R x_left + t), from the stereo solve's Jacobian as the intrinsics'
+// is from theirs: each pair's residuals in both cameras, d/d(right_T_left, left_T_board of each
+// pair) by cv::projectPoints and cv::composeRT, the board poses marginalised (Schur complement),
+// sigma^2 = SSR / (4 N - 6 - 6 P) over the N corners of P pairs in both images. The cameras'
+// intrinsics are held as the solve held them (cv::CALIB_FIX_INTRINSIC); when their covariances
+// are given (both or neither), their effect on the solution is added to first order:
+// d(right_T_left)/d(intrinsics) = -S^-1 (the pose rows of J^T J_intrinsics, poses marginalised),
+// cov += G diag(cov_left, cov_right) G^T. Approximation, stated: each board pose is the left
+// camera's own cv::solvePnP, not the joint optimum (they differ by far less than the pose's
+// uncertainty; the Jacobian hardly changes).
+// Errors (CalibrationError): fewer than 3 pairs, a pair whose lists differ in length, or J^T J
+// singular (the pairs do not determine the pose).
+struct StereoPoseCovariance {
+  cv::Matx66d covariance = cv::Matx66d::zeros();  // right_r_left (rad), right_t_left (m)
+  double corner_sigma_px = 0;
+};
+struct StereoView {
+  const std::vector<cv::Point3f>* board_m;
+  const std::vector<cv::Point2f>*left_px, *right_px;  // the same corners in both images
+};
+StereoPoseCovariance stereo_pose_covariance(const CameraModel& left, const CameraModel& right,
+                                            const cv::Matx33d& right_R_left, const cv::Vec3d& right_t_left_m,
+                                            const std::vector<StereoView>& views,
+                                            const IntrinsicsCovariance* left_intrinsics = nullptr,
+                                            const IntrinsicsCovariance* right_intrinsics = nullptr);
+
 // The 2 x 2 covariance (px^2) of the projection of the ray seen at `pixel_px`; NaN entries when
 // the model does not invert there (its round trip misses the pixel by more than 1e-3 px: a
 // distortion that folds beyond where the corners were).

@@ -236,6 +236,63 @@ TEST_CASE("stereo calibration recovers the baseline and rectifies") {
   CHECK(contains(message, "view0 / blank: blank: pattern not found"));
 }
 
+TEST_CASE("stereo pose covariance: right_T_left's spread over noisy corners, with the intrinsics' share") {
+  // Each trial: both cameras calibrated from their own noisy corners (sigma 0.2 px), then the
+  // pair with those intrinsics held, and with the true intrinsics; the error of right_T_left
+  // against the truth in units of the predicted covariance (chi-square, 6 dof: mean 6).
+  const Board board = parse_board(scenes::chessboard_text());
+  const CameraModel left_truth = model_of(scenes::test_camera()), right_truth = model_of(spec_of_right());
+  const std::vector<Eigen::Isometry3d> views = scenes::board_views(board, kViews);
+  const Eigen::Isometry3d right_T_left = scenes::left_T_right().inverse();
+  cv::Matx33d true_r;
+  cv::eigen2cv(Eigen::Matrix3d(right_T_left.linear()), true_r);
+  cv::Vec3d true_rotation;
+  cv::Rodrigues(true_r, true_rotation);
+  const cv::Vec3d true_t(right_T_left.translation().x(), right_T_left.translation().y(),
+                         right_T_left.translation().z());
+  const auto chi2 = [&](const StereoCalibration& s, const StereoPoseCovariance& c) {
+    cv::Vec3d rotation;
+    cv::Rodrigues(s.right_R_left, rotation);
+    const cv::Vec3d dr = rotation - true_rotation, dt = s.right_t_left_m - true_t;
+    const cv::Vec6d e(dr[0], dr[1], dr[2], dt[0], dt[1], dt[2]);
+    return (e.t() * c.covariance.inv(cv::DECOMP_CHOLESKY) * e)(0);
+  };
+  constexpr int kTrials = 30;
+  cv::RNG rng(22);
+  double with = 0, without = 0, known = 0, sigma = 0;
+  for (int trial = 0; trial < kTrials; ++trial) {
+    std::vector<BoardDetection> left, right;
+    for (std::size_t i = 0; i < views.size(); ++i) {
+      left.push_back(projected(board, left_truth, views[i], "left" + std::to_string(i), rng, 0.2));
+      right.push_back(projected(board, right_truth, right_T_left * views[i], "right" + std::to_string(i), rng, 0.2));
+    }
+    std::vector<StereoView> pairs;
+    for (std::size_t i = 0; i < views.size(); ++i)
+      pairs.push_back({&left[i].board_m, &left[i].image_px, &right[i].image_px});
+    const IntrinsicCalibration lc = calibrate_intrinsics(left), rc = calibrate_intrinsics(right);
+    const StereoCalibration s = calibrate_stereo(left, right, lc.camera, rc.camera);
+    with += chi2(s, stereo_pose_covariance(lc.camera, rc.camera, s.right_R_left, s.right_t_left_m, pairs,
+                                           &lc.uncertainty, &rc.uncertainty)) /
+            kTrials;
+    without += chi2(s, stereo_pose_covariance(lc.camera, rc.camera, s.right_R_left, s.right_t_left_m, pairs)) / kTrials;
+    const StereoCalibration t = calibrate_stereo(left, right, left_truth, right_truth);
+    const StereoPoseCovariance c =
+        stereo_pose_covariance(left_truth, right_truth, t.right_R_left, t.right_t_left_m, pairs);
+    known += chi2(t, c) / kTrials;
+    sigma += c.corner_sigma_px / kTrials;
+  }
+  MESSAGE("mean chi-square of right_T_left's error: " << with << " with the estimated intrinsics and their share, "
+                                                      << without << " without their share, " << known
+                                                      << " with the true intrinsics; corner sigma " << sigma << " px");
+  CHECK(sigma == doctest::Approx(0.2).epsilon(0.05));
+  // 30 trials: the mean of chi-square(6) has a standard deviation of 0.63.
+  for (const double mean : {with, known}) {
+    CHECK(mean > 4.0);
+    CHECK(mean < 8.5);
+  }
+  CHECK(without > 10 * with);  // the intrinsics' error dominates right_T_left's
+}
+
 TEST_CASE("hand-eye calibration on rendered views recovers gripper_T_camera") {
   const Board board = parse_board(scenes::chessboard_text());
   const std::vector<Eigen::Isometry3d> views = scenes::board_views(board, kViews);
