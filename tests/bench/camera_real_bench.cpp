@@ -16,6 +16,14 @@
 //   camera_real_lens_model_difference_px, camera_real_lens_model_difference_max_px
 //       the two left cameras: every 8th pixel of the image unprojected by the recipe's model
 //       and projected by kincal's; RMS and largest distance
+//   camera_real_lens_model_difference_in_hull_px, ..._outside_hull_px   the same RMS over the
+//       pixels inside the convex hull of all the views' corners (where the board was) and outside
+//   camera_real_lens_model_difference_over_sigma   the mean of (distance / sigma)^2 over the image,
+//       sigma kincal's own predicted projection sigma per axis (host/camera/uncertainty.hpp) at
+//       that pixel: about 2 if the models differed by one model's own error, less when both
+//       estimates share the images
+//   camera_real_k3_effect_px, camera_real_k3_effect_in_hull_px   kincal's camera against kincal's
+//       with k3 held at 0 (CALIB_FIX_K3) on the same corners: RMS over the image and inside the hull
 //   camera_real_intrinsics_std_over_opencv   kincal's standard deviations of the 9 intrinsics over
 //       OpenCV's stdDeviationsIntrinsics on the same corners (the same for all 9 to 1e-6)
 //   camera_real_intrinsics_std_same_sigma_deviation   the largest |ratio - 1| once both use one
@@ -202,6 +210,44 @@ int main() {
   }
   figure("camera_real_lens_model_difference_px", std::sqrt(sum / static_cast<double>(pixels.size())), "px");
   figure("camera_real_lens_model_difference_max_px", largest, "px");
+
+  // Where the board was: the convex hull of every used corner. How far apart the models are
+  // inside and outside it, against kincal's own projection uncertainty, and what k3 does.
+  {
+    std::vector<cv::Point2f> corners, hull;
+    for (const BoardDetection& d : left) corners.insert(corners.end(), d.image_px.begin(), d.image_px.end());
+    cv::convexHull(corners, hull);
+    const auto inside = [&](const cv::Point2d& p) {
+      return cv::pointPolygonTest(hull, cv::Point2f(static_cast<float>(p.x), static_cast<float>(p.y)), false) >= 0;
+    };
+    IntrinsicOptions no_k3;
+    no_k3.flags = cv::CALIB_FIX_K3;
+    const std::vector<cv::Point2d> without_k3 =
+        reproject(kincal_left.camera, calibrate_intrinsics(left, no_k3).camera, pixels);
+    double in_sum = 0, out_sum = 0, z_sum = 0, k3_sum = 0, k3_in_sum = 0;
+    int in_count = 0, z_count = 0;
+    for (std::size_t i = 0; i < pixels.size(); ++i) {
+      const double e2 = std::pow(cv::norm(reprojected[i] - pixels[i]), 2),
+                   k3 = std::pow(cv::norm(without_k3[i] - pixels[i]), 2);
+      const bool in = inside(pixels[i]);
+      (in ? in_sum : out_sum) += e2;
+      in_count += in ? 1 : 0;
+      k3_sum += k3;
+      k3_in_sum += in ? k3 : 0;
+      const cv::Matx22d c = projection_covariance(kincal_left.camera, kincal_left.uncertainty, pixels[i]);
+      if (const double sigma2 = 0.5 * (c(0, 0) + c(1, 1)); std::isfinite(sigma2)) {
+        z_sum += e2 / sigma2;
+        ++z_count;
+      }
+    }
+    const double n = static_cast<double>(pixels.size());
+    std::printf("%d of %zu pixels inside the corners' hull\n", in_count, pixels.size());
+    figure("camera_real_lens_model_difference_in_hull_px", std::sqrt(in_sum / in_count), "px");
+    figure("camera_real_lens_model_difference_outside_hull_px", std::sqrt(out_sum / (n - in_count)), "px");
+    figure("camera_real_lens_model_difference_over_sigma", z_sum / z_count, "ratio");
+    figure("camera_real_k3_effect_px", std::sqrt(k3_sum / n), "px");
+    figure("camera_real_k3_effect_in_hull_px", std::sqrt(k3_in_sum / in_count), "px");
+  }
 
   // The 13 pairs.
   const StereoCalibration s = calibrate_stereo(left, right, kincal_left.camera, kincal_right.camera);
