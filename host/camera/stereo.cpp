@@ -215,6 +215,14 @@ StereoCalibration calibrate_stereo(const std::vector<BoardDetection>& left, cons
                              " px): its corners do not fit the stereo geometry (a mismatched pair, or the board "
                              "moved between the two exposures)");
   }
+  if (options.left_intrinsics != nullptr && options.right_intrinsics != nullptr && !options.refine_intrinsics) {
+    std::vector<StereoView> views;
+    for (std::size_t k = 0; k < object_points.size(); ++k)
+      views.push_back({&object_points[k], &left_points[k], &right_points[k]});
+    result.pose_uncertainty =
+        stereo_pose_covariance(result.left, result.right, result.right_R_left, result.right_t_left_m, views,
+                               options.left_intrinsics, options.right_intrinsics);
+  }
   cv::Mat r1, r2, p1, p2, q;
   cv::stereoRectify(k1, d1, k2, d2, left_camera.image_size, r, t, r1, r2, p1, p2, q, cv::CALIB_ZERO_DISPARITY, 0);
   result.rectify_left = cv::Matx33d(r1);
@@ -237,6 +245,18 @@ std::string describe(const StereoCalibration& c) {
   cv::Vec3d rotation;
   cv::Rodrigues(c.right_R_left, rotation);
   out << "right_R_left: " << fixed(cv::norm(rotation) * 180 / CV_PI, 4) << " degrees\n";
+  if (c.pose_uncertainty) {
+    const cv::Matx66d& v = c.pose_uncertainty->covariance;
+    const cv::Vec3d along = c.right_t_left_m / c.baseline_m;
+    double baseline_variance = 0;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) baseline_variance += along[i] * v(3 + i, 3 + j) * along[j];
+    out << "baseline sigma (with the intrinsics' uncertainty): " << fixed(1e3 * std::sqrt(baseline_variance), 4)
+        << " mm\n";
+    out << "right_R_left sigma about x y z: " << fixed(std::sqrt(v(0, 0)) * 180 / CV_PI, 4) << " "
+        << fixed(std::sqrt(v(1, 1)) * 180 / CV_PI, 4) << " " << fixed(std::sqrt(v(2, 2)) * 180 / CV_PI, 4)
+        << " degrees\n";
+  }
   for (const StereoPairReport& p : c.pairs) {
     out << "pair " << p.left_view << " / " << p.right_view << ": ";
     if (p.used) {

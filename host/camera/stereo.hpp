@@ -25,6 +25,11 @@
 //  - epipolar residuals, after the solve: a pair whose RMS exceeds both outlier_over_median
 //    times the median pair's and outlier_floor_px is refused, named;
 //  - refuse_wrong_board and refuse_other_image_sizes (host/camera/intrinsics.hpp) on both lists.
+// Uncertainty: with both cameras' intrinsics covariances given in the options (from their camera
+// files, load_camera_uncertainty) and the intrinsics held (refine_intrinsics false),
+// pose_uncertainty is right_T_left's covariance with the intrinsics' share
+// (stereo_pose_covariance, host/camera/uncertainty.hpp); otherwise it is empty (without the
+// intrinsics' share it would understate the error many times over: tested).
 // Errors: CalibrationError when the lists differ in length, the two cameras' image sizes
 // differ, any gate refuses, or fewer than min_pairs pairs are usable
 // (the message lists each pair left out and why), or a baseline below
@@ -33,6 +38,7 @@
 // Cost: one Levenberg-Marquardt solve in OpenCV (milliseconds for tens of pairs).
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -40,6 +46,7 @@
 
 #include "host/camera/board.hpp"
 #include "host/camera/intrinsics.hpp"
+#include "host/camera/uncertainty.hpp"
 
 namespace kincal::camera {
 
@@ -53,6 +60,8 @@ struct StereoOptions {
   double max_pair_translation_fraction = 0.1;
   double outlier_over_median = 3;
   double outlier_floor_px = 1.0;
+  const IntrinsicsCovariance* left_intrinsics = nullptr;  // both or neither: see Uncertainty above
+  const IntrinsicsCovariance* right_intrinsics = nullptr;
 };
 
 struct StereoPairReport {
@@ -74,6 +83,7 @@ struct StereoCalibration {
   cv::Matx34d projection_left, projection_right;  // P1, P2
   cv::Matx44d disparity_to_depth;                 // Q
   std::vector<StereoPairReport> pairs;
+  std::optional<StereoPoseCovariance> pose_uncertainty;  // see Uncertainty above
 };
 
 StereoCalibration calibrate_stereo(const std::vector<BoardDetection>& left, const std::vector<BoardDetection>& right,

@@ -206,17 +206,29 @@ TEST_CASE("stereo calibration recovers the baseline and rectifies") {
   for (const Eigen::Isometry3d& v : left_views) right_views.push_back(scenes::left_T_right().inverse() * v);
   const std::vector<BoardDetection>& left = chessboard_views();
   const std::vector<BoardDetection> right = detect_rendered(board, spec_of_right(), right_views, "right");
-  const CameraModel left_camera = calibrate_intrinsics(left).camera;
-  const CameraModel right_camera = calibrate_intrinsics(right).camera;
+  const IntrinsicCalibration left_intrinsics = calibrate_intrinsics(left),
+                             right_intrinsics = calibrate_intrinsics(right);
+  const CameraModel& left_camera = left_intrinsics.camera;
+  const CameraModel& right_camera = right_intrinsics.camera;
   const double baseline_m = scenes::left_T_right().translation().norm();
 
   for (const bool refine : {false, true}) {
     CAPTURE(refine);
     StereoOptions options;
     options.refine_intrinsics = refine;
+    options.left_intrinsics = &left_intrinsics.uncertainty;
+    options.right_intrinsics = &right_intrinsics.uncertainty;
     const StereoCalibration s = calibrate_stereo(left, right, left_camera, right_camera, options);
     MESSAGE(describe(s));
     CHECK(std::abs(s.baseline_m / baseline_m - 1) < 0.01);
+    // The pose's covariance with the intrinsics' share when the intrinsics are held, none else.
+    REQUIRE(s.pose_uncertainty.has_value() == !refine);
+    if (!refine) {
+      const cv::Vec3d along = s.right_t_left_m / s.baseline_m;
+      const double sigma_m = std::sqrt((along.t() * s.pose_uncertainty->covariance.get_minor<3, 3>(3, 3) * along)(0));
+      CHECK(std::abs(s.baseline_m - baseline_m) < 4 * sigma_m);
+      CHECK(contains(describe(s), "baseline sigma (with the intrinsics' uncertainty): "));
+    }
     cv::Vec3d rotation;
     cv::Rodrigues(s.right_R_left, rotation);
     CHECK(cv::norm(rotation) == doctest::Approx(3 * kDeg).epsilon(0.05));
