@@ -27,9 +27,9 @@ namespace {
 struct IdentifyArgs {
   ModelOption model;
   std::string data, out, method = "full", start = "nominal", validate, urdf;
-  std::vector<std::string> fix, params;
+  std::vector<std::string> fix, params, prior;
   double sigma_m = 0.0, orientation_sigma_deg = 0.0, outlier_probability = 1e-3, max_rejected_fraction = 0.05;
-  bool no_robust = false, no_model_error = false, accept_implausible = false;
+  bool no_robust = false, no_model_error = false, accept_implausible = false, no_prior = false;
 };
 
 std::string stats_line(const char* what, const identify::AccuracyStats& s) {
@@ -145,6 +145,17 @@ int run_identify(const IdentifyArgs& a) {
     files::refuse_overwriting({{"--out", a.out}, {"--urdf", a.urdf}},
                               {{"--model", a.model.path}, {"--data", a.data}, {"--validate", a.validate}});
     const model::RobotModel nominal = a.model.load();
+    // Priors: the model file's (a YAML model), then --prior's; later entries win.
+    if (!model::is_urdf_path(a.model.path)) options.prior.sigma = model::load_model_priors(a.model.path);
+    for (const std::string& entry : a.prior) {
+      options.prior.sigma.push_back(identify::parse_prior_entry(entry));
+      try {
+        (void)model::parse_parameter_name(options.prior.sigma.back().first, nominal.joint_count());
+      } catch (const model::InputError& e) {
+        throw model::InputError("--prior '" + entry + "': " + e.what());
+      }
+    }
+    if (a.no_prior) options.prior.strength = 0.0;
     const model::Dataset data = model::read_dataset(a.data);
     std::optional<model::Dataset> held_out;  // read before the solve: a bad file fails in a second
     if (!a.validate.empty()) {
@@ -236,6 +247,13 @@ void add_identify_command(CLI::App& app, int& status) {
                   "reject at most this fraction of the rows (default 0.05)")
       ->check(finite_in(0.0, 0.5));
   cmd->add_flag("--no-robust", a->no_robust, "reject no outliers");
+  cmd->add_option("--prior", a->prior,
+                  "prior sigma of a parameter's deviation from the nominal, NAME=SIGMA with a unit (e.g. "
+                  "a5=0.5mm,theta5=0.2deg,base_x=inf); defaults: 1 mm lengths, 0.5 deg angles, base 100 mm / 10 deg, "
+                  "tool 10 mm / 5 deg, scale 0.01; these win over the model file's priors:")
+      ->delimiter(',');
+  cmd->add_flag("--no-prior", a->no_prior,
+                "no priors: plain least squares (the parameters the data see poorly may run off)");
   cmd->add_flag("--no-model-error", a->no_model_error,
                 "no model-error variance: the noise is the data's covariance (or --sigma) alone, estimated only "
                 "where nothing gives it");

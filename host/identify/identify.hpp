@@ -30,10 +30,21 @@
 // least 0.1 (a given sigma above the actual noise must not turn rounding into outliers); a
 // row is rejected when t_i / c exceeds the chi-square quantile at 1 - outlier_probability / N
 // (Bonferroni over the N rows). The median makes this the deleted-residual test to first order.
-// At most max_rejected_fraction of the rows are rejected, in up to eight rounds with the fit and
+// Nothing is rejected with fewer than 5 equations per identified parameter (a small set, or sweeps:
+// a row there cannot be told from the model error; rejecting cost held out on the simulated sagging
+// sweep set). At most max_rejected_fraction of the rows are rejected, in up to eight rounds with the fit and
 // V redone between them, each round only the rows within a factor 2 of the largest residual (a
 // blunder pulls its neighbours' residuals until it is out); each rejection is reported with its residual, its
 // statistic and how far removing it moves the predicted tool over the data (Rejection).
+//
+// Priors (full and first-order; prior.hpp): each identified parameter's change has a Gaussian
+// prior; the solve is the maximum a posteriori estimate and the covariance the inverse of the
+// posterior information J^T J + diag(1 / sigma^2). The noise model's REML counts the prior rows
+// as observations of known variance; the outlier test judges each row against the data alone
+// (the leverage of the data's own fit: a sweep's end that alone sees a direction keeps it). Exact
+// dependencies (identifiability.hpp) are still held fixed: the data cannot split them, so the
+// prior alone would. Each parameter's prior share of its posterior information is reported, and
+// a change beyond 3 prior sigmas is flagged in the report.
 //
 // Every method reports: the identifiable parameters and those held fixed with the reason
 // (identifiability.hpp: rank of the whitened Jacobian at the start), each identified
@@ -66,6 +77,7 @@
 #include <Eigen/Core>
 
 #include "host/identify/identifiability.hpp"
+#include "host/identify/prior.hpp"
 #include "host/identify/problem.hpp"
 #include "host/model/dataset.hpp"
 #include "host/model/robot_model.hpp"
@@ -88,6 +100,7 @@ struct IdentifyOptions {
   double max_rejected_fraction = 0.05;
   int max_iterations = 100;
   double parallel_tolerance_rad = 0.1;
+  PriorOptions prior;  // MAP with these priors (prior.hpp); prior.strength = 0: least squares
 };
 
 // Position (and orientation) errors of a model against measurements.
@@ -122,6 +135,8 @@ struct IdentifyResult {
   Identifiability identifiability;
   Eigen::VectorXd change;  // of identifiability.identified, SI
   Eigen::VectorXd stddev;
+  Eigen::VectorXd prior_sigma;     // of change, SI; infinity where there is none
+  Eigen::VectorXd prior_share;     // of each parameter's posterior information, 0..1 (1 - data share)
   AccuracyStats residuals;         // over the measurements used
   Eigen::MatrixXd covariance;      // of change, SI
   std::vector<int> outlier_lines;  // source lines of rejected measurements

@@ -153,9 +153,35 @@ CalibrationRecord read_calibration(const Reader& r, const YAML::Node& node) {
   return c;
 }
 
+// The `priors:` mapping: parameter name -> sigma (SI lengths; angles in the file's unit).
+std::vector<std::pair<std::string, double>> read_priors(const Reader& r, const YAML::Node& node, int joint_count,
+                                                        AngleUnit unit) {
+  if (!node.IsMap()) r.fail(node, "priors must be a mapping of parameter names to sigmas");
+  std::vector<std::pair<std::string, double>> out;
+  for (const auto& entry : node) {
+    const std::string name = r.text(entry.first, "a prior's parameter name");
+    core::ParameterId id{};
+    try {
+      id = parse_parameter_name(name, joint_count);
+    } catch (const InputError& e) {
+      r.fail(entry.first, std::string("priors: ") + e.what());
+    }
+    const bool angle = id.kind == core::ParameterKind::link_theta || id.kind == core::ParameterKind::link_alpha ||
+                       id.kind == core::ParameterKind::link_beta ||
+                       (id.kind >= core::ParameterKind::base_rx && id.kind <= core::ParameterKind::base_rz) ||
+                       (id.kind >= core::ParameterKind::tool_rx && id.kind <= core::ParameterKind::tool_rz);
+    const double sigma =
+        angle ? r.angle(entry.second, "priors: " + name, unit) : r.number(entry.second, "priors: " + name);
+    if (!(sigma > 0.0)) r.fail(entry.second, "priors: " + name + " must be positive (a standard deviation)");
+    out.emplace_back(name, sigma);
+  }
+  return out;
+}
+
 RobotModel read_model(const YAML::Node& root, const Reader& r) {
   if (!root || root.IsNull()) r.fail(root, "empty model file");
-  r.only_keys(root, "the model", {"name", "angles", "base", "joints", "tool", "gravity", "payload", "calibration"});
+  r.only_keys(root, "the model",
+              {"name", "angles", "base", "joints", "tool", "gravity", "payload", "calibration", "priors"});
   RobotModel model;
   model.name = root["name"] ? r.text(root["name"], "name") : "robot";
   if (root["angles"]) {
@@ -271,6 +297,8 @@ RobotModel read_model(const YAML::Node& root, const Reader& r) {
     if (p["centre_of_mass"]) model.payload.centre_of_mass_m = r.vector3(p["centre_of_mass"], "payload centre_of_mass");
   }
   if (root["calibration"]) model.calibration = read_calibration(r, root["calibration"]);
+  if (root["priors"])
+    (void)read_priors(r, root["priors"], model.joint_count(), unit);  // checked here, used by identify
   return model;
 }
 
@@ -324,6 +352,13 @@ RobotModel load_model(const std::string& path, const UrdfChainEnds& ends) {
   if (!ends.base_link.empty() || !ends.tip_link.empty())
     throw InputError(path + ": --base-link and --tip-link are for URDF models (*.urdf)");
   return parse_model(files::read_text_or_throw<InputError>(path, files::kModelFile), path);
+}
+
+std::vector<std::pair<std::string, double>> load_model_priors(const std::string& path) {
+  const RobotModel model = load_model(path);  // the whole file checked, priors included
+  const YAML::Node root = YAML::Load(files::read_text_or_throw<InputError>(path, files::kModelFile));
+  if (!root["priors"]) return {};
+  return read_priors(Reader(path), root["priors"], model.joint_count(), model.file_angles);
 }
 
 std::string write_model(const RobotModel& model) {

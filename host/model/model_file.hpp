@@ -36,6 +36,10 @@
 // robot_model.hpp says how scale, coupling and compliance act. A model without them reads and
 // writes exactly as before (gravity is written only with a compliance or when not the default).
 //   calibration: ...             # written by `kincal identify`; read back as a record, not used
+//   priors:                      # optional: identify's prior sigma of a parameter's deviation from
+//     a5: 0.0005                 # this model (identify/prior.hpp): lengths m, angles in the file's
+//     theta5: 0.2                # unit, scale<i> a ratio; names as identify prints them. Not
+//                                # written back (a calibrated model's deviations start anew)
 //
 // Reading is strict: unknown keys, missing parameters, wrong types, an unknown convention or
 // joint type, more than core::kMaxJoints joints, non-finite numbers, lower >= upper (equal limits
@@ -49,6 +53,8 @@
 #pragma once
 
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "host/model/robot_model.hpp"
 #include "host/model/urdf_chain.hpp"
@@ -60,6 +66,9 @@ namespace kincal::model {
 RobotModel load_model(const std::string& path, const UrdfChainEnds& ends = {});
 // `source` names the text in messages.
 RobotModel parse_model(const std::string& text, const std::string& source);
+// The `priors:` of a YAML model file (name, sigma in SI), in file order; empty without. Throws
+// InputError as load_model, and for an unknown parameter name or a sigma that is not positive.
+std::vector<std::pair<std::string, double>> load_model_priors(const std::string& path);
 
 std::string write_model(const RobotModel& model);
 // Writes whole or not at all (host/files/output_file.hpp); throws InputError when the file

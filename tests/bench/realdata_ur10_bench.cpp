@@ -13,14 +13,34 @@
 //   realdata_ur10_nominal_registered_rms_mm   nominal geometry, only base and probe identified
 //                                             (300 rows), for orientation
 //   realdata_ur10_positions_only_heldout_rms_mm_n300   without the orientation columns
+// Issue #23: priors (MAP) and the model chosen by the data.
+//   realdata_ur10_extrapolation_rms_mm     train on the rows whose joint readings all lie inside
+//                                          the central 70 % of each joint's range (over the
+//                                          file), predict the rest: the defaults
+//   realdata_ur10_extrapolation_old_default_rms_mm   the same with priors off (issue #12's
+//                                          default), and _over_old_default the ratio
+//   realdata_ur10_extrapolation_coverage_95   held-out errors of that split inside the predicted
+//                                          95 % ellipsoid (defaults)
+//   realdata_ur10_old_default_heldout_rms_mm   the random split (300 rows) with priors off
+//   realdata_ur10_dh_urdf_flange_deg       the URDF route (ur10.urdf, tip tracker_probe) and the
+//                                          DH route (ur10.yaml) fitted to the same 300 rows'
+//                                          positions (as the worked example imports them): the
+//                                          largest angle between their flange orientations on the
+//                                          500 held-out rows, less the constant turn between the
+//                                          two descriptions' flange frames (their mean)
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
 #include <string>
+#include <vector>
+
+#include <Eigen/SVD>
 
 #include "host/identify/identify.hpp"
 #include "host/identify/statistics.hpp"
 #include "host/model/model_file.hpp"
+#include "host/model/urdf_chain.hpp"
 #include "tests/host/model/ur10_realdata.hpp"
 
 namespace {
@@ -58,6 +78,49 @@ model::Dataset without_covariance(model::Dataset d) {
 
 void figure(const std::string& name, double value, const char* unit) {
   std::printf("FIGURE %s %.4f %s\n", name.c_str(), value, unit);
+}
+
+// Rows whose readings all lie inside the central `fraction` of each joint's range, and the rest.
+realdata::Split central_split(const model::Dataset& d, double fraction) {
+  const std::size_t joints = static_cast<std::size_t>(d.joint_count);
+  std::vector<double> lo(joints, 1e300), hi(joints, -1e300);
+  for (const model::Measurement& m : d.rows)
+    for (std::size_t j = 0; j < joints; ++j) {
+      lo[j] = std::min(lo[j], m.q[j]);
+      hi[j] = std::max(hi[j], m.q[j]);
+    }
+  realdata::Split s;
+  const double margin = (1.0 - fraction) / 2.0;
+  for (std::size_t i = 0; i < d.rows.size(); ++i) {
+    bool inside = true;
+    for (std::size_t j = 0; j < joints; ++j) {
+      const double span = hi[j] - lo[j], q = d.rows[i].q[j];
+      inside = inside && q >= lo[j] + margin * span && q <= hi[j] - margin * span;
+    }
+    (inside ? s.train_order : s.held_out).push_back(static_cast<int>(i));
+  }
+  return s;
+}
+
+// The flange's orientation in the device frame: the tool pose less the flange-to-tool turn.
+Eigen::Matrix3d flange_rotation(const model::RobotModel& m, const std::vector<double>& q) {
+  return model::forward_kinematics(m, q).rotation * m.flange_T_tool.rotation.transpose();
+}
+
+// Largest angle (rad) between the two models' flange orientations over the rows, less their mean turn.
+double flange_difference_rad(const model::RobotModel& a, const model::RobotModel& b, const model::Dataset& rows) {
+  std::vector<Eigen::Matrix3d> turn;
+  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+  for (const model::Measurement& m : rows.rows) {
+    turn.push_back(flange_rotation(a, m.q).transpose() * flange_rotation(b, m.q));
+    sum += turn.back();
+  }
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d mean = svd.matrixU() * svd.matrixV().transpose();  // the rotation nearest the mean
+  if (mean.determinant() < 0) mean = -mean;
+  double worst = 0.0;
+  for (const Eigen::Matrix3d& t : turn) worst = std::max(worst, identify::so3_log(mean.transpose() * t).norm());
+  return worst;
 }
 
 }  // namespace
@@ -102,6 +165,38 @@ int main() {
       identify::IdentifyOptions r;
       r.requested = {"base", "tool"};
       figure("realdata_ur10_nominal_registered_rms_mm", run(nominal, train, held_out, r).rms_m * 1e3, "mm");
+    }
+  }
+  {
+    identify::IdentifyOptions old_default;
+    old_default.prior.strength = 0.0;
+    const std::vector<int> rows(split.train_order.begin(), split.train_order.begin() + 300);
+    const model::Dataset train = realdata::subset(all, rows);
+    figure("realdata_ur10_old_default_heldout_rms_mm", run(nominal, train, held_out, old_default).rms_m * 1e3, "mm");
+    const realdata::Split central = central_split(all, 0.7);
+    const model::Dataset inside = realdata::subset(all, central.train_order);
+    const model::Dataset outside = realdata::subset(all, central.held_out);
+    const Outcome now = run(nominal, inside, outside, {});
+    const Outcome old = run(nominal, inside, outside, old_default);
+    figure("realdata_ur10_extrapolation_train_rows", static_cast<double>(inside.rows.size()), "rows");
+    figure("realdata_ur10_extrapolation_rms_mm", now.rms_m * 1e3, "mm");
+    figure("realdata_ur10_extrapolation_old_default_rms_mm", old.rms_m * 1e3, "mm");
+    figure("realdata_ur10_extrapolation_over_old_default", now.rms_m / old.rms_m, "ratio");
+    figure("realdata_ur10_extrapolation_coverage_95", now.coverage, "fraction");
+    figure("realdata_ur10_extrapolation_old_default_coverage_95", old.coverage, "fraction");
+    // The worked example's two routes on the same 300 rows.
+    const model::RobotModel urdf =
+        model::load_model(KINCAL_ROBOTS_DIR "/ur10.urdf", model::UrdfChainEnds{"", "tracker_probe"});
+    model::Dataset points = train;  // positions only, as the worked example imports them
+    points.has_orientation = false;
+    for (model::Measurement& m : points.rows) m.orientation.reset();
+    for (const bool priors : {true, false}) {
+      identify::IdentifyOptions o;
+      if (!priors) o.prior.strength = 0.0;
+      const identify::IdentifyResult from_urdf = identify::identify(urdf, points, o);
+      const identify::IdentifyResult from_dh = identify::identify(nominal, points, o);
+      figure(std::string("realdata_ur10_dh_urdf_flange_deg") + (priors ? "" : "_old_default"),
+             flange_difference_rad(from_urdf.model, from_dh.model, held_out) * 180.0 / std::numbers::pi, "deg");
     }
   }
   figure("realdata_ur10_cov_over_nocov", worst_ratio, "ratio");
