@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 
 #include "host/cli/blobs.hpp"
+#include "host/cli/board_poses_command.hpp"
 #include "host/cli/camera_command.hpp"
 #include "host/cli/colour_table.hpp"
 #include "host/cli/command_line.hpp"
@@ -48,6 +49,7 @@ int main(int argc, char** argv) {
   kincal::cli::add_export_command(app, status);
   kincal::cli::add_correct_command(app, status);
   kincal::cli::add_camera_command(app, status);
+  kincal::cli::add_board_poses_command(app, status);
 
   if (const auto stop = kincal::cli::parse_command_line(app, argc, argv)) return *stop;
   return status;

@@ -24,6 +24,16 @@ std::string quoted_field(const std::string& text) {
   return out + '"';
 }
 
+// The pose covariance's columns beyond the position block, with their place in the 6x6.
+struct CovarianceColumn {
+  const char* name;
+  int row, col;
+};
+constexpr CovarianceColumn kPoseCovariance[] = {{"cxrx", 0, 3},  {"cxry", 0, 4},  {"cxrz", 0, 5},  {"cyrx", 1, 3},
+                                                {"cyry", 1, 4},  {"cyrz", 1, 5},  {"czrx", 2, 3},  {"czry", 2, 4},
+                                                {"czrz", 2, 5},  {"crxrx", 3, 3}, {"crxry", 3, 4}, {"crxrz", 3, 5},
+                                                {"cryry", 4, 4}, {"cryrz", 4, 5}, {"crzrz", 5, 5}};
+
 bool skipped(const std::string& line) {
   const std::string t = trim_field(line);
   return t.empty() || t[0] == '#';
@@ -67,6 +77,7 @@ Header parse_header(const std::string& line, const std::string& source, int numb
   for (const auto& [name, i] : h.index) {
     bool known = false;
     for (const char* k : kKnown) known = known || name == k;
+    for (const CovarianceColumn& k : kPoseCovariance) known = known || name == k.name;
     if (name.size() > 1 && name[0] == 'q' && name.find_first_not_of("0123456789", 1) == std::string::npos) {
       // More digits than any joint count: out of range without overflowing stoi (a fuzzer find).
       const int j = name.size() <= 4 ? std::stoi(name.substr(1)) : 0;
@@ -155,6 +166,14 @@ Dataset parse_dataset(std::istream& in, const std::string& source) {
     data.noise = covariance == 6          ? NoiseColumns::covariance
                  : h.index.count("sigma") ? NoiseColumns::sigma
                                           : NoiseColumns::none;
+    int pose = 0;
+    for (const CovarianceColumn& k : kPoseCovariance) pose += h.index.count(k.name) ? 1 : 0;
+    if (pose != 0 && pose != 15) fail_at(source, number, "header: a pose covariance needs all of cxrx..crzrz");
+    if (pose == 15 && (covariance != 6 || !data.has_orientation))
+      fail_at(source, number,
+              "header: a pose covariance (cxrx..crzrz) needs the orientation (qw..qz) and the position covariance "
+              "(cxx..czz)");
+    data.has_pose_covariance = pose == 15;
     has_id = h.index.count("id") != 0;
   };
   const auto values = [&](const Row& row, Measurement& m) {
@@ -177,6 +196,15 @@ Dataset parse_dataset(std::istream& in, const std::string& source) {
       if (llt.info() != Eigen::Success || c.diagonal().minCoeff() <= 0.0)
         fail_at(source, row.line, "the covariance (cxx..czz) is not positive definite");
       m.covariance = c;
+      if (data.has_pose_covariance) {
+        Matrix6 p;
+        p.topLeftCorner<3, 3>() = c;
+        for (const CovarianceColumn& k : kPoseCovariance) p(k.row, k.col) = p(k.col, k.row) = row.value(k.name);
+        Eigen::LLT<Matrix6> pose_llt(p);
+        if (pose_llt.info() != Eigen::Success || p.diagonal().minCoeff() <= 0.0)
+          fail_at(source, row.line, "the pose covariance (cxx..crzrz) is not positive definite");
+        m.pose_covariance = p;
+      }
     } else if (data.noise == NoiseColumns::sigma) {
       const double s = value("sigma");
       if (!(s > 0.0)) fail_at(source, row.line, "sigma must be positive");
@@ -235,10 +263,14 @@ void write_dataset(std::ostream& out, const Dataset& data) {
     covariance = covariance && m.covariance.has_value();
     id = id && !m.id.empty();
   }
+  bool pose = data.has_orientation && covariance;
+  for (const Measurement& m : data.rows) pose = pose && m.pose_covariance.has_value();
   for (int j = 1; j <= data.joint_count; ++j) out << 'q' << j << ',';
   out << "x,y,z";
   if (data.has_orientation) out << ",qw,qx,qy,qz";
   if (covariance) out << ",cxx,cxy,cxz,cyy,cyz,czz";
+  if (pose)
+    for (const CovarianceColumn& k : kPoseCovariance) out << ',' << k.name;
   if (id) out << ",id";
   out << '\n';
   for (const Measurement& m : data.rows) {
@@ -256,6 +288,9 @@ void write_dataset(std::ostream& out, const Dataset& data) {
           << shortest_number_text(c(0, 2)) << ',' << shortest_number_text(c(1, 1)) << ','
           << shortest_number_text(c(1, 2)) << ',' << shortest_number_text(c(2, 2));
     }
+    if (pose)
+      for (const CovarianceColumn& k : kPoseCovariance)
+        out << ',' << shortest_number_text((*m.pose_covariance)(k.row, k.col));
     if (id) out << ',' << quoted_field(m.id);
     out << '\n';
   }

@@ -12,6 +12,16 @@
 // fields may stand in double quotes as RFC 4180 says ("" for a quote), which an id holding a
 // comma needs (write_dataset quotes it).
 //
+// The full pose's covariance (issue #26: board poses), with the orientation and the position
+// covariance columns: cxrx,cxry,cxrz,cyrx,cyry,cyrz,czrx,czry,czrz (position x rotation, m rad)
+// and crxrx,crxry,crxrz,cryry,cryrz,crzrz (rotation, rad^2) complete the upper triangle of the
+// 6x6 covariance of (x, y, z, rx, ry, rz): the position error (m) and the rotation error d (rad),
+// both in the device frame, d a rotation vector applied on the left, device_R_tool_measured =
+// exp([d]x) device_R_tool (the rotation identify's orientation residual uses). All 15 or none;
+// refused without the orientation or the position covariance, or when the 6x6 is not positive
+// definite. The reader also fills `covariance` with its position block, so a reader of positions
+// only weights the row as before; write_dataset writes them when every row has one.
+//
 // Why a small reader of our own: the format is numbers only (no quoting, no embedded commas),
 // and every error must carry its line number and the column at fault. Debian's C++ CSV
 // parsers do not fit: fast-cpp-csv-parser (libfccp-dev) fixes the column count at compile time;
@@ -35,11 +45,14 @@
 
 namespace kincal::model {
 
+using Matrix6 = Eigen::Matrix<double, 6, 6>;
+
 struct Measurement {
   std::vector<double> q;
   Vector3 position = Vector3::Zero();
   std::optional<Eigen::Quaterniond> orientation;  // device_R_tool
   std::optional<Matrix3> covariance;              // of position, m^2
+  std::optional<Matrix6> pose_covariance;         // (x y z rx ry rz), see above
   int line = 0;                                   // 1-based line in the source
   std::string id;                                 // the export's row id or time stamp; empty: none
 };
@@ -50,6 +63,7 @@ struct Dataset {
   std::string source;
   int joint_count = 0;
   bool has_orientation = false;
+  bool has_pose_covariance = false;  // the 15 columns beyond cxx..czz
   NoiseColumns noise = NoiseColumns::none;
   std::vector<Measurement> rows;
 };
