@@ -135,4 +135,9 @@ PoseCovariance inverse_pose_covariance(const Eigen::Isometry3d& camera_T_board, 
   return a * covariance * a.transpose();
 }
 
+PoseMeasurement pose_measurement(const BoardPose& pose, bool camera_on_hand) {
+  if (!camera_on_hand) return {pose.camera_T_board, pose.covariance};
+  return {pose.camera_T_board.inverse(), inverse_pose_covariance(pose.camera_T_board, pose.covariance)};
+}
+
 }  // namespace kincal::camera

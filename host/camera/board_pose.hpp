@@ -72,4 +72,13 @@ BoardPose board_pose(const BoardDetection& detection, const CameraModel& camera,
 // frame: position and rotation errors of board_T_camera in the board frame.
 PoseCovariance inverse_pose_covariance(const Eigen::Isometry3d& camera_T_board, const PoseCovariance& covariance);
 
+// A usable view as the rig's pose measurement: with the camera on the flange (hand) the fixed
+// board is the device frame and the measurement board_T_camera (the covariance carried over by
+// inverse_pose_covariance); with the camera fixed (world) it is camera_T_board as it is.
+struct PoseMeasurement {
+  Eigen::Isometry3d device_T_tool = Eigen::Isometry3d::Identity();
+  PoseCovariance covariance = PoseCovariance::Zero();
+};
+PoseMeasurement pose_measurement(const BoardPose& pose, bool camera_on_hand);
+
 }  // namespace kincal::camera

@@ -70,9 +70,7 @@ int run_board_poses(const BoardPosesArgs& a) {
       std::cout << p.view << ": refused: " << p.refusal << "\n";
       continue;
     }
-    const Eigen::Isometry3d device_T_tool = hand ? p.camera_T_board.inverse() : p.camera_T_board;
-    const camera::PoseCovariance c =
-        hand ? camera::inverse_pose_covariance(p.camera_T_board, p.covariance) : p.covariance;
+    const auto [device_T_tool, c] = camera::pose_measurement(p, hand);
     model::Measurement m;
     m.q = joints[i];
     m.position = device_T_tool.translation();

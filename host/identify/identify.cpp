@@ -683,6 +683,7 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
       const auto at = static_cast<Eigen::Index>(k) * size;
       Rejection rejection;
       rejection.line = data.rows[static_cast<std::size_t>(rows[k])].line;
+      rejection.id = model::id_suffix(data.rows[static_cast<std::size_t>(rows[k])]);
       rejection.residual_m = e.segment<3>(at).norm();
       rejection.statistic_ratio = t[k] / (scale * threshold);
       // Removing row k changes the parameters by R^-1 Q_k^T (I - H_kk)^-1 r_k (first order).
@@ -765,7 +766,7 @@ std::string format_noise(const IdentifyResult& r) {
       << "; the parameters' standard deviations include "
       << (r.model_error_estimated ? "the model error" : "the instrument noise only") << '\n';
   for (const Rejection& x : r.rejections)
-    out << "  rejected line " << x.line << ": residual " << x.residual_m * 1e3 << " mm, studentized statistic "
+    out << "  rejected line " << x.line << x.id << ": residual " << x.residual_m * 1e3 << " mm, studentized statistic "
         << x.statistic_ratio << " x the threshold; removing it moves the predicted tool by up to "
         << x.tool_shift_max_m * 1e3 << " mm over the data\n";
   if (!r.rejections.empty())

@@ -123,6 +123,7 @@ struct SweepReport;  // cpa.hpp
 // One rejected measurement and what rejecting it changes.
 struct Rejection {
   int line = 0;
+  std::string id;                 // " (id TEXT)" from the row's id column (model::id_suffix), or empty
   double residual_m = 0.0;        // position residual of the fit with it
   double statistic_ratio = 0.0;   // t_i / c over the rejection threshold (> 1)
   double tool_shift_max_m = 0.0;  // largest change of the predicted tool position over the

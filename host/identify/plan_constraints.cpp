@@ -10,6 +10,7 @@
 
 #include "host/files/input_file.hpp"
 #include "host/model/number_text.hpp"
+#include "host/model/yaml_text.hpp"
 
 namespace kincal::identify {
 
@@ -229,19 +230,8 @@ unsigned violated_constraints(const model::RobotModel& model, const PlanConstrai
 
 PlanConstraints parse_plan_constraints(const std::string& text, const std::string& source,
                                        const model::RobotModel& model) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
-    throw InputError(source + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) +
-                     ": YAML syntax: " + e.msg);
-  }
   const Values r{source};
-  try {
-    return read_root(root, r, model);
-  } catch (const YAML::Exception& e) {  // a conversion deep inside yaml-cpp
-    throw InputError(source + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
-  }
+  return model::read_yaml_text(text, source, [&](const YAML::Node& root) { return read_root(root, r, model); });
 }
 
 PlanConstraints read_plan_constraints(const std::string& path, const model::RobotModel& model) {

@@ -99,10 +99,11 @@ void check_far_points(const model::Dataset& data, const Predicted& p, std::vecto
   for (const model::Measurement& r : data.rows) {
     const double coordinate = r.position.cwiseAbs().maxCoeff();  // the norm of 1e308s overflows
     if (coordinate > kMaxRange_m && remote++ == 0)
-      first_remote = "line " + std::to_string(r.line) + ": a coordinate of " + number(coordinate) + " m";
+      first_remote =
+          "line " + std::to_string(r.line) + model::id_suffix(r) + ": a coordinate of " + number(coordinate) + " m";
     const double distance = (r.position - centre).norm();
     if (distance <= limit) continue;  // NaN cannot occur: the reader takes finite numbers only
-    if (far++ == 0) first = "line " + std::to_string(r.line) + ": " + number(distance) + " m";
+    if (far++ == 0) first = "line " + std::to_string(r.line) + model::id_suffix(r) + ": " + number(distance) + " m";
   }
   if (remote > 0)
     found.push_back(std::to_string(remote) + " measured points lie farther than " + number(kMaxRange_m) +

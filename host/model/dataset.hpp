@@ -22,8 +22,9 @@
 // definite. The reader also fills `covariance` with its position block, so a reader of positions
 // only weights the row as before; write_dataset writes them when every row has one.
 //
-// Why a small reader of our own: the format is numbers only (no quoting, no embedded commas),
-// and every error must carry its line number and the column at fault. Debian's C++ CSV
+// Why a small reader of our own: the format is numbers and one text column (the id, in quotes
+// only where it holds a comma or a quote), and every error must carry its line number and the
+// column at fault. Debian's C++ CSV
 // parsers do not fit: fast-cpp-csv-parser (libfccp-dev) fixes the column count at compile time;
 // libcsv is a C tokenizer with callbacks that would still leave number parsing and the line
 // bookkeeping to us.

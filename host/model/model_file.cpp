@@ -3,6 +3,7 @@
 #include "host/files/input_file.hpp"
 #include "host/files/output_file.hpp"
 #include "host/model/number_text.hpp"
+#include "host/model/yaml_text.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -332,18 +333,7 @@ void emit_transform(YAML::Emitter& out, const Transform& t, double angle_scale) 
 
 RobotModel parse_model(const std::string& text, const std::string& source) {
   const Reader r(source);
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
-    throw InputError(source + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) +
-                     ": YAML syntax: " + e.msg);
-  }
-  try {
-    return read_model(root, r);
-  } catch (const YAML::Exception& e) {  // a conversion deep inside yaml-cpp
-    throw InputError(source + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
-  }
+  return read_yaml_text(text, source, [&](const YAML::Node& root) { return read_model(root, r); });
 }
 
 RobotModel load_model(const std::string& path, const UrdfChainEnds& ends) {
@@ -355,10 +345,12 @@ RobotModel load_model(const std::string& path, const UrdfChainEnds& ends) {
 }
 
 std::vector<std::pair<std::string, double>> load_model_priors(const std::string& path) {
-  const RobotModel model = load_model(path);  // the whole file checked, priors included
-  const YAML::Node root = YAML::Load(files::read_text_or_throw<InputError>(path, files::kModelFile));
-  if (!root["priors"]) return {};
-  return read_priors(Reader(path), root["priors"], model.joint_count(), model.file_angles);
+  const std::string text = files::read_text_or_throw<InputError>(path, files::kModelFile);  // read once
+  const RobotModel model = parse_model(text, path);  // the whole file checked, priors included
+  return read_yaml_text(text, path, [&](const YAML::Node& root) {
+    if (!root["priors"]) return std::vector<std::pair<std::string, double>>{};
+    return read_priors(Reader(path), root["priors"], model.joint_count(), model.file_angles);
+  });
 }
 
 std::string write_model(const RobotModel& model) {

@@ -117,9 +117,7 @@ void run(sim::BoardMount mount, std::uint64_t seed, PoseStats& poses, MountResul
     poses.chi2 += chi2;
     if (static_cast<int>(i) >= kTraining) continue;
     const bool hand = mount == sim::BoardMount::hand;
-    const Eigen::Isometry3d device_T_tool = hand ? p.camera_T_board.inverse() : p.camera_T_board;
-    const camera::PoseCovariance c =
-        hand ? camera::inverse_pose_covariance(p.camera_T_board, p.covariance) : p.covariance;
+    const auto [device_T_tool, c] = camera::pose_measurement(p, hand);
     model::Measurement m;
     m.q = plan[i];
     m.position = device_T_tool.translation();

@@ -200,8 +200,11 @@ TEST_CASE("full identification with noise: outliers rejected by line, noise esti
   model::Dataset d =
       simulation::measure(truth, sim::random_configurations(nominal, 80, rng), rng, 5e-5, true, 1e-4, false);
   d.rows[10].position.z() += 0.01;
+  d.rows[10].id = "2021-03-04 10:11:12";  // the export's time stamp (import --id) names the row too
   const identify::IdentifyResult r = identify::identify(nominal, d, {});
   CHECK(r.outlier_lines == std::vector<int>{d.rows[10].line});
+  CHECK(identify::format_noise(r).find("rejected line " + std::to_string(d.rows[10].line) +
+                                       " (id 2021-03-04 10:11:12): ") != std::string::npos);
   CHECK(r.model_error_estimated);
   CHECK(r.model_error_position_m == doctest::Approx(5e-5).epsilon(0.15));
   CHECK(r.model_error_orientation_rad == doctest::Approx(1e-4).epsilon(0.15));
