@@ -24,7 +24,8 @@
 // before).
 //
 // The start the deviations are counted from is identification's starting model: the nominal
-// after reparameterization and base registration (identify.hpp), or cpa's result with --start cpa.
+// after reparameterization and base registration (identify.hpp). With --start cpa there are no
+// priors: cpa's result is itself fitted to the data, and the tolerances are about the nominal.
 #pragma once
 
 #include <limits>
