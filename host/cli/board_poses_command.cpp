@@ -71,14 +71,7 @@ int run_board_poses(const BoardPosesArgs& a) {
       continue;
     }
     const auto [device_T_tool, c] = camera::pose_measurement(p, hand);
-    model::Measurement m;
-    m.q = joints[i];
-    m.position = device_T_tool.translation();
-    m.orientation = Eigen::Quaterniond(device_T_tool.linear()).normalized();
-    m.covariance = c.topLeftCorner<3, 3>();
-    m.pose_covariance = c;
-    m.line = static_cast<int>(i) + 1;
-    data.rows.push_back(m);
+    data.rows.push_back(model::pose_row(joints[i], device_T_tool, c, static_cast<int>(i) + 1));
     std::cout << p.view << ": " << p.corners << " corners, RMS " << fixed(p.rms_px, 3) << " px, sigma "
               << fixed(p.corner_sigma_px, 3) << " px, tilt " << fixed(p.tilt_rad * 180 / 3.14159265358979323846, 1)
               << " deg, position sigma " << fixed(std::sqrt(c.topLeftCorner<3, 3>().trace()) * 1e3, 3)

@@ -7,6 +7,7 @@
 #include <optional>
 #include <ostream>
 #include <sstream>
+#include <utility>
 
 #include "host/files/input_file.hpp"
 #include "host/model/csv_fields.hpp"
@@ -251,6 +252,18 @@ void check_joint_count(const RobotModel& model, int data_joints, const std::stri
   if (data_joints != model.joint_count())
     throw InputError(source + ": the data has " + std::to_string(data_joints) + " joint columns but the model '" +
                      model.name + "' has " + std::to_string(model.joint_count()) + " joints");
+}
+
+Measurement pose_row(std::vector<double> q, const Eigen::Isometry3d& device_T_tool, const Matrix6& covariance,
+                     int line) {
+  Measurement m;
+  m.q = std::move(q);
+  m.position = device_T_tool.translation();
+  m.orientation = Eigen::Quaterniond(device_T_tool.linear()).normalized();
+  m.covariance = covariance.topLeftCorner<3, 3>();
+  m.pose_covariance = covariance;
+  m.line = line;
+  return m;
 }
 
 std::string id_suffix(const Measurement& row) {

@@ -80,6 +80,11 @@ std::vector<std::vector<double>> parse_joints(std::istream& in, const std::strin
 // Throws InputError when the data's joint count differs from the model's.
 void check_joint_count(const RobotModel& model, int data_joints, const std::string& source);
 
+// A pose measurement as a row: joint readings q, the tool's pose in the device frame and its 6 x 6
+// covariance (the convention above); `covariance` gets its position block. `line` numbers the row.
+Measurement pose_row(std::vector<double> q, const Eigen::Isometry3d& device_T_tool, const Matrix6& covariance,
+                     int line);
+
 // " (id TEXT)" for a row with an id, else "": what a message naming the row appends.
 std::string id_suffix(const Measurement& row);
 

@@ -118,20 +118,13 @@ void run(sim::BoardMount mount, std::uint64_t seed, PoseStats& poses, MountResul
     if (static_cast<int>(i) >= kTraining) continue;
     const bool hand = mount == sim::BoardMount::hand;
     const auto [device_T_tool, c] = camera::pose_measurement(p, hand);
-    model::Measurement m;
-    m.q = plan[i];
-    m.position = device_T_tool.translation();
-    m.orientation = Eigen::Quaterniond(device_T_tool.linear()).normalized();
-    m.covariance = c.topLeftCorner<3, 3>();
-    m.pose_covariance = c;
-    m.line = static_cast<int>(i) + 1;
-    data.rows.push_back(m);
+    data.rows.push_back(model::pose_row(plan[i], device_T_tool, c, static_cast<int>(i) + 1));
     model::Measurement t;
     t.q = plan[i];
     t.position = robot.tool_pose(plan[i]).translation;
     for (int k = 0; k < 3; ++k) t.position(k) += tracker_noise(rng);
     t.covariance = Eigen::Matrix3d::Identity() * (kTrackerSigma_m * kTrackerSigma_m);
-    t.line = m.line;
+    t.line = data.rows.back().line;
     tracker.rows.push_back(t);
   }
   const model::Dataset held_out = held_out_truth(robot, plan);
