@@ -27,8 +27,8 @@ constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 class RowCost final : public ceres::CostFunction {
  public:
-  RowCost(Parameterization& p, const model::Measurement& m, const Eigen::Matrix3d& w, double wo, int size)
-      : p_(p), m_(m), w_(w), wo_(wo), size_(size) {
+  RowCost(Parameterization& p, const model::Measurement& m, const Matrix6& l, int size)
+      : p_(p), m_(m), l_(l), size_(size) {
     set_num_residuals(size);
     mutable_parameter_block_sizes()->push_back(p.size());
   }
@@ -36,7 +36,7 @@ class RowCost final : public ceres::CostFunction {
     p_.set(std::span<const double>(parameters[0], static_cast<std::size_t>(p_.size())));
     const bool want = jacobians != nullptr && jacobians[0] != nullptr;
     Eigen::MatrixXd j;
-    row_residual(p_, m_, w_, wo_, residuals, want ? &j : nullptr);
+    row_residual(p_, m_, l_, size_, residuals, want ? &j : nullptr);
     if (want) {
       Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(jacobians[0], size_,
                                                                                          p_.size()) = j;
@@ -47,8 +47,7 @@ class RowCost final : public ceres::CostFunction {
  private:
   Parameterization& p_;
   const model::Measurement& m_;
-  Eigen::Matrix3d w_;
-  double wo_;
+  Matrix6 l_;
   int size_;
 };
 
@@ -95,14 +94,6 @@ std::vector<int> all_rows(const model::Dataset& data) {
   return rows;
 }
 
-// The instrument's position covariance of each row: its own, sigma_m^2 I, or zero.
-std::vector<Eigen::Matrix3d> instrument_covariances(const model::Dataset& data, double sigma_m) {
-  std::vector<Eigen::Matrix3d> c;
-  for (const model::Measurement& m : data.rows)
-    c.push_back(m.covariance ? *m.covariance : Eigen::Matrix3d(Eigen::Matrix3d::Identity() * sigma_m * sigma_m));
-  return c;
-}
-
 // The model-error variance components s_p^2 (m^2) and s_o^2 (rad^2).
 struct Components {
   double position2 = 0.0;
@@ -112,26 +103,16 @@ struct Components {
 // The smallest variance a component takes (it stays positive so the weights stay finite).
 constexpr double kVarianceFloor = 1e-20;
 
-// Weights of the noise model V_i = instrument_i + s_p^2 I (position), s_given^2 + s_o^2 (orientation).
-Weights noise_weights(const std::vector<Eigen::Matrix3d>& instrument, double orientation_given2, const Components& c,
-                      bool orientation_used) {
-  Weights w;
-  for (const Eigen::Matrix3d& ci : instrument) {
-    const Eigen::Matrix3d factor =
-        Eigen::LLT<Eigen::Matrix3d>(ci + Eigen::Matrix3d::Identity() * c.position2).matrixL();
-    w.position.push_back(factor.inverse());
-  }
-  w.orientation = orientation_used ? 1.0 / std::sqrt(orientation_given2 + c.orientation2) : 0.0;
-  return w;
+// Weights of the noise model V_i = instrument_i + diag(s_p^2 I, s_o^2 I) (instrument_i the row's
+// 6 x 6, problem.hpp: full where the row has a pose covariance).
+Weights noise_weights(const std::vector<Matrix6>& instrument, const Components& c, bool orientation_used) {
+  return covariance_weights(instrument, orientation_used ? 6 : 3, c.position2, c.orientation2);
 }
 
 // Unwhitened residuals e and Jacobian J of the rows at the current point (r(d) ~ e + J d).
 void linearize(const Parameterization& p, const model::Dataset& data, const std::vector<int>& rows,
                bool orientation_used, Eigen::VectorXd& e, Eigen::MatrixXd& j) {
-  Weights unit;
-  unit.position.assign(data.rows.size(), Eigen::Matrix3d::Identity());
-  unit.orientation = orientation_used ? 1.0 : 0.0;
-  stacked(p, data, unit, rows, e, &j);
+  stacked(p, data, unit_weights(data.rows.size(), orientation_used ? 6 : 3), rows, e, &j);
 }
 
 // The weighted linear fit of e + J d at weights w: whitened residuals after the step, the thin Q
@@ -148,13 +129,9 @@ WhitenedFit whitened_fit(const Eigen::VectorXd& e, const Eigen::MatrixXd& j, con
   Eigen::MatrixXd jw = j;
   for (std::size_t k = 0; k < rows.size(); ++k) {
     const auto at = static_cast<Eigen::Index>(k) * size;
-    const Eigen::Matrix3d& l = w.position[static_cast<std::size_t>(rows[k])];
-    ew.segment<3>(at) = l * e.segment<3>(at);
-    jw.middleRows<3>(at) = l * j.middleRows<3>(at);
-    if (size == 6) {
-      ew.segment<3>(at + 3) *= w.orientation;
-      jw.middleRows<3>(at + 3) *= w.orientation;
-    }
+    const auto l = w.factor[static_cast<std::size_t>(rows[k])].topLeftCorner(size, size).triangularView<Eigen::Lower>();
+    ew.segment(at, size) = l * e.segment(at, size);
+    jw.middleRows(at, size) = l * j.middleRows(at, size);
   }
   const Eigen::HouseholderQR<Eigen::MatrixXd> qr(jw);
   WhitenedFit f;
@@ -175,50 +152,54 @@ WhitenedFit whitened_fit(const Eigen::VectorXd& e, const Eigen::MatrixXd& j, con
 // REML for the model-error components at a fixed linearization (see identify.hpp), by Fisher
 // scoring: g_k = (r^T V^-1 V_k V^-1 r - tr(V_k P)) / 2, F_kl = tr(V_k P V_l P) / 2, evaluated per
 // row block with whitened residuals and the thin Q of the whitened Jacobian (H = Q Q^T; with
-// M_k = L V_k L^T block-diagonal, tr(V_k P V_k P) = tr(M_k^2) - 2 tr(Q^T M_k^2 Q) + |Q^T M_k Q|^2).
+// M_k = L V_k L^T block-diagonal, tr(V_k P V_l P) = tr(M_k M_l) - 2 tr(Q^T M_k M_l Q) +
+// tr(Q^T M_k Q Q^T M_l Q)). V_p = diag(I, 0) and V_o = diag(0, I) per row; L mixes them where a
+// row's covariance ties its position to its rotation.
 // A step is cut at a hundredth of the current value, so the boundary at zero is approached
 // geometrically; a component below negligible2 (1e-6 of the instrument's variance) has reached
 // zero for every practical purpose and stays there.
 Components reml(const Eigen::VectorXd& e, const Eigen::MatrixXd& j, const std::vector<int>& rows,
-                const std::vector<Eigen::Matrix3d>& instrument, double orientation_given2, Components c,
-                bool estimate_position, bool estimate_orientation, int size, double negligible_position2) {
+                const std::vector<Matrix6>& instrument, double orientation_given2, Components c, bool estimate_position,
+                bool estimate_orientation, int size, double negligible_position2) {
   const bool orientation_used = size == 6;
   const Eigen::Index p = j.cols();
   const double negligible_orientation2 = 1e-6 * orientation_given2;
   for (int iteration = 0; iteration < 100; ++iteration) {
-    const Weights w = noise_weights(instrument, orientation_given2, c, orientation_used);
+    const Weights w = noise_weights(instrument, c, orientation_used);
     const WhitenedFit f = whitened_fit(e, j, w, rows, size);
+    const int components = orientation_used ? 2 : 1;
     Eigen::Vector2d num = Eigen::Vector2d::Zero(), trace = Eigen::Vector2d::Zero();
-    Eigen::Vector2d trace_m2 = Eigen::Vector2d::Zero(), trace_qm2q = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d trace_mm = Eigen::Matrix2d::Zero(), trace_qmmq = Eigen::Matrix2d::Zero();
     std::array<Eigen::MatrixXd, 2> qmq{Eigen::MatrixXd::Zero(p, p), Eigen::MatrixXd::Zero(p, p)};
-    const double w2 = w.orientation * w.orientation;
+    std::array<Eigen::MatrixXd, 2> mk, mkq;  // a row block of M_k and M_k Q
     for (std::size_t k = 0; k < rows.size(); ++k) {
       const auto at = static_cast<Eigen::Index>(k) * size;
-      const Eigen::Matrix3d& l = w.position[static_cast<std::size_t>(rows[k])];
-      const Eigen::Matrix3d a = l * l.transpose();  // M_k's block for V_k = I on the position block
-      const auto qp = f.q.middleRows<3>(at);
-      const Eigen::Vector3d rp = f.residual.segment<3>(at);
-      num(0) += rp.dot(a * rp);
-      trace(0) += a.trace() - a.cwiseProduct(qp * qp.transpose()).sum();
-      trace_m2(0) += a.squaredNorm();
-      trace_qm2q(0) += (a * qp).squaredNorm();
-      qmq[0] += qp.transpose() * a * qp;
-      if (orientation_used) {
-        const auto qo = f.q.middleRows<3>(at + 3);
-        num(1) += w2 * f.residual.segment<3>(at + 3).squaredNorm();
-        trace(1) += w2 * (3.0 - qo.squaredNorm());
-        trace_m2(1) += 3.0 * w2 * w2;
-        trace_qm2q(1) += w2 * w2 * qo.squaredNorm();
-        qmq[1] += w2 * qo.transpose() * qo;
+      const Eigen::MatrixXd l = w.factor[static_cast<std::size_t>(rows[k])].topLeftCorner(size, size);
+      const auto q = f.q.middleRows(at, size);
+      const auto r = f.residual.segment(at, size);
+      for (int a = 0; a < components; ++a) {
+        const auto s = static_cast<std::size_t>(a);
+        mk[s] = l.middleCols(3 * a, 3) * l.middleCols(3 * a, 3).transpose();
+        mkq[s] = mk[s] * q;
+        num(a) += r.dot(mk[s] * r);
+        trace(a) += mk[s].trace() - mkq[s].cwiseProduct(q).sum();
+        qmq[s] += q.transpose() * mkq[s];
       }
+      for (int a = 0; a < components; ++a)
+        for (int b = 0; b < components; ++b) {
+          const auto sa = static_cast<std::size_t>(a), sb = static_cast<std::size_t>(b);
+          trace_mm(a, b) += mk[sa].cwiseProduct(mk[sb]).sum();
+          trace_qmmq(a, b) += mkq[sa].cwiseProduct(mkq[sb]).sum();
+        }
     }
     const std::array<bool, 2> active{estimate_position && c.position2 > negligible_position2,
                                      estimate_orientation && c.orientation2 > negligible_orientation2};
     Eigen::Vector2d g = 0.5 * (num - trace);
     Eigen::Matrix2d fisher;
-    for (int m = 0; m < 2; ++m)
-      fisher(m, m) = 0.5 * (trace_m2(m) - 2.0 * trace_qm2q(m) + qmq[static_cast<std::size_t>(m)].squaredNorm());
-    fisher(0, 1) = fisher(1, 0) = 0.5 * qmq[0].cwiseProduct(qmq[1]).sum();
+    for (int a = 0; a < 2; ++a)
+      for (int b = 0; b < 2; ++b)
+        fisher(a, b) = 0.5 * (trace_mm(a, b) - 2.0 * trace_qmmq(a, b) +
+                              qmq[static_cast<std::size_t>(a)].cwiseProduct(qmq[static_cast<std::size_t>(b)]).sum());
     for (int m = 0; m < 2; ++m) {
       if (active[static_cast<std::size_t>(m)]) continue;
       g(m) = 0.0;
@@ -248,10 +229,9 @@ SolveSummary solve_ceres(Parameterization& p, const model::Dataset& data, const 
                          const std::vector<int>& rows, const Eigen::VectorXd& prior_weight, int max_iterations,
                          std::vector<double>& delta) {
   ceres::Problem problem;
-  const int size = residual_size(w);
   for (int r : rows) {
     const auto k = static_cast<std::size_t>(r);
-    problem.AddResidualBlock(new RowCost(p, data.rows[k], w.position[k], w.orientation, size), nullptr, delta.data());
+    problem.AddResidualBlock(new RowCost(p, data.rows[k], w.factor[k], w.size), nullptr, delta.data());
   }
   if ((prior_weight.array() > 0.0).any()) problem.AddResidualBlock(new PriorCost(prior_weight), nullptr, delta.data());
   ceres::Solver::Options options;
@@ -489,10 +469,10 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
   const bool estimate_orientation =
       result.orientation_used && (options.model_error || !(result.orientation_sigma_rad > 0.0));
   result.model_error_estimated = estimate_position || estimate_orientation;
-  const std::vector<Eigen::Matrix3d> instrument = instrument_covariances(data, result.sigma_m);
+  const std::vector<Matrix6> instrument = instrument_covariances(data, result.sigma_m, result.orientation_sigma_rad);
   {
     std::vector<double> sigmas;
-    for (const Eigen::Matrix3d& c : instrument) sigmas.push_back(std::sqrt(c.trace() / 3.0));
+    for (const Matrix6& c : instrument) sigmas.push_back(std::sqrt(c.topLeftCorner<3, 3>().trace() / 3.0));
     result.median_instrument_sigma_m = median(sigmas);
   }
   if (data.has_orientation && nominal.tool == model::ToolKind::point)
@@ -529,8 +509,8 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
   const double orientation_given2 = result.orientation_sigma_rad * result.orientation_sigma_rad;
   // Start: 1 mm and 1 mrad of model error (the scale of real arms), refined from the residuals.
   Components components{estimate_position ? 1e-6 : 0.0, estimate_orientation ? 1e-6 : 0.0};
-  Weights weights = noise_weights(instrument, orientation_given2, components, result.orientation_used);
-  const int size = residual_size(weights);
+  Weights weights = noise_weights(instrument, components, result.orientation_used);
+  const int size = weights.size;
 
   // Candidates and identifiability at the start.
   const ParameterIds fixed = parse_names(options.fixed, result.start);
@@ -600,7 +580,7 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
   // Solve, estimate the model error from the residuals (REML), re-weight, until it settles.
   const auto fit = [&] {
     for (int pass = 0; pass < 20; ++pass) {
-      weights = noise_weights(instrument, orientation_given2, components, result.orientation_used);
+      weights = noise_weights(instrument, components, result.orientation_used);
       if (options.method == Method::first_order) {
         // Doty's eps = E psi, one weighted least-squares step at the nominal model.
         std::fill(delta.begin(), delta.end(), 0.0);
@@ -635,7 +615,7 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
       if (settled) break;
       if (pass == 19) result.notes.push_back("the model-error estimate did not settle in 20 passes");
     }
-    weights = noise_weights(instrument, orientation_given2, components, result.orientation_used);
+    weights = noise_weights(instrument, components, result.orientation_used);
   };
   fit();
   result.model_error_before_rejection_m = std::sqrt(components.position2);

@@ -11,8 +11,10 @@
 //
 // Noise model (full and first-order): the error of row i is N(0, V_i) with
 //   position     V_i = C_i + s_p^2 I   C_i the row's covariance (or --sigma^2 I, or 0)
-//   orientation  V_i = (s_given^2 + s_o^2) I   (rotation vector; the dataset carries no
-//                                                orientation covariance)
+//   orientation  V_i = (s_given^2 + s_o^2) I   (rotation vector)
+// or, for a row with the full pose covariance C_i (6 x 6, model/dataset.hpp: a board pose, whose
+// position error is tied to its rotation error by the lever arm), V_i = C_i + diag(s_p^2 I, s_o^2 I)
+// over [position; rotation], whitened by its Cholesky factor (problem.hpp).
 // s_p and s_o are the model error: what the robot does that the model cannot (repeatability,
 // elasticity, gears). A laser tracker measures to 0.01 mm while a real arm leaves about 0.4 mm
 // unexplained, so the instrument's covariance alone would call every row an outlier. s_p, s_o

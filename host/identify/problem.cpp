@@ -168,55 +168,72 @@ Transform Parameterization::pose(std::span<const double> q, Eigen::MatrixXd* jac
   return frames.base_T_tool;
 }
 
-Weights make_weights(const model::Dataset& data, double sigma_m, double orientation_sigma_rad) {
-  Weights w;
+std::vector<Matrix6> instrument_covariances(const model::Dataset& data, double sigma_m, double orientation_sigma_rad) {
+  std::vector<Matrix6> c;
   for (const model::Measurement& m : data.rows) {
-    if (m.covariance) {
-      // L = inverse of the Cholesky factor: L^T L = C^-1.
-      const Eigen::Matrix3d c_factor = Eigen::LLT<Eigen::Matrix3d>(*m.covariance).matrixL();
-      w.position.push_back(c_factor.inverse());
-    } else {
-      w.position.push_back(Eigen::Matrix3d::Identity() / sigma_m);
+    if (m.pose_covariance) {
+      c.push_back(*m.pose_covariance);
+      continue;
     }
+    Matrix6 v = Matrix6::Zero();
+    v.topLeftCorner<3, 3>() =
+        m.covariance ? *m.covariance : Eigen::Matrix3d(Eigen::Matrix3d::Identity() * sigma_m * sigma_m);
+    v.bottomRightCorner<3, 3>().diagonal().setConstant(orientation_sigma_rad * orientation_sigma_rad);
+    c.push_back(v);
   }
-  w.orientation = data.has_orientation && orientation_sigma_rad > 0.0 ? 1.0 / orientation_sigma_rad : 0.0;
+  return c;
+}
+
+Weights covariance_weights(const std::vector<Matrix6>& covariance, int size, double position2, double orientation2) {
+  Weights w;
+  w.size = size;
+  for (const Matrix6& c : covariance) {
+    Matrix6 v = c;
+    v.topLeftCorner<3, 3>().diagonal().array() += position2;
+    v.bottomRightCorner<3, 3>().diagonal().array() += orientation2;
+    const Eigen::LLT<Eigen::MatrixXd> llt(v.topLeftCorner(size, size));
+    if (llt.info() != Eigen::Success) throw std::invalid_argument("a row's covariance is not positive definite");
+    Matrix6 l = Matrix6::Zero();
+    l.topLeftCorner(size, size) = llt.matrixL().solve(Eigen::MatrixXd::Identity(size, size));
+    w.factor.push_back(l);
+  }
   return w;
 }
 
-int residual_size(const Weights& w) { return w.orientation > 0.0 ? 6 : 3; }
+Weights unit_weights(std::size_t rows, int size) {
+  Weights w;
+  w.size = size;
+  w.factor.assign(rows, Matrix6::Identity());
+  return w;
+}
 
-void row_residual(const Parameterization& p, const model::Measurement& m, const Eigen::Matrix3d& position_weight,
-                  double orientation_weight, double* residual, Eigen::MatrixXd* jacobian) {
+Weights make_weights(const model::Dataset& data, double sigma_m, double orientation_sigma_rad) {
+  const bool orientation = data.has_orientation && orientation_sigma_rad > 0.0;
+  return covariance_weights(instrument_covariances(data, sigma_m, orientation_sigma_rad), orientation ? 6 : 3);
+}
+
+void row_residual(const Parameterization& p, const model::Measurement& m, const Matrix6& factor, int size,
+                  double* residual, Eigen::MatrixXd* jacobian) {
   Eigen::MatrixXd e;
   const Transform pose = p.pose(m.q, jacobian ? &e : nullptr);
-  Eigen::Map<Eigen::Vector3d> position_residual(residual);
-  position_residual = position_weight * (m.position - pose.translation);
-  Eigen::Map<Eigen::Vector3d> orientation_residual(residual + 3);
-  const bool orientation = orientation_weight > 0.0 && m.orientation;
-  Eigen::Vector3d phi = Eigen::Vector3d::Zero();
-  if (orientation) {
-    phi = so3_log(m.orientation->toRotationMatrix() * pose.rotation.transpose());
-    orientation_residual = orientation_weight * phi;
-  } else if (orientation_weight > 0.0) {
-    orientation_residual.setZero();
-  }
+  Eigen::Matrix<double, 6, 1> error = Eigen::Matrix<double, 6, 1>::Zero();
+  error.head<3>() = m.position - pose.translation;
+  const bool orientation = size == 6 && m.orientation;
+  if (orientation) error.tail<3>() = so3_log(m.orientation->toRotationMatrix() * pose.rotation.transpose());
+  const auto l = factor.topLeftCorner(size, size).triangularView<Eigen::Lower>();
+  Eigen::Map<Eigen::VectorXd>(residual, size) = l * error.head(size);
   if (jacobian) {
-    const int size = orientation_weight > 0.0 ? 6 : 3;
-    jacobian->resize(size, e.cols());
-    jacobian->topRows(3) = -position_weight * e.topRows(3);
-    if (size == 6) {
-      if (orientation) {
-        jacobian->bottomRows(3) = -orientation_weight * so3_right_jacobian_inverse(phi) * e.bottomRows(3);
-      } else {
-        jacobian->bottomRows(3).setZero();
-      }
-    }
+    // d(error)/d(delta): the pose's twist e moves the model's point and rotation (on the left).
+    Eigen::MatrixXd d = Eigen::MatrixXd::Zero(size, e.cols());
+    d.topRows(3) = -e.topRows(3);
+    if (orientation) d.bottomRows(3) = -so3_right_jacobian_inverse(error.tail<3>()) * e.bottomRows(3);
+    *jacobian = l * d;
   }
 }
 
 void stacked(const Parameterization& p, const model::Dataset& data, const Weights& w, const std::vector<int>& rows,
              Eigen::VectorXd& residual, Eigen::MatrixXd* jacobian) {
-  const int size = residual_size(w);
+  const int size = w.size;
   const auto n = static_cast<Eigen::Index>(rows.size()) * size;
   residual.resize(n);
   if (jacobian) jacobian->resize(n, p.size());
@@ -224,7 +241,7 @@ void stacked(const Parameterization& p, const model::Dataset& data, const Weight
   Eigen::Index at = 0;
   for (int r : rows) {
     const auto k = static_cast<std::size_t>(r);
-    row_residual(p, data.rows[k], w.position[k], w.orientation, residual.data() + at, jacobian ? &j : nullptr);
+    row_residual(p, data.rows[k], w.factor[k], size, residual.data() + at, jacobian ? &j : nullptr);
     if (jacobian) jacobian->middleRows(at, size) = j;
     at += size;
   }

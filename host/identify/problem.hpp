@@ -16,9 +16,13 @@
 // the geometry, taken by central differences, about 1e-12 of a column). A model without one takes
 // the plain chain's path, unchanged.
 //
-// Residuals of one measurement (whitened, so each is N(0, 1) for a correct model):
-//   position     L (p_measured - p_model),   L^T L = inverse position covariance
-//   orientation  w log(R_measured R_model^T),  w = 1 / sigma_rad (when used)
+// Residuals of one measurement (whitened, so each is N(0, 1) for a correct model): L e with
+//   e = [p_measured - p_model; log(R_measured R_model^T)]   (the orientation rows when used)
+// and L^T L = V^-1, V the row's covariance over e: the position's (3 x 3), or the full pose's
+// (6 x 6: position and rotation error, the rotation error a rotation vector on the left,
+// R_measured = exp([d]x) R_true, in the device frame as the dataset states it; the orientation
+// residual is that d). A row's V need not be block-diagonal: a board pose seen from a camera
+// 0.6 m away has its position error tied to its rotation error by the lever arm.
 #pragma once
 
 #include <span>
@@ -79,20 +83,37 @@ Eigen::Vector3d so3_log(const Eigen::Matrix3d& r);
 // b = a * [exp(r), t], so t is in a's axes.
 Eigen::Matrix<double, 6, 1> small_motion(const Transform& a, const Transform& b);
 
+using Matrix6 = model::Matrix6;
+
+// The whitening of every row: residuals per row (3: position; 6: position and orientation) and
+// per measurement L, whose top-left size x size block is the inverse of the Cholesky factor of
+// the row's covariance (lower triangular; L^T L = V^-1). Rows of a dataset share the size.
 struct Weights {
-  std::vector<Eigen::Matrix3d> position;  // per measurement: L with L^T L = covariance^-1
-  double orientation = 0.0;               // 1 / sigma_rad; 0: orientation not used
+  int size = 3;
+  std::vector<Matrix6> factor;
 };
 
-// Position weights from each row's covariance, or 1/sigma_m for rows without one.
+// The instrument's covariance of every row over (x, y, z, rx, ry, rz) (model/dataset.hpp): the
+// row's pose covariance where it has one; else its position covariance (or sigma_m^2 I) and
+// orientation_sigma_rad^2 I, uncorrelated. A row's own covariance wins over the given sigmas.
+std::vector<Matrix6> instrument_covariances(const model::Dataset& data, double sigma_m, double orientation_sigma_rad);
+
+// Weights whitening covariances' top-left size x size blocks, each first increased by
+// diag(position2 I, orientation2 I) (the model-error components identify estimates).
+// Throws std::invalid_argument when one is not positive definite.
+Weights covariance_weights(const std::vector<Matrix6>& covariance, int size, double position2 = 0.0,
+                           double orientation2 = 0.0);
+
+// Identity weights (unwhitened residuals: metres and radians) for `rows` measurements.
+Weights unit_weights(std::size_t rows, int size);
+
+// Weights of the instrument alone: orientation rows when the data has orientations and
+// orientation_sigma_rad > 0 (rows with a pose covariance are weighted by it).
 Weights make_weights(const model::Dataset& data, double sigma_m, double orientation_sigma_rad);
 
-// Residual size of one measurement: 3, or 6 with orientation.
-int residual_size(const Weights& w);
-
 // Whitened residual of row i at the current point, and optionally its Jacobian (size x P).
-void row_residual(const Parameterization& p, const model::Measurement& m, const Eigen::Matrix3d& position_weight,
-                  double orientation_weight, double* residual, Eigen::MatrixXd* jacobian);
+void row_residual(const Parameterization& p, const model::Measurement& m, const Matrix6& factor, int size,
+                  double* residual, Eigen::MatrixXd* jacobian);
 
 // All rows stacked: residual (rows * size) and Jacobian (rows * size x P).
 void stacked(const Parameterization& p, const model::Dataset& data, const Weights& w, const std::vector<int>& rows,
