@@ -51,16 +51,18 @@ class RowCost final : public ceres::CostFunction {
   int size_;
 };
 
-// The priors' whitened residuals w_k delta_k (w = 1 / sigma, 0 for none).
+// The priors' whitened residuals w_k (delta_k - c_k) (w = 1 / sigma, 0 for none; c the prior's
+// centre: the nominal in the start's parameters).
 class PriorCost final : public ceres::CostFunction {
  public:
-  explicit PriorCost(const Eigen::VectorXd& w) : w_(w) {
+  PriorCost(const Eigen::VectorXd& w, const Eigen::VectorXd& centre) : w_(w), centre_(centre) {
     set_num_residuals(static_cast<int>(w.size()));
     mutable_parameter_block_sizes()->push_back(static_cast<int>(w.size()));
   }
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
     const Eigen::Index p = w_.size();
-    Eigen::Map<Eigen::VectorXd>(residuals, p) = w_.cwiseProduct(Eigen::Map<const Eigen::VectorXd>(parameters[0], p));
+    Eigen::Map<Eigen::VectorXd>(residuals, p) =
+        w_.cwiseProduct(Eigen::Map<const Eigen::VectorXd>(parameters[0], p) - centre_);
     if (jacobians != nullptr && jacobians[0] != nullptr)
       Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(jacobians[0], p, p) =
           w_.asDiagonal();
@@ -68,12 +70,13 @@ class PriorCost final : public ceres::CostFunction {
   }
 
  private:
-  Eigen::VectorXd w_;
+  Eigen::VectorXd w_, centre_;
 };
 
-// Appends the prior rows (already whitened: w_k delta_k, d/d(delta) = w_k e_k) of the parameters
-// with a prior below the rows of a linearization e + J d.
-void append_prior(const Eigen::VectorXd& w, std::span<const double> delta, Eigen::VectorXd& e, Eigen::MatrixXd& j) {
+// Appends the prior rows (already whitened: w_k (delta_k - c_k), d/d(delta) = w_k e_k) of the
+// parameters with a prior below the rows of a linearization e + J d.
+void append_prior(const Eigen::VectorXd& w, const Eigen::VectorXd& centre, std::span<const double> delta,
+                  Eigen::VectorXd& e, Eigen::MatrixXd& j) {
   std::vector<Eigen::Index> with;
   for (Eigen::Index k = 0; k < w.size(); ++k)
     if (w(k) > 0.0) with.push_back(k);
@@ -83,7 +86,7 @@ void append_prior(const Eigen::VectorXd& w, std::span<const double> delta, Eigen
   j.bottomRows(count).setZero();
   for (Eigen::Index m = 0; m < count; ++m) {
     const Eigen::Index k = with[static_cast<std::size_t>(m)];
-    e(at + m) = w(k) * delta[static_cast<std::size_t>(k)];
+    e(at + m) = w(k) * (delta[static_cast<std::size_t>(k)] - centre(k));
     j(at + m, k) = w(k);
   }
 }
@@ -226,14 +229,15 @@ struct SolveSummary {
 // Plain least squares: outliers are handled by the leverage-aware rejection (a robust loss
 // would bias the variance components the noise model estimates from the same residuals).
 SolveSummary solve_ceres(Parameterization& p, const model::Dataset& data, const Weights& w,
-                         const std::vector<int>& rows, const Eigen::VectorXd& prior_weight, int max_iterations,
-                         std::vector<double>& delta) {
+                         const std::vector<int>& rows, const Eigen::VectorXd& prior_weight,
+                         const Eigen::VectorXd& prior_centre, int max_iterations, std::vector<double>& delta) {
   ceres::Problem problem;
   for (int r : rows) {
     const auto k = static_cast<std::size_t>(r);
     problem.AddResidualBlock(new RowCost(p, data.rows[k], w.factor[k], w.size), nullptr, delta.data());
   }
-  if ((prior_weight.array() > 0.0).any()) problem.AddResidualBlock(new PriorCost(prior_weight), nullptr, delta.data());
+  if ((prior_weight.array() > 0.0).any())
+    problem.AddResidualBlock(new PriorCost(prior_weight, prior_centre), nullptr, delta.data());
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::DENSE_QR;
   options.max_num_iterations = max_iterations;
@@ -348,6 +352,39 @@ void register_base(RobotModel& start, const model::Dataset& data, std::vector<st
   note << "the model's base was " << before * 1e3 << " mm RMS from the data; registered first (rigid fit of the "
        << "tool points: " << after * 1e3 << " mm RMS), the base changes below are from there";
   notes.push_back(note.str());
+}
+
+// The nominal in the start's parameters, for a start that is not the nominal (cpa's fit): the
+// change of the start that best reproduces the nominal's tool poses (reparameterized and
+// registered as a nominal start would be) at the data's configurations, by the same solver. The
+// priors are centred there: the maker's tolerance is about the nominal, whatever the solve starts
+// from (a prior centred on cpa's fit would count the data twice).
+Eigen::VectorXd nominal_in_start(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options,
+                                 const Parameterization& param, bool registered, bool orientation_used,
+                                 std::vector<std::string>& notes) {
+  RobotModel reference = reparameterize_for_identification(nominal, options.parallel_tolerance_rad, nullptr);
+  std::vector<std::string> unused;
+  if (registered) register_base(reference, data, unused);
+  model::Dataset poses = data;
+  for (model::Measurement& row : poses.rows) {
+    const Transform pose = model::forward_kinematics(reference, row.q);
+    row.position = pose.translation;
+    row.orientation.reset();
+    if (orientation_used) row.orientation = Eigen::Quaterniond(pose.rotation);
+  }
+  // Metres, and radians as metres (a 1 m lever).
+  const Weights unit = unit_weights(poses.rows.size(), orientation_used ? 6 : 3);
+  Parameterization fit(param.start(), param.ids());
+  std::vector<double> delta(static_cast<std::size_t>(fit.size()), 0.0);
+  const Eigen::VectorXd none = Eigen::VectorXd::Zero(fit.size());
+  solve_ceres(fit, poses, unit, all_rows(poses), none, none, options.max_iterations, delta);
+  std::ostringstream note;
+  note.precision(3);
+  note << "priors centred on the nominal: the start is not the nominal; the nominal in the start's parameters "
+          "reproduces its tool points to "
+       << std::fixed << accuracy(fit.model(), poses).rms_m * 1e3 << " mm RMS over the data's configurations";
+  notes.push_back(note.str());
+  return Eigen::Map<const Eigen::VectorXd>(delta.data(), fit.size());
 }
 
 }  // namespace
@@ -567,13 +604,10 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
   Parameterization param(result.start, ids);
   std::vector<double> delta(static_cast<std::size_t>(p), 0.0);
   result.prior_sigma = prior_sigmas(options.prior, ids, n, "prior");
-  if (options.start == Start::cpa && options.method == Method::full) {
-    // cpa's start is itself fitted to these data, and the maker's tolerance is about the nominal:
-    // a prior centred on it would count the data twice (a stereo session from cpa went from 2.1 to
-    // 7.3 mm held out with it). From cpa the fit stays plain least squares.
-    result.prior_sigma.setConstant(std::numeric_limits<double>::infinity());
-    result.notes.push_back("no priors: the start is cpa's fit to these data, not the nominal");
-  }
+  result.prior_centre = Eigen::VectorXd::Zero(p);
+  if (options.start == Start::cpa && options.prior.strength > 0.0)
+    result.prior_centre = nominal_in_start(nominal, data, options, param, base_free && options.requested.empty(),
+                                           result.orientation_used, result.notes);
   const Eigen::VectorXd prior_weight = prior_weights(options.prior, result.prior_sigma);
   const double negligible_position2 = 1e-6 * result.median_instrument_sigma_m * result.median_instrument_sigma_m;
 
@@ -588,14 +622,15 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
         Eigen::VectorXd r;
         Eigen::MatrixXd j;
         stacked(param, data, weights, rows, r, &j);
-        append_prior(prior_weight, delta, r, j);
+        append_prior(prior_weight, result.prior_centre, delta, r, j);
         const Eigen::VectorXd step = j.colPivHouseholderQr().solve(-r);
         for (int k = 0; k < p; ++k) delta[static_cast<std::size_t>(k)] = step(k);
         param.set(delta);
         result.iterations = 1;
         result.termination = "one linear step (first-order model)";
       } else {
-        const SolveSummary s = solve_ceres(param, data, weights, rows, prior_weight, options.max_iterations, delta);
+        const SolveSummary s =
+            solve_ceres(param, data, weights, rows, prior_weight, result.prior_centre, options.max_iterations, delta);
         result.iterations += s.iterations;
         result.termination = s.termination;
       }
@@ -824,12 +859,12 @@ std::string format_report(const IdentifyResult& r) {
       if (priors && std::isfinite(r.prior_sigma(i))) {
         std::snprintf(line + at, sizeof line - static_cast<std::size_t>(at), " %10.5f %-4s %5.1f %%",
                       r.prior_sigma(i) * u.per_si, u.name, 100.0 * (1.0 - r.prior_share(i)));
-        const double sigmas = std::abs(r.change(i)) / r.prior_sigma(i);
+        const double sigmas = std::abs(r.change(i) - r.prior_centre(i)) / r.prior_sigma(i);
         if (sigmas > 3.0) {
           char warn[200];
           std::snprintf(warn, sizeof warn,
-                        "warning: %s changed %.1f prior sigmas from its nominal (%.5f %s, prior %.5f %s)\n",
-                        model::parameter_name(id).c_str(), sigmas, r.change(i) * u.per_si, u.name,
+                        "warning: %s is %.1f prior sigmas from its nominal (%.5f %s, prior %.5f %s)\n",
+                        model::parameter_name(id).c_str(), sigmas, (r.change(i) - r.prior_centre(i)) * u.per_si, u.name,
                         r.prior_sigma(i) * u.per_si, u.name);
           beyond += warn;
         }

@@ -39,11 +39,12 @@
 // blunder pulls its neighbours' residuals until it is out); each rejection is reported with its residual, its
 // statistic and how far removing it moves the predicted tool over the data (Rejection).
 //
-// Priors (full and first-order; prior.hpp): each identified parameter's change has a Gaussian
-// prior; the solve is the maximum a posteriori estimate and the covariance the inverse of the
-// posterior information J^T J + diag(1 / sigma^2). The noise model's REML counts the prior rows
-// as observations of known variance; the outlier test judges each row against the data alone
-// (the leverage of the data's own fit: a sweep's end that alone sees a direction keeps it). Exact
+// Priors (full and first-order; prior.hpp): each identified parameter's deviation from the
+// nominal has a Gaussian prior, whatever the start (from cpa, the nominal expressed in the start's
+// parameters by a fit of its tool poses at the data's configurations is the prior's centre); the solve is the maximum a
+// posteriori estimate and the covariance the inverse of the posterior information J^T J + diag(1 / sigma^2). The noise
+// model's REML counts the prior rows as observations of known variance; the outlier test judges each row against the
+// data alone (the leverage of the data's own fit: a sweep's end that alone sees a direction keeps it). Exact
 // dependencies (identifiability.hpp) are still held fixed: the data cannot split them, so the
 // prior alone would. Each parameter's prior share of its posterior information is reported, and
 // a change beyond 3 prior sigmas is flagged in the report.
@@ -139,6 +140,7 @@ struct IdentifyResult {
   Eigen::VectorXd change;  // of identifiability.identified, SI
   Eigen::VectorXd stddev;
   Eigen::VectorXd prior_sigma;     // of change, SI; infinity where there is none
+  Eigen::VectorXd prior_centre;    // of change, SI: the nominal in the start's parameters (0 from the nominal)
   Eigen::VectorXd prior_share;     // of each parameter's posterior information, 0..1 (1 - data share)
   AccuracyStats residuals;         // over the measurements used
   Eigen::MatrixXd covariance;      // of change, SI

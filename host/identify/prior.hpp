@@ -1,4 +1,4 @@
-// Priors of identification (issue #23): every parameter's deviation from its starting value is
+// Priors of identification (issue #23): every parameter's deviation from its nominal value is
 // N(0, sigma^2) a priori -- the manufacturing tolerance -- and identification is the maximum a
 // posteriori estimate: the residual delta_k / sigma_k of each parameter joins the whitened
 // measurement residuals, in the solve and in the information matrix J^T J + diag(1 / sigma^2)
@@ -23,9 +23,9 @@
 // file); `strength` multiplies every 1 / sigma (0: no prior at all, the plain least squares of
 // before).
 //
-// The start the deviations are counted from is identification's starting model: the nominal
-// after reparameterization and base registration (identify.hpp). With --start cpa there are no
-// priors: cpa's result is itself fitted to the data, and the tolerances are about the nominal.
+// The deviations are counted from the nominal after reparameterization and base registration
+// (identify.hpp), whatever the start: with --start cpa the solve starts from cpa's fit and the
+// prior stays centred on the nominal (identify.cpp's nominal_in_start).
 #pragma once
 
 #include <limits>
