@@ -22,6 +22,8 @@
 //       sqrt(mean_k trace(J_k F^-1 J_k^T)), F = sum_i J_i^T V_i^-1 J_i over the training views
 //       (J: parameter_jacobian of identify's identified parameters at its start model; V_i the
 //       view's 6x6 as written in the dataset) (target <= 1.15)
+//   board_rig_prediction_rms_over_crlb_hand_least_squares / _world_least_squares  the same with
+//       identify's priors off (--no-prior): the bound is the data's alone, which a prior adds to
 //   board_rig_held_out_rms_hand / _world        the held-out RMS itself (mm)
 //   board_rig_over_tracker                      eye-in-hand held-out RMS over the held-out RMS of
 //       the same arms and readings measured by a laser tracker (positions, 0.02 mm per axis,
@@ -59,7 +61,7 @@ struct PoseStats {
 };
 
 struct MountResult {
-  double held_out_ms = 0, crlb_ms = 0, tracker_ms = 0;  // sums of squares over held-out rows
+  double held_out_ms = 0, least_squares_ms = 0, crlb_ms = 0, tracker_ms = 0;  // sums of squares over held-out rows
   int rows = 0;
 };
 
@@ -130,6 +132,10 @@ void run(sim::BoardMount mount, std::uint64_t seed, PoseStats& poses, MountResul
   const model::Dataset held_out = held_out_truth(robot, plan);
   const identify::IdentifyResult fit = identify::identify(rig.nominal, data, {});
   const identify::AccuracyStats a = identify::accuracy(fit.model, held_out);
+  identify::IdentifyOptions no_prior;
+  no_prior.prior.strength = 0.0;
+  const identify::AccuracyStats ls =
+      identify::accuracy(identify::identify(rig.nominal, data, no_prior).model, held_out);
 
   // The bound: Fisher information of the identified parameters from the views' covariances.
   const std::vector<core::ParameterId>& ids = fit.identifiability.identified;
@@ -149,14 +155,16 @@ void run(sim::BoardMount mount, std::uint64_t seed, PoseStats& poses, MountResul
   const identify::IdentifyResult tracker_fit = identify::identify(rig.nominal, tracker, tracker_options);
   const identify::AccuracyStats t = identify::accuracy(tracker_fit.model, held_out);
   result.held_out_ms += a.rms_m * a.rms_m * a.count;
+  result.least_squares_ms += ls.rms_m * ls.rms_m * ls.count;
   result.crlb_ms += bound;
   result.tracker_ms += t.rms_m * t.rms_m * t.count;
   result.rows += a.count;
   std::printf(
-      "%s seed %llu: %zu training views, held-out RMS %.4f mm (bound %.4f mm), tracker %.4f mm; %zu "
-      "parameters, model error %.4f mm\n",
+      "%s seed %llu: %zu training views, held-out RMS %.4f mm (no prior %.4f mm, bound %.4f mm), tracker %.4f mm; "
+      "%zu parameters, model error %.4f mm\n",
       mount == sim::BoardMount::hand ? "hand " : "world", static_cast<unsigned long long>(seed), data.rows.size(),
-      a.rms_m * 1e3, std::sqrt(bound / a.count) * 1e3, t.rms_m * 1e3, ids.size(), fit.model_error_position_m * 1e3);
+      a.rms_m * 1e3, ls.rms_m * 1e3, std::sqrt(bound / a.count) * 1e3, t.rms_m * 1e3, ids.size(),
+      fit.model_error_position_m * 1e3);
 }
 
 }  // namespace
@@ -173,6 +181,10 @@ int main() {
   figure("board_rig_pose_mean_chi2_over_6", poses.chi2 / poses.views / 6, "ratio");
   figure("board_rig_prediction_rms_over_crlb_hand", std::sqrt(hand.held_out_ms / hand.crlb_ms), "ratio");
   figure("board_rig_prediction_rms_over_crlb_world", std::sqrt(world.held_out_ms / world.crlb_ms), "ratio");
+  figure("board_rig_prediction_rms_over_crlb_hand_least_squares", std::sqrt(hand.least_squares_ms / hand.crlb_ms),
+         "ratio");
+  figure("board_rig_prediction_rms_over_crlb_world_least_squares", std::sqrt(world.least_squares_ms / world.crlb_ms),
+         "ratio");
   figure("board_rig_held_out_rms_hand", std::sqrt(hand.held_out_ms / hand.rows) * 1e3, "mm");
   figure("board_rig_held_out_rms_world", std::sqrt(world.held_out_ms / world.rows) * 1e3, "mm");
   figure("board_rig_over_tracker", std::sqrt(hand.held_out_ms / hand.tracker_ms), "ratio");
