@@ -13,12 +13,19 @@
 //   realdata_ur10_nominal_registered_rms_mm   nominal geometry, only base and probe identified
 //                                             (300 rows), for orientation
 //   realdata_ur10_positions_only_heldout_rms_mm_n300   without the orientation columns
-// Issue #23: priors (MAP) and the model chosen by the data.
+// Issue #23: priors (MAP) and the model chosen by the data. "The defaults" are kincal identify's:
+// the model chosen by cross-validation (model_selection.hpp) from the training rows alone at 100
+// rows or more (its table is printed; realdata_ur10_selection_seconds_<set> its time), every
+// parameter with the default priors below that.
 //   realdata_ur10_extrapolation_rms_mm     train on the rows whose joint readings all lie inside
 //                                          the central 70 % of each joint's range (over the
-//                                          file), predict the rest: the defaults
-//   realdata_ur10_extrapolation_old_default_rms_mm   the same with priors off (issue #12's
-//                                          default), and _over_old_default the ratio
+//                                          file; identify::out_of_range_split), predict the rest
+//   realdata_ur10_extrapolation_default_before_rms_mm   the same with the default before model
+//                                          selection (geometry, default priors), and
+//                                          realdata_ur10_extrapolation_over_default the ratio
+//   realdata_ur10_extrapolation_old_default_rms_mm   with priors off (issue #12's default)
+//   realdata_ur10_extrapolation_rms_mm_<candidate>   every candidate on that split, for
+//                                          orientation (the choice sees only the training rows)
 //   realdata_ur10_extrapolation_coverage_95   held-out errors of that split inside the predicted
 //                                          95 % ellipsoid (defaults)
 //   realdata_ur10_old_default_heldout_rms_mm   the random split (300 rows) with priors off
@@ -29,6 +36,7 @@
 //                                          500 held-out rows, less the constant turn between the
 //                                          two descriptions' flange frames (their mean)
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -38,6 +46,7 @@
 #include <Eigen/SVD>
 
 #include "host/identify/identify.hpp"
+#include "host/identify/model_selection.hpp"
 #include "host/identify/statistics.hpp"
 #include "host/model/model_file.hpp"
 #include "host/model/urdf_chain.hpp"
@@ -80,26 +89,16 @@ void figure(const std::string& name, double value, const char* unit) {
   std::printf("FIGURE %s %.4f %s\n", name.c_str(), value, unit);
 }
 
-// Rows whose readings all lie inside the central `fraction` of each joint's range, and the rest.
-realdata::Split central_split(const model::Dataset& d, double fraction) {
-  const std::size_t joints = static_cast<std::size_t>(d.joint_count);
-  std::vector<double> lo(joints, 1e300), hi(joints, -1e300);
-  for (const model::Measurement& m : d.rows)
-    for (std::size_t j = 0; j < joints; ++j) {
-      lo[j] = std::min(lo[j], m.q[j]);
-      hi[j] = std::max(hi[j], m.q[j]);
-    }
-  realdata::Split s;
-  const double margin = (1.0 - fraction) / 2.0;
-  for (std::size_t i = 0; i < d.rows.size(); ++i) {
-    bool inside = true;
-    for (std::size_t j = 0; j < joints; ++j) {
-      const double span = hi[j] - lo[j], q = d.rows[i].q[j];
-      inside = inside && q >= lo[j] + margin * span && q <= hi[j] - margin * span;
-    }
-    (inside ? s.train_order : s.held_out).push_back(static_cast<int>(i));
-  }
-  return s;
+// identify's default (kincal identify): the model chosen by cross-validation with enough rows,
+// every parameter with the default priors below that.
+identify::IdentifyOptions chosen(const model::RobotModel& nominal, const model::Dataset& train, const char* label) {
+  if (static_cast<int>(train.rows.size()) < identify::kMinRowsForSelection) return {};
+  const auto start = std::chrono::steady_clock::now();
+  const identify::Selection s = identify::select_model(nominal, train, {});
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("%s (%zu rows): %s", label, train.rows.size(), identify::format_selection(s).c_str());
+  figure(std::string("realdata_ur10_selection_seconds_") + label, seconds, "s");
+  return s.chosen.options;
 }
 
 // The flange's orientation in the device frame: the tool pose less the flange-to-tool turn.
@@ -135,7 +134,7 @@ int main() {
     const std::vector<int> rows(split.train_order.begin(), split.train_order.begin() + n);
     const model::Dataset train = realdata::subset(all, rows);
     const std::string suffix = "_n" + std::to_string(n);
-    identify::IdentifyOptions o;
+    identify::IdentifyOptions o = chosen(nominal, train, ("n" + std::to_string(n)).c_str());
     const Outcome cov = run(nominal, train, held_out, o);
     const Outcome nocov = run(nominal, without_covariance(train), held_out, o);
     o.robust = false;
@@ -160,7 +159,7 @@ int main() {
       model::Dataset points = train;
       points.has_orientation = false;
       for (model::Measurement& m : points.rows) m.orientation.reset();
-      identify::IdentifyOptions p;
+      const identify::IdentifyOptions p = chosen(nominal, points, "positions_only_n300");
       figure("realdata_ur10_positions_only_heldout_rms_mm_n300", run(nominal, points, held_out, p).rms_m * 1e3, "mm");
       identify::IdentifyOptions r;
       r.requested = {"base", "tool"};
@@ -173,17 +172,23 @@ int main() {
     const std::vector<int> rows(split.train_order.begin(), split.train_order.begin() + 300);
     const model::Dataset train = realdata::subset(all, rows);
     figure("realdata_ur10_old_default_heldout_rms_mm", run(nominal, train, held_out, old_default).rms_m * 1e3, "mm");
-    const realdata::Split central = central_split(all, 0.7);
-    const model::Dataset inside = realdata::subset(all, central.train_order);
-    const model::Dataset outside = realdata::subset(all, central.held_out);
-    const Outcome now = run(nominal, inside, outside, {});
+    const identify::RowSplit central = identify::out_of_range_split(all, 0.7);
+    const model::Dataset inside = realdata::subset(all, central.inside);
+    const model::Dataset outside = realdata::subset(all, central.outside);
+    const Outcome now = run(nominal, inside, outside, chosen(nominal, inside, "extrapolation"));
+    const Outcome before = run(nominal, inside, outside, {});  // the default before model selection
     const Outcome old = run(nominal, inside, outside, old_default);
     figure("realdata_ur10_extrapolation_train_rows", static_cast<double>(inside.rows.size()), "rows");
     figure("realdata_ur10_extrapolation_rms_mm", now.rms_m * 1e3, "mm");
+    figure("realdata_ur10_extrapolation_default_before_rms_mm", before.rms_m * 1e3, "mm");
+    figure("realdata_ur10_extrapolation_over_default", now.rms_m / before.rms_m, "ratio");
     figure("realdata_ur10_extrapolation_old_default_rms_mm", old.rms_m * 1e3, "mm");
-    figure("realdata_ur10_extrapolation_over_old_default", now.rms_m / old.rms_m, "ratio");
     figure("realdata_ur10_extrapolation_coverage_95", now.coverage, "fraction");
-    figure("realdata_ur10_extrapolation_old_default_coverage_95", old.coverage, "fraction");
+    figure("realdata_ur10_extrapolation_default_before_coverage_95", before.coverage, "fraction");
+    // Every candidate on this split, for orientation (the choice above sees the training rows only).
+    for (const identify::Candidate& c : identify::candidate_models(nominal, {}))
+      figure("realdata_ur10_extrapolation_rms_mm_" + c.name, run(nominal, inside, outside, c.options).rms_m * 1e3,
+             "mm");
     // The worked example's two routes on the same 300 rows.
     const model::RobotModel urdf =
         model::load_model(KINCAL_ROBOTS_DIR "/ur10.urdf", model::UrdfChainEnds{"", "tracker_probe"});

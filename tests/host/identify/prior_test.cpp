@@ -4,6 +4,7 @@
 // bad values refused naming where, and the report's 3-sigma warning.
 #include <doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -12,6 +13,7 @@
 #include <string>
 
 #include "host/identify/identify.hpp"
+#include "host/identify/model_selection.hpp"
 #include "host/identify/prior.hpp"
 #include "host/model/model_file.hpp"
 #include "tests/host/identify/simulation.hpp"
@@ -118,7 +120,7 @@ TEST_CASE("a prior far tighter than the data: change about zero with the prior's
   CHECK(flagged.change(index_of(flagged, "a1")) > 1.9e-3);
   const std::string report = identify::format_report(flagged);
   INFO(report);
-  CHECK(has(report, "warning: a1 changed "));
+  CHECK(has(report, "warning: a1 is "));
   CHECK(has(report, "prior sigmas from its nominal"));
   // The default 1 mm prior: 2 mm is 2 sigmas, recovered, no warning.
   const identify::IdentifyResult plain = identify::identify(nominal, d, {});
@@ -160,4 +162,55 @@ TEST_CASE("model file priors: read in the file's units, bad values refused with 
             "prior_test_model.yaml:8:7: priors: a2 must be positive"));
   CHECK(has(model_file_error(std::string(kModel) + "priors:\n  a2: wide\n"), "priors: a2: 'wide' is not a number"));
   CHECK(has(model_file_error(std::string(kModel) + "priors: [1, 2]\n"), "priors must be a mapping"));
+}
+
+TEST_CASE("model selection: the out-of-range split, the candidates, and the choice on the real UR10") {
+  model::Dataset d;
+  d.joint_count = 2;
+  for (int i = 0; i <= 10; ++i) {  // q1 = q2 over 0..10: the central 70 % is [1.5, 8.5]
+    model::Measurement m;
+    m.q = {static_cast<double>(i), static_cast<double>(i)};
+    d.rows.push_back(m);
+  }
+  d.rows[5].q[1] = 10.0;  // q1 central, q2 at its end: out of range
+  const identify::RowSplit s = identify::out_of_range_split(d, 0.7);
+  CHECK(s.inside == std::vector<int>{2, 3, 4, 6, 7, 8});
+  CHECK(s.outside == std::vector<int>{0, 1, 5, 9, 10});
+
+  const RobotModel ur10 = robot("ur10.yaml");
+  std::string names;
+  for (const identify::Candidate& c : identify::candidate_models(ur10, {})) names += c.name + " ";
+  CHECK(names == "registration joint-offsets geometry-x2 geometry geometry-x0.5 geometry-noprior ");
+  CHECK(identify::find_candidate(ur10, {}, "geometry-x2").options.prior.strength == 2.0);
+  std::string error;
+  try {
+    (void)identify::find_candidate(ur10, {}, "everything");
+  } catch (const model::InputError& e) {
+    error = e.what();
+  }
+  CHECK(has(error, "'everything': no such candidate model"));
+  CHECK(has(error, "joint-offsets"));
+
+  const model::Dataset all = realdata::import_ur10(KINCAL_REALDATA_DIR).data;
+  const realdata::Split split = realdata::split_rows(static_cast<int>(all.rows.size()), 500);
+  const model::Dataset train =
+      realdata::subset(all, std::vector<int>(split.train_order.begin(), split.train_order.begin() + 100));
+  const identify::Selection selection = identify::select_model(ur10, train, {});
+  REQUIRE(selection.scores.size() == 6);
+  CHECK(selection.scores[0].parameters == 12);  // base and tool
+  CHECK(selection.scores[1].parameters == 16);  // and four joint offsets (theta1, theta6 go to base, tool)
+  // The nominal geometry leaves about 1.1 mm; every geometric candidate about half that.
+  CHECK(selection.scores[0].kfold_rms_m > 1.5 * selection.scores[3].kfold_rms_m);
+  CHECK(selection.chosen.name.starts_with("geometry"));
+  for (const identify::CandidateScore& x : selection.scores) {
+    CHECK(x.out_of_range_rms_m > 0.0);
+    if (x.name != selection.chosen.name) {
+      const auto& chosen = *std::find_if(selection.scores.begin(), selection.scores.end(),
+                                         [&](const auto& y) { return y.name == selection.chosen.name; });
+      CHECK(x.score_m >= chosen.score_m);
+    }
+  }
+  const std::string table = identify::format_selection(selection);
+  CHECK(has(table, selection.chosen.name + ": the lowest mean of the K-fold and out-of-range RMS"));
+  CHECK(has(table, "<- chosen"));
 }

@@ -1,0 +1,202 @@
+#include "host/identify/model_selection.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <sstream>
+
+namespace kincal::identify {
+
+namespace {
+
+Candidate make(std::string name, std::string description, const IdentifyOptions& base, double strength,
+               const std::vector<std::string>& fixed) {
+  Candidate c{std::move(name), std::move(description), base};
+  c.options.prior.strength *= strength;
+  c.options.fixed.insert(c.options.fixed.end(), fixed.begin(), fixed.end());
+  return c;
+}
+
+// Sum of squared position errors of `model` over `rows`.
+double squared_errors(const RobotModel& model, const model::Dataset& data, const std::vector<int>& rows) {
+  const AccuracyStats s = accuracy(model, data, rows);
+  return s.rms_m * s.rms_m * s.count;
+}
+
+model::Dataset subset(const model::Dataset& data, const std::vector<int>& rows) {
+  model::Dataset out = data;
+  out.rows.clear();
+  for (int r : rows) out.rows.push_back(data.rows[static_cast<std::size_t>(r)]);
+  return out;
+}
+
+// The candidate identified from `train`, its squared errors over `test`; false (why set) when
+// the candidate cannot be identified from those rows.
+bool predict(const RobotModel& nominal, const model::Dataset& data, const Candidate& c, const std::vector<int>& train,
+             const std::vector<int>& test, double& sum2, int* parameters, std::string& why) {
+  try {
+    const IdentifyResult r = identify(nominal, subset(data, train), c.options);
+    sum2 += squared_errors(r.model, data, test);
+    if (parameters != nullptr) *parameters = static_cast<int>(r.identifiability.identified.size());
+    return true;
+  } catch (const model::InputError& e) {
+    why = e.what();
+    return false;
+  }
+}
+
+}  // namespace
+
+std::vector<Candidate> candidate_models(const RobotModel& nominal, const IdentifyOptions& base) {
+  const RobotModel m = reparameterize_for_identification(nominal, base.parallel_tolerance_rad, nullptr);
+  std::vector<std::string> links, links_but_offsets, joint_map;
+  for (const core::ParameterId& id : model::all_parameters(m)) {
+    const std::string name = model::parameter_name(id);
+    if (model::is_joint_map_parameter(id.kind)) {
+      joint_map.push_back(name);
+      continue;
+    }
+    if (model::is_motion_parameter(id.kind)) continue;
+    links.push_back(name);
+    const bool prismatic = m.joints[static_cast<std::size_t>(id.link)].type == core::JointType::prismatic;
+    const core::ParameterKind offset = prismatic ? core::ParameterKind::link_d : core::ParameterKind::link_theta;
+    if (id.kind != offset) links_but_offsets.push_back(name);
+  }
+  std::vector<std::string> registration = links, offsets = links_but_offsets;
+  registration.insert(registration.end(), joint_map.begin(), joint_map.end());
+  offsets.insert(offsets.end(), joint_map.begin(), joint_map.end());
+  std::vector<Candidate> out{
+      make("registration", "base and tool only, the geometry nominal", base, 1.0, registration),
+      make("joint-offsets", "base, tool and each joint's zero offset", base, 1.0, offsets),
+      make("geometry-x2", "every geometric parameter, priors twice as strong", base, 2.0, joint_map),
+      make("geometry", "every geometric parameter, the default priors", base, 1.0, joint_map),
+      make("geometry-x0.5", "every geometric parameter, priors half as strong", base, 0.5, joint_map),
+      make("geometry-noprior", "every geometric parameter, no priors", base, 0.0, joint_map)};
+  if (!joint_map.empty())
+    out.push_back(
+        make("geometry+nongeometric", "every parameter with the model file's scales and compliances", base, 1.0, {}));
+  return out;
+}
+
+Candidate find_candidate(const RobotModel& nominal, const IdentifyOptions& base, const std::string& name) {
+  std::string names;
+  for (const Candidate& c : candidate_models(nominal, base)) {
+    if (c.name == name) return c;
+    names += " " + c.name;
+  }
+  throw model::InputError("--model-select '" + name + "': no such candidate model (this model has:" + names +
+                          "; or auto, off)");
+}
+
+RowSplit out_of_range_split(const model::Dataset& d, double fraction) {
+  const auto joints = static_cast<std::size_t>(d.joint_count);
+  std::vector<double> lo(joints, HUGE_VAL), hi(joints, -HUGE_VAL);
+  for (const model::Measurement& m : d.rows)
+    for (std::size_t j = 0; j < joints; ++j) {
+      lo[j] = std::min(lo[j], m.q[j]);
+      hi[j] = std::max(hi[j], m.q[j]);
+    }
+  RowSplit s;
+  const double margin = (1.0 - fraction) / 2.0;
+  for (std::size_t i = 0; i < d.rows.size(); ++i) {
+    bool inside = true;
+    for (std::size_t j = 0; j < joints; ++j) {
+      const double span = hi[j] - lo[j], q = d.rows[i].q[j];
+      inside = inside && q >= lo[j] + margin * span && q <= hi[j] - margin * span;
+    }
+    (inside ? s.inside : s.outside).push_back(static_cast<int>(i));
+  }
+  return s;
+}
+
+Selection select_model(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& base,
+                       const SelectionOptions& options) {
+  const int n = static_cast<int>(data.rows.size());
+  std::vector<int> order(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) order[static_cast<std::size_t>(i)] = i;
+  std::mt19937_64 rng(23);
+  std::shuffle(order.begin(), order.end(), rng);
+  const RowSplit range = out_of_range_split(data, options.central_fraction);
+  Selection s;
+  s.out_of_range_train_rows = static_cast<int>(range.inside.size());
+  s.out_of_range_test_rows = static_cast<int>(range.outside.size());
+  const std::vector<Candidate> candidates = candidate_models(nominal, base);
+  int best = -1;
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    CandidateScore score;
+    score.name = candidates[c].name;
+    double sum2 = 0.0;
+    bool ok = true;
+    for (int k = 0; k < options.folds && ok; ++k) {
+      std::vector<int> train, test;
+      for (int i = 0; i < n; ++i) (i % options.folds == k ? test : train).push_back(order[static_cast<std::size_t>(i)]);
+      ok = predict(nominal, data, candidates[c], train, test, sum2, k == 0 ? &score.parameters : nullptr, score.why);
+    }
+    if (ok) score.kfold_rms_m = std::sqrt(sum2 / n);
+    double out2 = 0.0;
+    std::string why;
+    if (ok && !range.inside.empty() && !range.outside.empty() &&
+        predict(nominal, data, candidates[c], range.inside, range.outside, out2, nullptr, why))
+      score.out_of_range_rms_m = std::sqrt(out2 / static_cast<double>(range.outside.size()));
+    else if (ok && !range.inside.empty() && !range.outside.empty())
+      score.why = "out-of-range fold: " + why;
+    s.scores.push_back(score);
+  }
+  // The out-of-range fold counts when every candidate the K folds could judge was identified on
+  // its in-range rows: a fold that only the small models can be fitted to would favour them.
+  const bool any_range = std::all_of(s.scores.begin(), s.scores.end(), [](const CandidateScore& x) {
+    return x.kfold_rms_m < 0.0 || x.out_of_range_rms_m >= 0.0;
+  });
+  for (std::size_t c = 0; c < s.scores.size(); ++c) {
+    CandidateScore& x = s.scores[c];
+    if (x.kfold_rms_m < 0.0) continue;
+    x.score_m = any_range ? 0.5 * (x.kfold_rms_m + x.out_of_range_rms_m) : x.kfold_rms_m;
+    if (best < 0 || x.score_m < s.scores[static_cast<std::size_t>(best)].score_m) best = static_cast<int>(c);
+  }
+  if (best < 0) {
+    std::string why;
+    for (const CandidateScore& x : s.scores) why += "\n  " + x.name + ": " + x.why;
+    throw model::InputError(data.source + ": model selection: no candidate model can be identified from " +
+                            std::to_string(options.folds) + "-fold training rows:" + why);
+  }
+  s.chosen = candidates[static_cast<std::size_t>(best)];
+  std::ostringstream reason;
+  reason.setf(std::ios::fixed);
+  reason.precision(4);
+  reason << s.chosen.name << ": the lowest "
+         << (any_range ? "mean of the K-fold and out-of-range RMS"
+                       : "K-fold RMS (no out-of-range fold: no rows in range, none out of it, or a candidate that "
+                         "cannot be identified from those in range)")
+         << " (" << s.scores[static_cast<std::size_t>(best)].score_m * 1e3 << " mm)";
+  s.reason = reason.str();
+  return s;
+}
+
+std::string format_selection(const Selection& s, const SelectionOptions& options) {
+  std::ostringstream out;
+  out << "model selection: " << options.folds << "-fold cross-validation and an out-of-range fold (train on the "
+      << s.out_of_range_train_rows << " rows inside the central " << options.central_fraction * 100.0
+      << " % of every joint's range, predict the other " << s.out_of_range_test_rows << "); position RMS:\n";
+  char line[200];
+  std::snprintf(line, sizeof line, "  %-22s %10s %12s %8s %10s\n", "candidate", "K-fold", "out-of-range", "params",
+                "score");
+  out << line;
+  const auto mm = [](double v) {
+    char b[32];
+    if (v < 0.0) return std::string("-");
+    std::snprintf(b, sizeof b, "%.4f mm", v * 1e3);
+    return std::string(b);
+  };
+  for (const CandidateScore& x : s.scores) {
+    std::snprintf(line, sizeof line, "  %-22s %10s %12s %8d %10s%s\n", x.name.c_str(), mm(x.kfold_rms_m).c_str(),
+                  mm(x.out_of_range_rms_m).c_str(), x.parameters, mm(x.score_m).c_str(),
+                  x.name == s.chosen.name ? "  <- chosen" : "");
+    out << line;
+    if (!x.why.empty()) out << "    (" << x.why << ")\n";
+  }
+  out << "chosen: " << s.reason << "\n";
+  return out.str();
+}
+
+}  // namespace kincal::identify
