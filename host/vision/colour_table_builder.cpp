@@ -1,5 +1,6 @@
 #include "host/vision/colour_table_builder.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -45,14 +46,14 @@ core::ColourClassTable build_colour_table(const ColourTableSamples& samples, cor
   const cv::Matx33d inverse = cov.inv(cv::DECOMP_CHOLESKY);
   core::ColourClassTable table;
   table.space = space;
-  table.threshold = static_cast<std::uint8_t>(std::lround(255.0 * std::exp(-0.5 * max_distance * max_distance)));
+  table.threshold = kColourTableThreshold;
   for (int c0 = 0; c0 < 16; ++c0)
     for (int c1 = 0; c1 < 16; ++c1)
       for (int c2 = 0; c2 < 16; ++c2) {
         const auto index = static_cast<std::size_t>(c0 << 8 | c1 << 4 | c2);
         const cv::Matx31d d = cv::Matx31d(c0 + 0.5, c1 + 0.5, c2 + 0.5) - mean;
-        const double d2 = (d.t() * inverse * d)(0, 0);
-        double score = d2 < max_distance * max_distance ? 255.0 * std::exp(-0.5 * d2) : 0.0;
+        const double distance = std::sqrt((d.t() * inverse * d)(0, 0));
+        double score = distance < max_distance ? 255.0 * std::min(1.0, max_distance - distance) : 0.0;
         if (negatives[index] > 0 && negatives[index] >= positives[index]) score = 0;
         // Inside the ellipsoid every cell is above the threshold, however small its weight.
         table.score[index] =

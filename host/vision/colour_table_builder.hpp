@@ -4,12 +4,21 @@
 //
 // Model: the positives, converted to the table's colour space (RGB565 as the camera packs it,
 // or BT.601 YUV), in cell units (16 levels per channel), get a mean and a covariance (plus a
-// quarter cell squared on the diagonal for the quantization). A cell scores
-// 255 exp(-d^2 / 2) of its centre's Mahalanobis distance d; scores of cells beyond
-// d = max_distance are 0, and the table's threshold is the score at max_distance, so the class
-// is the ellipsoid d < max_distance with soft weights falling off toward its rim. A cell that
-// holds at least as many negatives as positives is cleared: the scene's colours never count.
-//
+// quarter cell squared on the diagonal for the quantization). The class is the ellipsoid
+// d < max_distance of the cell centre's Mahalanobis distance d. Its core, d <= max_distance - 1,
+// scores 255; from there the score falls linearly to 0 at max_distance (every cell of the class
+// keeps at least threshold + 1, the threshold is kColourTableThreshold). A cell that holds at
+// least as many negatives as positives is cleared: the scene's colours never count.
+// Why flat, not 255 exp(-d^2 / 2) (issue #22): the scores weight the centroid, and the samples'
+// spread is mostly the beacon's brightness over the image. A score peaked at the mean colour
+// made the disc's weights follow the lighting across it: vignetting tilted them toward the image
+// centre, by a different amount in the two cameras of a stereo pair (the beacon sits a disparity
+// apart), and biased the triangulated depth (tests/bench/stereo_colour_bias_bench.cpp). On
+// that bench's frames at k1 = 0 (800 centroids, a one-off run) the centroid error against
+// column was -1.1e-4 px/px (+-0.3e-4) with the peaked score, -0.2e-4 (+-0.2e-4) flat, and the
+// centroid's spread 1.6 times smaller. The ramp keeps sub-pixel weights on the
+// rim, whose pixels mix the beacon with the background (all 255, a binary class: -0.3e-4 px/px,
+// spread 1.2 times the ramp's).
 // Errors: std::runtime_error (fewer than 8 positive samples; a degenerate covariance is
 // regularized, not an error).
 #pragma once
@@ -21,6 +30,8 @@
 #include "firmware/core/colour_class.hpp"
 
 namespace kincal::vision {
+
+inline constexpr std::uint8_t kColourTableThreshold = 3;
 
 struct ColourTableSamples {
   std::vector<cv::Vec3b> positive_bgr, negative_bgr;

@@ -149,6 +149,48 @@ TEST_CASE("colour classes: a table built from beacon samples finds the beacon, n
                   std::runtime_error);
 }
 
+TEST_CASE("colour classes: lighting that changes across the beacon does not move its centroid") {
+  // Samples of the beacon under lighting from 0.6 to 1.0; a disc of radius 8 px at (60, 40) lit
+  // from 0.81 on its left to 0.89 on its right (0.6 % per pixel: about 6 times the steepest
+  // vignetting slope of tests/bench/stereo_colour_bias_bench's frames). Every disc pixel is in the
+  // class's flat core, so its weights are equal and the centroid does not move; the score peaked
+  // at the samples' mean colour (255 exp(-d^2 / 2), before issue #22's fix) pulled it toward the
+  // side lit nearest that mean: 0.13 px in RGB565, 0.014 px in YUV422.
+  vision::ColourTableSamples samples;
+  for (int i = 0; i < 200; ++i) {
+    const double light = 0.6 + 0.4 * i / 199.0;
+    samples.positive_bgr.emplace_back(static_cast<std::uint8_t>(40 * light), static_cast<std::uint8_t>(20 * light),
+                                      static_cast<std::uint8_t>(200 * light));
+  }
+  samples.negative_bgr = {cv::Vec3b(90, 90, 90)};
+  // The disc with light slope `per_px` (0: evenly lit at 0.85).
+  const auto centroid = [&](core::ColourSpace space, double per_px) {
+    cv::Mat scene(80, 120, CV_8UC3, cv::Scalar(90, 90, 90));
+    for (int y = 0; y < scene.rows; ++y)
+      for (int x = 0; x < scene.cols; ++x)
+        if (std::hypot(x - 60, y - 40) <= 8) {
+          const double light = 0.85 + per_px * (x - 60);
+          scene.at<cv::Vec3b>(y, x) =
+              cv::Vec3b(static_cast<std::uint8_t>(40 * light), static_cast<std::uint8_t>(20 * light),
+                        static_cast<std::uint8_t>(200 * light));
+        }
+    vision::LabelOptions options;
+    options.colour = vision::build_colour_table(samples, space);
+    const vision::LabelResult r = vision::label_colour(scene, options);
+    REQUIRE(r.blobs.size() == 1);
+    return cv::Point2d(r.blobs[0].x_px.to_double(), r.blobs[0].y_px.to_double());
+  };
+  // RGB565: the disc's centre. YUV422: the same as evenly lit (pixel pairs that share chroma
+  // with the background drop out of the class on the right rim only, lit or not).
+  const cv::Point2d rgb = centroid(core::ColourSpace::kRgb565, 0.005);
+  CHECK(std::fabs(rgb.x - 60) < 0.005);
+  CHECK(std::fabs(rgb.y - 40) < 0.005);
+  const cv::Point2d yuv = centroid(core::ColourSpace::kYuv422, 0.005),
+                    yuv_even = centroid(core::ColourSpace::kYuv422, 0);
+  CHECK(std::fabs(yuv.x - yuv_even.x) < 0.005);
+  CHECK(std::fabs(yuv.y - yuv_even.y) < 0.005);
+}
+
 TEST_CASE("image files: errors name the file") {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "kincal_vision_test";
   std::filesystem::create_directories(dir);
