@@ -1,9 +1,10 @@
 // `kincal session`: a calibration session (host/session/session.hpp) from the command line.
 //
-//   kincal session --model FILE [--rig platform|stereo] [--plan FILE | --sweeps N [--home Q] | --poses N]
+//   kincal session --model FILE [--rig platform|stereo|camera] [--plan FILE | --sweeps N [--home Q] | --poses N]
 //                  [--validation N | --validation-plan FILE]
 //                  [--robot sim|manual | --robot-cmd 'CMD {q}'] [--can IF [--fd]] [--squares N]
 //                  [--left SRC... --right SRC... --stereo FILE [--colour-table FILE] [--pixel-sigma PX]]
+//                  [--board B --mount hand|world [--camera FILE --source SRC...]]
 //                  [--discover --joints N --home Q [--prismatic J,...] [--sweep-deg D] [--sweep-m M]
 //                   [--discovered FILE]]
 //                  [--journal FILE] [--resume] [--out FILE] [--report FILE] [--dataset FILE] [--seed S]
@@ -16,7 +17,14 @@
 // calibrated stereo pair watching the beacon (host/session/stereo_sensor.hpp): frames from
 // host/capture (--left, --right: cameras, videos or recorded images, one pair per pose), the
 // pair from `kincal camera stereo` (--stereo; the device frame is the left camera's), the beacon
-// by its colour class (--colour-table) or as the brightest blob.
+// by its colour class (--colour-table) or as the brightest blob; or, with --rig camera (issue
+// #26), by a camera and a printed board (--board), the camera on the flange (--mount hand: the
+// device frame is the board's) or fixed (--mount world: the device frame is the camera's), each
+// view a full pose with its 6x6 covariance (host/session/board_sensor.hpp): frames from
+// host/capture (--source, one per pose as --left), the camera from `kincal camera calibrate`
+// (--camera); the base registration and the mount (hand-eye) are identified with the arm. The
+// simulated robot's camera rig renders the views of its hidden-truth arm (random poses near
+// --home, where the camera sees the board head-on).
 // A discovery session (--discover, stereo rig) needs no model: it sweeps each of the --joints
 // joints in turn from --home over --sweep-deg (or --sweep-m for the --prismatic joints, those the
 // controller reads in metres) with --sweeps readings, discovers the arm from the sweeps
@@ -37,8 +45,10 @@
 #include <sstream>
 
 #include "firmware/core/camera_model.hpp"
+#include "host/camera/board.hpp"
 #include "host/camera/calibration_file.hpp"
 #include "host/can/socketcan.hpp"
+#include "host/capture/frame_source.hpp"
 #include "host/capture/stereo_source.hpp"
 #include "host/cli/colour_table.hpp"
 #include "host/cli/model_option.hpp"
@@ -49,11 +59,11 @@
 #include "host/identify/plausibility.hpp"
 #include "host/model/model_file.hpp"
 #include "host/report/report.hpp"
+#include "host/session/board_sensor.hpp"
 #include "host/session/online_correction.hpp"
 #include "host/session/session.hpp"
 #include "host/session/session_report.hpp"
 #include "host/session/stereo_sensor.hpp"
-#include "host/sim/robot.hpp"
 
 namespace kincal::cli {
 
@@ -65,6 +75,8 @@ struct SessionArgs {
   std::string out, report, dataset;
   std::vector<std::string> left, right;  // real stereo pair: frame sources
   std::string stereo, colour_table;
+  std::vector<std::string> source;  // real camera rig: frame source
+  std::string camera, board = "chessboard:9x6:0.03", mount = "hand";
   double pixel_sigma_px = 0.1, pair_tolerance_s = 0.5;
   // Discovery of an unknown arm: its joint count, the joints read in metres, the sweeps' spans.
   bool discover = false;
@@ -120,24 +132,17 @@ std::vector<double> mid_range(const model::RobotModel& m) {
   return q;
 }
 
-// `count` random configurations the simulated rig can measure, drawn within the joint limits. The
-// draws are bounded: a robot whose workspace the rig cannot see fails with the numbers instead of
-// drawing forever.
-std::vector<std::vector<double>> random_observable(const model::RobotModel& nominal, const session::SimulatedRig& rig,
-                                                   int count, std::mt19937_64& rng, const char* what) {
-  const long attempts = 1000 + 200L * count;
-  std::vector<std::vector<double>> poses;
-  for (long i = 0; i < attempts && static_cast<int>(poses.size()) < count; ++i) {
-    std::vector<double> q = sim::random_configuration(nominal, rng);
-    if (rig.observable(q)) poses.push_back(std::move(q));
+// `count` random configurations the simulated rig can measure (SimulatedRig::random_poses: bounded
+// draws, so a robot whose workspace the rig cannot see fails with the numbers instead of drawing
+// forever).
+std::vector<std::vector<double>> random_observable(const session::SimulatedRig& rig, int count, std::mt19937_64& rng,
+                                                   const char* what) {
+  try {
+    return rig.random_poses(count, rng);
+  } catch (const model::InputError& e) {
+    throw model::InputError(std::string(what) + ": " + e.what() +
+                            " (give --plan/--validation-plan with poses it can see, or fewer poses)");
   }
-  if (static_cast<int>(poses.size()) < count)
-    throw model::InputError(std::string(what) + ": " + std::to_string(poses.size()) + " of " +
-                            std::to_string(attempts) + " random configurations of " + nominal.name +
-                            " within its joint limits are in view of the simulated rig, " + std::to_string(count) +
-                            " needed: the rig cannot see this robot's workspace (give --plan/--validation-plan "
-                            "with poses it can see, or fewer poses)");
-  return poses;
 }
 
 // A plan file read against the rig's model. A simulated rig may narrow joint limits (the ARID rig
@@ -230,6 +235,51 @@ class CapturedStereo {
   int taken_ = 0;
 };
 
+// The frames of a real camera (host/capture), one per pose: recorded sources (image sequences,
+// videos) hold one frame per pose of the plan, in plan order (pose i is frame i, so a resumed
+// session skips the frames of the poses already measured); a live camera gives the frame taken
+// after kLiveStaleFrames more, so that frames queued during the move are not used.
+class CapturedFrames {
+ public:
+  static constexpr int kLiveStaleFrames = 4;  // --help says so
+
+  CapturedFrames(const std::vector<std::string>& sources, int poses) : source_(capture::open_source(sources)) {
+    live_ = dynamic_cast<capture::CameraSource*>(source_.get()) != nullptr;
+    const auto* images = dynamic_cast<const capture::ImageSequenceSource*>(source_.get());
+    if (images && images->files().size() != static_cast<std::size_t>(poses))
+      throw model::InputError("--source has " + std::to_string(images->files().size()) + " images (" + source_->name() +
+                              "), the plan " + std::to_string(poses) +
+                              " poses (calibration and validation): recorded frames are one per pose, in plan order");
+  }
+
+  session::BoardFrame grab(int pose) {
+    const std::string at = "pose " + std::to_string(pose) + ": ";
+    std::optional<capture::Frame> frame;
+    try {
+      if (live_) {
+        for (int i = 0; i <= kLiveStaleFrames; ++i) frame = source_->next();
+      } else {
+        if (taken_ > pose) throw session::SessionError(at + "its frame was read already");
+        while (taken_ <= pose) {
+          frame = source_->next();
+          if (!frame)
+            throw session::SessionError(at + "the frames of " + source_->name() + " ended after " +
+                                        std::to_string(taken_));
+          ++taken_;
+        }
+      }
+    } catch (const capture::CaptureError& e) {
+      throw session::SessionError(at + e.what());
+    }
+    return {frame->image, frame->timestamp_s, frame->origin};
+  }
+
+ private:
+  std::unique_ptr<capture::FrameSource> source_;
+  bool live_ = false;
+  int taken_ = 0;
+};
+
 // The calibrated pair of `kincal camera stereo` as the sensor takes it; the device frame is the
 // left camera's.
 session::StereoSetup stereo_setup(const SessionArgs& a) {
@@ -259,11 +309,12 @@ int run(const SessionArgs& a) {
        {"--plan", a.plan},
        {"--validation-plan", a.validation_plan},
        {"--stereo", a.stereo},
-       {"--colour-table", a.colour_table}});
+       {"--colour-table", a.colour_table},
+       {"--camera", a.camera}});
   const bool simulated = a.robot == "sim" && a.robot_cmd.empty();
-  const bool platform = a.rig == "platform";
+  const bool platform = a.rig == "platform", stereo = a.rig == "stereo", camera_rig = a.rig == "camera";
   if (a.discover) {
-    if (platform)
+    if (!stereo)
       throw model::InputError(
           "--discover: a discovery session watches a beacon: add --rig stereo (the platform "
           "needs the arm's model to know which square it sees)");
@@ -281,7 +332,7 @@ int run(const SessionArgs& a) {
                             ") has " + std::to_string(file.joint_count()));
   const bool real_stereo = !a.left.empty() || !a.right.empty() || !a.stereo.empty();
   if (real_stereo) {
-    if (platform) throw model::InputError("--left/--right/--stereo: cameras of a stereo rig: add --rig stereo");
+    if (!stereo) throw model::InputError("--left/--right/--stereo: cameras of a stereo rig: add --rig stereo");
     if (simulated)
       throw model::InputError(
           "--left/--right/--stereo: real cameras watch a real robot: give --robot manual or --robot-cmd CMD (the "
@@ -290,6 +341,18 @@ int run(const SessionArgs& a) {
       throw model::InputError("a real stereo pair needs all of --left SRC, --right SRC and --stereo FILE");
     if (!a.can.empty()) throw model::InputError("--can: the stereo rig has no platform on a CAN bus");
   }
+  const bool real_camera = !a.source.empty() || !a.camera.empty();
+  if (real_camera) {
+    if (!camera_rig)
+      throw model::InputError("--camera/--source: the camera of a camera-and-board rig: add --rig camera");
+    if (simulated)
+      throw model::InputError(
+          "--camera/--source: a real camera watches a real robot: give --robot manual or --robot-cmd CMD (the "
+          "simulated robot brings its own rendered camera)");
+    if (a.source.empty() || a.camera.empty())
+      throw model::InputError("a real camera rig needs both --camera FILE and --source SRC");
+  }
+  if (camera_rig && !a.can.empty()) throw model::InputError("--can: the camera rig has no platform on a CAN bus");
 
   std::unique_ptr<session::SimulatedRig> rig;
   std::unique_ptr<can::Transport> transport;
@@ -304,9 +367,19 @@ int run(const SessionArgs& a) {
     session::RigOptions o;
     o.seed = a.seed;
     o.fd = a.fd;
-    rig = session::make_simulated_rig(platform ? session::RigKind::platform : session::RigKind::stereo, file, o);
+    o.board = a.board;
+    o.camera_on_hand = a.mount == "hand";
+    if (camera_rig && !a.home.empty()) o.home = parse_home(a.home, file);
+    rig = session::make_simulated_rig(platform ? session::RigKind::platform
+                                      : stereo ? session::RigKind::stereo
+                                               : session::RigKind::camera,
+                                      file, o);
   } else {
-    if (!platform && !real_stereo)
+    if (camera_rig && !real_camera)
+      throw model::InputError(
+          "--rig camera with a real robot: give its camera (--camera FILE from `kincal camera calibrate`, --source "
+          "SRC, --board B, --mount hand|world)");
+    if (stereo && !real_stereo)
       throw model::InputError(
           "--rig stereo with a real robot: give its cameras (--left SRC --right SRC --stereo FILE from `kincal "
           "camera stereo`, and --colour-table FILE for a coloured beacon)");
@@ -333,11 +406,11 @@ int run(const SessionArgs& a) {
         session::single_joint_sweeps(*unknown, parse_home(a.home, *unknown), a.sweeps > 0 ? a.sweeps : 10, 1.0);
   } else if (!a.plan.empty()) {
     plan.calibration = read_plan_for(file, nominal, a.plan);
-  } else if (a.sweeps > 0 || !platform) {
+  } else if (a.sweeps > 0 || stereo) {
     const std::vector<double> home = a.home.empty() ? mid_range(nominal) : parse_home(a.home, nominal);
     plan.calibration = session::single_joint_sweeps(nominal, home, a.sweeps > 0 ? a.sweeps : 10, 0.4);
   } else {
-    plan.calibration = random_observable(nominal, *rig, a.poses, rng, "--poses");
+    plan.calibration = random_observable(*rig, a.poses, rng, "--poses");
   }
   if (!a.validation_plan.empty() && unknown && a.model.path.empty()) {
     // An unknown arm's limits are only its sweeps: its validation poses lie anywhere.
@@ -347,7 +420,7 @@ int run(const SessionArgs& a) {
   } else if (!a.validation_plan.empty()) {
     plan.validation = read_plan_for(file, nominal, a.validation_plan);
   } else if (rig) {
-    plan.validation = random_observable(nominal, *rig, a.validation, rng, "--validation");
+    plan.validation = random_observable(*rig, a.validation, rng, "--validation");
   }
 
   std::unique_ptr<CapturedStereo> captured;
@@ -356,6 +429,17 @@ int run(const SessionArgs& a) {
     captured = std::make_unique<CapturedStereo>(a, plan.total());
     sensor = std::make_unique<session::StereoBeaconSensor>(
         [&frames = *captured](int pose) { return frames.grab(pose); }, std::move(setup));
+  }
+  std::unique_ptr<CapturedFrames> frames;
+  if (real_camera) {
+    session::BoardSetup setup;
+    setup.board = camera::parse_board(a.board);
+    setup.camera = camera::load_camera(a.camera);
+    setup.intrinsics = camera::load_camera_uncertainty(a.camera);
+    setup.camera_on_hand = a.mount == "hand";
+    frames = std::make_unique<CapturedFrames>(a.source, plan.total());
+    sensor = std::make_unique<session::BoardPoseSensor>([&captured = *frames](int pose) { return captured.grab(pose); },
+                                                        std::move(setup));
   }
   session::Sensor& measure = rig ? rig->sensor() : *sensor;
 
@@ -369,6 +453,7 @@ int run(const SessionArgs& a) {
            << " home=" << a.home
            << " validation=" << (a.validation_plan.empty() ? std::to_string(a.validation) : a.validation_plan);
   if (real_stereo) identity << " stereo=" << a.stereo << " colour-table=" << a.colour_table;
+  if (camera_rig) identity << " board=" << a.board << " mount=" << a.mount << " camera=" << a.camera;
   if (unknown) {
     identity << " discover joints=" << a.joints << " sweep-deg=" << a.sweep_deg << " sweep-m=" << a.sweep_m
              << " prismatic=";
@@ -401,7 +486,7 @@ int run(const SessionArgs& a) {
     start = found.model;
   } else {
     if (!a.accept_implausible) identify::require_plausible(nominal, data.calibration, "--accept-implausible");
-    if (!platform) io.start = identify::Start::cpa;
+    if (stereo) io.start = identify::Start::cpa;
   }
   const session::Calibration calibration = session::calibrate(start, data, io);
   std::cout << identify::format_report(calibration.result);
@@ -422,7 +507,7 @@ int run(const SessionArgs& a) {
     session::RunDescription d;
     d.title = "Calibration session: " + file.name;
     d.robot = file.name;
-    d.method = platform  ? "full nonlinear least squares"
+    d.method = !stereo   ? "full nonlinear least squares"
                : unknown ? "discovery from single-joint sweeps (no model), then full least squares"
                          : "circle-point analysis, then full least squares";
     d.data = a.journal;
@@ -443,8 +528,10 @@ void add_session_command(CLI::App& app, int& status) {
   auto a = std::make_shared<SessionArgs>();
   auto* cmd = app.add_subcommand("session", "Run a calibration session: move, measure, journal, identify, upload");
   add_model_option(*cmd, a->model, "robot model (with --discover: the arm the simulated robot hides)", false);
-  cmd->add_option("--rig", a->rig, "platform (camera + rangers over CAN) or stereo (beacon and stereo pair)")
-      ->check(CLI::IsMember({"platform", "stereo"}))
+  cmd->add_option("--rig", a->rig,
+                  "platform (camera + rangers over CAN), stereo (beacon and stereo pair) or camera (a camera and a "
+                  "printed board)")
+      ->check(CLI::IsMember({"platform", "stereo", "camera"}))
       ->capture_default_str();
   cmd->add_option("--plan", a->plan, "calibration poses (joints CSV, e.g. from `kincal plan`)");
   cmd->add_option("--sweeps", a->sweeps,
@@ -484,6 +571,21 @@ void add_session_command(CLI::App& app, int& status) {
                   "stamped 1 s apart")
       ->check(finite_non_negative())
       ->capture_default_str();
+  cmd->add_option("--board", a->board,
+                  "camera rig: the printed board, chessboard:COLSxROWS:SQUARE_M or charuco:COLSxROWS:SQUARE_M:MARKER_M"
+                  "[:DICT] (the simulated rig renders chessboards)")
+      ->capture_default_str();
+  cmd->add_option("--mount", a->mount,
+                  "camera rig: hand, the camera on the flange and the board fixed (positions in the board's frame); "
+                  "world, the camera fixed and the board on the flange (positions in the camera's frame)")
+      ->check(CLI::IsMember({"hand", "world"}))
+      ->capture_default_str();
+  cmd->add_option("--camera", a->camera, "real camera rig: the camera's calibration (`kincal camera calibrate`)");
+  cmd->add_option("--source", a->source,
+                  "real camera rig: the camera's frames, as --left: a V4L2 device, a video, a directory of images or "
+                  "image files, one per pose of --plan then --validation-plan; a live camera's frame is taken after "
+                  "4 more")
+      ->expected(1, -1);
   cmd->add_flag("--discover", a->discover,
                 "discovery session (stereo rig): sweep each joint of an unknown arm from --home, discover its model "
                 "(`kincal discover`), then identify it fully from there");

@@ -17,7 +17,6 @@
 #include "host/report/report.hpp"
 #include "host/session/pose_plan.hpp"
 #include "host/session/session_report.hpp"
-#include "host/sim/robot.hpp"
 
 namespace kincal::session {
 
@@ -29,17 +28,6 @@ std::string text(const char* format, double a, double b = 0, double c = 0, doubl
   char line[256];
   std::snprintf(line, sizeof line, format, a, b, c, d);
   return line;
-}
-
-// `count` random poses at which the rig's sensor sees its target.
-Configurations observable_poses(const SimulatedRig& rig, int count, std::mt19937_64& rng) {
-  Configurations out;
-  for (int tries = 0; static_cast<int>(out.size()) < count; ++tries) {
-    if (tries > 1000 * count) throw model::InputError("demo: too few random poses in view of the sensor");
-    std::vector<double> q = sim::random_configuration(rig.nominal(), rng);
-    if (rig.observable(q)) out.push_back(std::move(q));
-  }
-  return out;
 }
 
 double rms_to_truth(const model::RobotModel& model, const model::RobotModel& truth, const model::Dataset& data) {
@@ -209,7 +197,7 @@ RigRun run_rig(RigKind kind, const DemoOptions& options, std::ostream& out) {
   if (platform) {
     // Random poses the camera can use: the strip covers a band of the arm's reach, so most
     // poses of a planner's pool over the whole joint space would not see it.
-    plan.calibration = observable_poses(*rig, options.quick ? 24 : 40, rng);
+    plan.calibration = rig->random_poses(options.quick ? 24 : 40, rng);
   } else {
     // Their home posture; each sweep as wide as the cameras' view allows (at most 40 % of the
     // joint's range).
@@ -222,7 +210,7 @@ RigRun run_rig(RigKind kind, const DemoOptions& options, std::ostream& out) {
       if (span < 0.02) throw model::InputError("demo: the stereo pair does not see the beacon at home");
     }
   }
-  plan.validation = observable_poses(*rig, validation, rng);
+  plan.validation = rig->random_poses(validation, rng);
   out << "plan: " << plan.calibration.size() << " calibration poses ("
       << (platform ? "random poses in view of the strip, full pose" : "single-joint sweeps, 10 readings per joint")
       << "), " << plan.validation.size() << " validation poses\n";

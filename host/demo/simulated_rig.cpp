@@ -5,12 +5,16 @@
 #include <limits>
 #include <numbers>
 #include <random>
+#include <stdexcept>
 
 #include <Eigen/Eigenvalues>
 
+#include "host/camera/board.hpp"
 #include "host/can/loopback.hpp"
+#include "host/session/board_sensor.hpp"
 #include "host/session/stereo_sensor.hpp"
 #include "host/sim/beacon.hpp"
+#include "host/sim/board_views.hpp"
 #include "host/sim/parameter_blocks.hpp"
 #include "host/sim/rangers.hpp"
 #include "host/sim/render.hpp"
@@ -41,6 +45,22 @@ model::Transform transform(const Eigen::Isometry3d& t) {
 std::uint64_t pose_seed(std::uint64_t seed, int index) {
   constexpr std::uint64_t kGolden = 0x9E3779B97F4A7C15u, kMix = 0xBF58476D1CE4E5B9u;
   return seed * kGolden + static_cast<std::uint64_t>(index) * kMix + 1u;
+}
+
+// `count` random readings within the joint limits that `rig` observes, in bounded draws.
+std::vector<std::vector<double>> observable_draws(const SimulatedRig& rig, int count, std::mt19937_64& rng) {
+  const long attempts = 1000 + 1000L * count;
+  std::vector<std::vector<double>> poses;
+  for (long i = 0; i < attempts && static_cast<int>(poses.size()) < count; ++i) {
+    std::vector<double> q = sim::random_configuration(rig.nominal(), rng);
+    if (rig.observable(q)) poses.push_back(std::move(q));
+  }
+  if (static_cast<int>(poses.size()) < count)
+    throw model::InputError(std::to_string(poses.size()) + " of " + std::to_string(attempts) +
+                            " random configurations of " + rig.nominal().name +
+                            " within its joint limits are in view of the simulated rig, " + std::to_string(count) +
+                            " needed: the rig cannot see this robot's workspace");
+  return poses;
 }
 
 // Goes exactly where it is told, then lets the world show what is there.
@@ -102,6 +122,9 @@ class PlatformRig : public SimulatedRig {
     const model::Vector3 hit = strip_T_camera.translation + t * axis;
     const double half = strip_.square_m / 2;
     return hit.x() > half && hit.x() < (strip_.squares - 1.5) * strip_.square_m && std::abs(hit.y()) < half * 0.6;
+  }
+  std::vector<std::vector<double>> random_poses(int count, std::mt19937_64& rng) const override {
+    return observable_draws(*this, count, rng);
   }
 
  private:
@@ -231,6 +254,9 @@ class StereoRig : public SimulatedRig {
     }
     return true;
   }
+  std::vector<std::vector<double>> random_poses(int count, std::mt19937_64& rng) const override {
+    return observable_draws(*this, count, rng);
+  }
 
  private:
   void show(int index, const std::vector<double>& q) {
@@ -256,6 +282,134 @@ class StereoRig : public SimulatedRig {
   std::unique_ptr<SimulatedDriver> driver_;
 };
 
+// ---- A camera and a printed board -----------------------------------------------------------
+
+constexpr double kBoardDistanceM = 0.6;  // camera to board's centre at home
+constexpr double kViewMarginPx = 30;     // the board's outline this far inside the image
+
+// The VGA camera the rig renders with and measures through (its true intrinsics): the
+// renderer's 640 x 480, f = 600 px, with barrel distortion.
+sim::CameraSpec vga_camera() {
+  sim::CameraSpec c;
+  c.distortion = {-0.21, 0.09, 0.0, 0.0, 0.0};
+  return c;
+}
+
+camera::CameraModel camera_model(const sim::CameraSpec& s) {
+  camera::CameraModel m;
+  m.image_size = cv::Size(s.width_px, s.height_px);
+  m.camera_matrix = cv::Matx33d(s.fx_px, 0, s.cx_px, 0, s.fy_px, s.cy_px, 0, 0, 1);
+  m.distortion = s.distortion;
+  return m;
+}
+
+// A chessboard: the one kind the rig renders.
+camera::Board parse_chessboard(const std::string& text) {
+  camera::Board board;
+  try {
+    board = camera::parse_board(text);
+  } catch (const std::invalid_argument& e) {
+    throw model::InputError(std::string("camera rig: ") + e.what());
+  }
+  if (board.kind != camera::BoardKind::kChessboard)
+    throw model::InputError("camera rig: the simulated camera rig renders chessboards only, not '" + text + "'");
+  return board;
+}
+
+// The printed area's extent in the board frame: inner corners from 0 to (cols - 1) squares, the
+// outer squares and the white border two more on each side.
+std::vector<Eigen::Vector3d> board_outline(const camera::Board& b) {
+  const double s = b.square_m, x0 = -2 * s, y0 = -2 * s, x1 = (b.cols + 1) * s, y1 = (b.rows + 1) * s;
+  return {{x0, y0, 0}, {x1, y0, 0}, {x1, y1, 0}, {x0, y1, 0}};
+}
+
+sim::BoardRig place_board_rig(const model::RobotModel& arm, const camera::Board& board, const RigOptions& options) {
+  std::vector<double> home = options.home;
+  if (home.empty())
+    for (const model::Joint& j : arm.joints)
+      home.push_back(std::isfinite(j.lower) && std::isfinite(j.upper) ? (j.lower + j.upper) / 2 : 0.0);
+  const Eigen::Vector3d centre(0.5 * (board.cols - 1) * board.square_m, 0.5 * (board.rows - 1) * board.square_m, 0);
+  try {
+    return sim::board_rig(arm, options.camera_on_hand ? sim::BoardMount::hand : sim::BoardMount::world, home,
+                          kBoardDistanceM, centre);
+  } catch (const std::invalid_argument& e) {
+    throw model::InputError(std::string("camera rig (") + arm.name + "): " + e.what());
+  }
+}
+
+class CameraRig : public SimulatedRig {
+ public:
+  CameraRig(const model::RobotModel& file, const RigOptions& options)
+      : options_(options),
+        board_(parse_chessboard(options.board)),
+        outline_(board_outline(board_)),
+        target_(sim::chessboard(board_.cols, board_.rows, board_.square_m)),
+        rig_(place_board_rig(file, board_, options)),
+        robot_(rig_.nominal, options.seed) {
+    BoardSetup setup;
+    setup.board = board_;
+    setup.camera = camera_model(camera_);
+    setup.camera_on_hand = options.camera_on_hand;
+    sensor_ = std::make_unique<BoardPoseSensor>([this](int) { return frame_; }, std::move(setup));
+    driver_ = std::make_unique<SimulatedDriver>([this](int index, const std::vector<double>& q) { show(index, q); });
+  }
+
+  const model::RobotModel& nominal() const override { return rig_.nominal; }
+  const model::RobotModel& truth() const override { return robot_.truth(); }
+  RobotDriver& driver() override { return *driver_; }
+  Sensor& sensor() override { return *sensor_; }
+  can::PlatformClient* platform() override { return nullptr; }
+  bool fd() const override { return false; }
+  std::string description() const override {
+    return std::string("a camera and a printed board (") + rig_.nominal.name + "): a VGA camera " +
+           (options_.camera_on_hand ? "on the flange, the board fixed in the cell"
+                                    : "fixed in the cell, the board on the flange") +
+           ", board " + board_.text() + " seen from about 0.6 m";
+  }
+
+  // The whole printed board in view, margin included, by the nominal rig.
+  bool observable(const std::vector<double>& q) const override {
+    const Eigen::Isometry3d view = sim::camera_T_board(rig_.mount, model::forward_kinematics(rig_.nominal, q));
+    for (const Eigen::Vector3d& p : outline_)
+      if ((view * p).z() <= 0) return false;
+    for (const cv::Point2d& px : sim::project_points(camera_, view, outline_))
+      if (px.x < kViewMarginPx || px.y < kViewMarginPx || px.x > camera_.width_px - 1 - kViewMarginPx ||
+          px.y > camera_.height_px - 1 - kViewMarginPx)
+        return false;
+    return true;
+  }
+  std::vector<std::vector<double>> random_poses(int count, std::mt19937_64& rng) const override {
+    sim::ViewPlanOptions plan;
+    plan.margin_px = kViewMarginPx;
+    try {
+      return sim::board_view_plan(rig_, camera_, outline_, count, rng, plan);
+    } catch (const std::invalid_argument& e) {
+      throw model::InputError(std::string("camera rig (") + rig_.nominal.name + "): " + e.what());
+    }
+  }
+
+ private:
+  void show(int index, const std::vector<double>& q) {
+    sim::ImagingConditions conditions;
+    conditions.supersampling = 2;
+    conditions.seed = pose_seed(options_.seed, index);
+    conditions.read_noise_dn *= options_.measurement_scale;
+    frame_ = {sim::render_board_view(robot_, rig_.mount, q, camera_, target_, conditions), 0.0,
+              "rendered view " + std::to_string(index)};
+  }
+
+  RigOptions options_;
+  sim::CameraSpec camera_ = vga_camera();
+  camera::Board board_;
+  std::vector<Eigen::Vector3d> outline_;
+  sim::PlanarTarget target_;
+  sim::BoardRig rig_;
+  sim::SimulatedRobot robot_;
+  BoardFrame frame_;
+  std::unique_ptr<BoardPoseSensor> sensor_;
+  std::unique_ptr<SimulatedDriver> driver_;
+};
+
 }  // namespace
 
 std::vector<model::Transform> strip_square_poses(int squares) {
@@ -269,6 +423,7 @@ std::vector<model::Transform> strip_square_poses(int squares) {
 std::unique_ptr<SimulatedRig> make_simulated_rig(RigKind kind, const model::RobotModel& model,
                                                  const RigOptions& options) {
   if (kind == RigKind::platform) return std::make_unique<PlatformRig>(model, options);
+  if (kind == RigKind::camera) return std::make_unique<CameraRig>(model, options);
   return std::make_unique<StereoRig>(model, options);
 }
 

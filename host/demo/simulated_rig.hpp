@@ -14,6 +14,18 @@
 //             11 x 13 um cells, 640 x 480, baseline 12.6 cm) 4.54 m away; the frames go through
 //             the firmware core's labeler and triangulation on the host. The device frame is the
 //             right camera's; the nominal model is the file's (host/model/robots/stanford_rrp.yaml).
+//   camera    a camera and a printed board (issue #26): a VGA camera (640 x 480, f = 600 px, barrel
+//             distortion) on the flange seeing a board fixed in the cell (camera_on_hand), or fixed
+//             and seeing the board the flange carries; the board a chessboard (default 9 x 6 inner
+//             corners of 30 mm squares, a 0.3 m sheet). sim::board_rig places the fixed part so
+//             that at `home` the camera sees the board's centre head-on from 0.6 m; the nominal
+//             model is the file's arm with that registration as its base and the mount as its tool
+//             (sim/board_views.hpp: the device frame is the board's for hand, the camera's for
+//             world). The views are rendered (sim::render_board_view) and measured by
+//             BoardPoseSensor (host/session/board_sensor.hpp) with the camera's true intrinsics;
+//             random poses are drawn near home (sim::board_view_plan: the whole board in view).
+//             Its truth has geometric errors only (no sag or repeatability): what is left after
+//             the calibration is the camera's.
 //
 // The truth: the nominal model with every parameter off by a Gaussian error (1 mm, 0.1 deg; base
 // 5 mm, 0.5 deg), drawn from the seed. The robot goes exactly where it is told (its readings are
@@ -21,11 +33,13 @@
 // session killed and resumed measures each pose exactly as an uninterrupted one would.
 //
 // Errors: model::InputError (a model the rig cannot use: e.g. a platform rig whose camera would
-// not face a plane), SessionError (the platform refusing its parameters).
+// not face a plane, a camera rig's home outside the joint limits or a board that is not a
+// chessboard), SessionError (the platform refusing its parameters).
 #pragma once
 
 #include <cstdint>
 #include <memory>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -36,13 +50,18 @@
 
 namespace kincal::session {
 
-enum class RigKind { platform, stereo };
+enum class RigKind { platform, stereo, camera };
 
 struct RigOptions {
   std::uint64_t seed = 1;
   bool fd = false;               // platform rig: CAN FD on the loopback bus
   std::string candump_log;       // platform rig: log every frame of the bus here (candump -L)
   double measurement_scale = 1;  // multiplies the simulated image and range noise
+  // Camera rig: the printed board (camera::parse_board's text), the mount, and the home at which
+  // the camera sees the board's centre head-on (empty: the middle of each joint's limits).
+  std::string board = "chessboard:9x6:0.03";
+  bool camera_on_hand = true;
+  std::vector<double> home;
 };
 
 class SimulatedRig {
@@ -58,6 +77,10 @@ class SimulatedRig {
   // Whether the sensor sees its target at joint readings q, by the nominal model with a margin
   // for the errors: plans keep to such poses.
   virtual bool observable(const std::vector<double>& q) const = 0;
+  // `count` random joint readings the sensor can measure at: within the joint limits and
+  // observable() (platform, stereo), or near the camera rig's home. Throws model::InputError
+  // when bounded draws do not find them (the rig cannot see the robot's workspace).
+  virtual std::vector<std::vector<double>> random_poses(int count, std::mt19937_64& rng) const = 0;
   virtual std::string description() const = 0;
 };
 

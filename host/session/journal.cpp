@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -29,6 +30,12 @@ namespace {
 constexpr std::string_view kCrcKey = " crc=";
 constexpr std::string_view kMagic = "kincal-journal";
 constexpr int kVersion = 1;
+
+// The pose covariance's entries beyond the position block, in the r= field's order (the
+// dataset's cxrx..crzrz): the position-rotation block row by row, then the rotation block's
+// upper triangle.
+constexpr std::array<int, 15> kRestRow{0, 0, 0, 1, 1, 1, 2, 2, 2, 3, 3, 3, 4, 4, 5};
+constexpr std::array<int, 15> kRestCol{3, 4, 5, 3, 4, 5, 3, 4, 5, 3, 4, 5, 4, 5, 5};
 
 [[noreturn]] void fail(const std::string& path, int line, const std::string& what) {
   throw JournalError(path + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": " + what);
@@ -92,6 +99,9 @@ std::string header_line(const std::string& path, const JournalIdentity& identity
   std::string payload =
       std::string(kMagic) + "=" + std::to_string(kVersion) + " joints=" + std::to_string(identity.joint_count) +
       " orientation=" + (identity.orientation ? "1" : "0") + " covariance=" + (identity.covariance ? "1" : "0");
+  if (identity.pose_covariance && !(identity.orientation && identity.covariance))
+    fail(path, 0, "a journal of pose covariances needs the orientation and the covariance");
+  if (identity.pose_covariance) payload += " pose_covariance=1";
   for (const auto& [key, value] : identity.items) {
     if (!valid_key(key)) fail(path, 0, "identity key '" + key + "' is not of [A-Za-z0-9_.-]+");
     payload += " id." + key + "=" + escape(value);
@@ -208,6 +218,7 @@ JournalIdentity parse_header(const Fields& fields, const std::string& path) {
   identity.joint_count = r.integer<int>("joints");
   identity.orientation = r.integer<int>("orientation") != 0;
   identity.covariance = r.integer<int>("covariance") != 0;
+  if (r.peek_key() == "pose_covariance") identity.pose_covariance = r.integer<int>("pose_covariance") != 0;
   if (identity.joint_count < 1) fail(path, 1, "joints must be at least 1");
   while (!r.at_end()) {
     const auto [key, value] = r.take_any();
@@ -237,6 +248,15 @@ JournalRecord parse_record(const Fields& fields, const JournalIdentity& identity
     m << c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5];
     record.covariance_m2 = m;
   }
+  if (identity.pose_covariance) {
+    const std::vector<double> r6 = r.numbers("r", kRestRow.size());
+    model::Matrix6 m = model::Matrix6::Zero();
+    m.topLeftCorner<3, 3>() = *record.covariance_m2;
+    for (std::size_t k = 0; k < r6.size(); ++k) {
+      m(kRestRow[k], kRestCol[k]) = m(kRestCol[k], kRestRow[k]) = r6[k];
+    }
+    record.pose_covariance = m;
+  }
   if (!r.at_end()) fail(path, line, "unexpected field '" + std::string(r.peek_key()) + "'");
   return record;
 }
@@ -253,6 +273,8 @@ std::string identity_differences(const JournalIdentity& journal, const JournalId
     differ("orientation", journal.orientation ? "on" : "off", now.orientation ? "on" : "off");
   if (journal.covariance != now.covariance)
     differ("covariance", journal.covariance ? "on" : "off", now.covariance ? "on" : "off");
+  if (journal.pose_covariance != now.pose_covariance)
+    differ("pose covariance", journal.pose_covariance ? "on" : "off", now.pose_covariance ? "on" : "off");
   std::map<std::string, std::pair<std::optional<std::string>, std::optional<std::string>>> keys;
   for (const auto& [k, v] : journal.items) keys[k].first = v;
   for (const auto& [k, v] : now.items) keys[k].second = v;
@@ -274,10 +296,14 @@ void check_record(const JournalRecord& record, const JournalIdentity& identity, 
     reject((identity.orientation ? "no orientation, the journal needs one" : "an orientation, the journal has none"));
   if (record.covariance_m2.has_value() != identity.covariance)
     reject((identity.covariance ? "no covariance, the journal needs one" : "a covariance, the journal has none"));
+  if (record.pose_covariance.has_value() != identity.pose_covariance)
+    reject((identity.pose_covariance ? "no pose covariance, the journal needs one"
+                                     : "a pose covariance, the journal has none"));
   const bool finite = std::all_of(record.q.begin(), record.q.end(), [](double v) { return std::isfinite(v); }) &&
                       record.position_m.allFinite() &&
                       (!record.orientation || record.orientation->coeffs().allFinite()) &&
-                      (!record.covariance_m2 || record.covariance_m2->allFinite());
+                      (!record.covariance_m2 || record.covariance_m2->allFinite()) &&
+                      (!record.pose_covariance || record.pose_covariance->allFinite());
   if (!finite) reject("a number is not finite");
   if (record.orientation && std::abs(record.orientation->norm() - 1.0) > 1e-3)
     reject("the orientation is not a unit quaternion");
@@ -285,6 +311,13 @@ void check_record(const JournalRecord& record, const JournalIdentity& identity, 
     const model::Matrix3& c = *record.covariance_m2;
     if (c != c.transpose() || Eigen::LLT<model::Matrix3>(c).info() != Eigen::Success)
       reject("the covariance is not symmetric positive definite");
+  }
+  if (record.pose_covariance) {
+    const model::Matrix6& c = *record.pose_covariance;
+    if (c != c.transpose() || Eigen::LLT<model::Matrix6>(c).info() != Eigen::Success)
+      reject("the pose covariance is not symmetric positive definite");
+    if (c.topLeftCorner<3, 3>() != *record.covariance_m2)
+      reject("the pose covariance's position block is not the covariance");
   }
 }
 
@@ -302,6 +335,11 @@ std::string record_line(const JournalRecord& record) {
     const model::Matrix3& c = *record.covariance_m2;
     const double values[] = {c(0, 0), c(0, 1), c(0, 2), c(1, 1), c(1, 2), c(2, 2)};
     append_list(payload, "c", values);
+  }
+  if (record.pose_covariance) {
+    std::array<double, kRestRow.size()> values{};
+    for (std::size_t k = 0; k < values.size(); ++k) values[k] = (*record.pose_covariance)(kRestRow[k], kRestCol[k]);
+    append_list(payload, "r", values);
   }
   return with_crc(payload);
 }
@@ -488,6 +526,7 @@ model::Dataset Journal::dataset() const {
   data.joint_count = identity_.joint_count;
   data.has_orientation = identity_.orientation;
   data.noise = identity_.covariance ? model::NoiseColumns::covariance : model::NoiseColumns::none;
+  data.has_pose_covariance = identity_.pose_covariance;
   std::vector<const JournalRecord*> ordered;
   for (const JournalRecord& r : records_) ordered.push_back(&r);
   std::sort(ordered.begin(), ordered.end(),
@@ -498,6 +537,7 @@ model::Dataset Journal::dataset() const {
     m.position = r->position_m;
     m.orientation = r->orientation;
     m.covariance = r->covariance_m2;
+    m.pose_covariance = r->pose_covariance;
     m.line = r->line;
     data.rows.push_back(std::move(m));
   }

@@ -4,15 +4,20 @@
 //
 // File format (text, one line per entry, each ending in " crc=XXXXXXXX\n": the CRC-32 of
 // shared/crc32.hpp, 8 lower-case hex digits, over every byte of the line before " crc="):
-//   kincal-journal=1 joints=N orientation=0|1 covariance=0|1 id.KEY=VALUE ... crc=...
-//   pose=P seq=S time_us=T q=Q1,...,QN p=X,Y,Z [o=QW,QX,QY,QZ] [c=CXX,CXY,CXZ,CYY,CYZ,CZZ] crc=...
-// The header line records the layout every record has (joint count; orientation; covariance)
+//   kincal-journal=1 joints=N orientation=0|1 covariance=0|1 [pose_covariance=1] id.KEY=VALUE ... crc=...
+//   pose=P seq=S time_us=T q=Q1,...,QN p=X,Y,Z [o=QW,QX,QY,QZ] [c=CXX,CXY,CXZ,CYY,CYZ,CZZ]
+//     [r=CXRX,CXRY,CXRZ,CYRX,CYRY,CYRZ,CZRX,CZRY,CZRZ,CRXRX,CRXRY,CRXRZ,CRYRY,CRYRZ,CRZRZ] crc=...
+// The header line records the layout every record has (joint count; orientation; covariance;
+// the full pose covariance, written only when on, so journals without it read as before)
 // and the session's identity: KEY=VALUE items the caller chooses (model file hash, plan hash,
 // seed, options), keys of [A-Za-z0-9_.-], values percent-escaped (every byte outside '!'..'~'
 // and '%' itself as %XX). Records: the plan's pose index P, the platform's measurement sequence
 // number S and timestamp T (us, unwrapped by the caller), the joint readings (rad or m), the
 // tool point (m), the orientation device_R_tool as a unit quaternion and the point's covariance
-// (m^2, upper triangle) -- the fields of a model::Measurement. Numbers are written in their
+// (m^2, upper triangle) and the rest of the full pose's 6x6 covariance (issue #26: the
+// position-rotation block row by row, then the rotation block's upper triangle, in the order and
+// convention of the dataset's 15 columns, host/model/dataset.hpp; it needs the orientation and
+// the covariance) -- the fields of a model::Measurement. Numbers are written in their
 // shortest exact form (std::to_chars) and read back bit for bit (std::from_chars).
 //
 // Durability: create() writes the header to PATH.tmp, fsyncs it, links it to PATH (never
@@ -40,7 +45,8 @@
 // journal; the identity or layout differs from the caller's (every differing item named, with
 // its value in the journal and now); a bad line before the last; a duplicate pose index; a
 // record that does not fit the layout or has a non-finite number, a quaternion that is not
-// unit (1e-3) or a covariance that is not positive definite (append, naming the pose); an
+// unit (1e-3) or a covariance that is not positive definite (append, naming the pose), a pose
+// covariance whose position block is not the record's covariance; an
 // operating-system failure (with strerror). After a failed write append() cuts the partial line
 // off again; if even that fails, the Journal refuses further appends.
 #pragma once
@@ -69,6 +75,7 @@ struct JournalIdentity {
   int joint_count = 0;
   bool orientation = false;                  // every record has an orientation
   bool covariance = false;                   // every record has a covariance
+  bool pose_covariance = false;              // every record has the full 6x6 (needs both above)
   std::map<std::string, std::string> items;  // e.g. {"model_sha256", ...}, {"plan_sha256", ...}, {"seed", "7"}
 };
 
@@ -80,6 +87,7 @@ struct JournalRecord {
   model::Vector3 position_m = model::Vector3::Zero();
   std::optional<Eigen::Quaterniond> orientation;  // device_R_tool
   std::optional<model::Matrix3> covariance_m2;    // of position_m
+  std::optional<model::Matrix6> pose_covariance;  // of (position_m, rotation), its top-left covariance_m2
   int line = 0;                                   // 1-based line in the journal (set by the Journal)
 };
 

@@ -17,6 +17,7 @@
 //                        frame), so identification weights each row by it. The orientation's
 //                        covariance is in the report too, but the dataset has no columns for it.
 //   StereoBeaconSensor   Kapucu & Baysec's rig: stereo_sensor.hpp.
+//   BoardPoseSensor      a camera and a printed board: board_sensor.hpp.
 //
 // Thread safety: one session thread. Cost: one CAN round trip.
 #pragma once
@@ -29,6 +30,7 @@
 #include <Eigen/Geometry>
 
 #include "host/can/platform_client.hpp"
+#include "host/model/dataset.hpp"
 #include "host/model/robot_model.hpp"
 #include "host/session/session_error.hpp"
 
@@ -38,9 +40,13 @@ struct Observation {
   model::Vector3 position = model::Vector3::Zero();  // device frame, m
   std::optional<Eigen::Quaterniond> orientation;     // device_R_tool
   std::optional<model::Matrix3> covariance;          // of position, m^2
-  std::uint32_t sequence = 0;                        // the platform's trigger sequence, if any
-  double timestamp_s = 0;                            // when the sensor saw it (sensor clock)
-  std::string note;                                  // e.g. "square 3 (pose over 2 squares), 6 fiducials"
+  // Of (x, y, z, rx, ry, rz): the position error (m) and the rotation error (rad, a rotation
+  // vector on the left, in the device frame), as the dataset's 6x6 columns (dataset.hpp); its
+  // position block is `covariance`.
+  std::optional<model::Matrix6> pose_covariance;
+  std::uint32_t sequence = 0;  // the platform's trigger sequence, if any
+  double timestamp_s = 0;      // when the sensor saw it (sensor clock)
+  std::string note;            // e.g. "square 3 (pose over 2 squares), 6 fiducials"
 };
 
 class Sensor {
@@ -52,6 +58,8 @@ class Sensor {
   // What every observation carries (the journal's layout is fixed when it is created).
   virtual bool gives_orientation() const = 0;
   virtual bool gives_covariance() const = 0;
+  // Every observation carries pose_covariance (a sensor that measures the full pose's 6x6).
+  virtual bool gives_pose_covariance() const { return false; }
 };
 
 class PlatformPoseSensor : public Sensor {

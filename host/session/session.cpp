@@ -30,6 +30,7 @@ SessionData run_session(const model::RobotModel& nominal, const SessionPlan& pla
   identity.joint_count = nominal.joint_count();
   identity.orientation = sensor.gives_orientation();
   identity.covariance = sensor.gives_covariance();
+  identity.pose_covariance = sensor.gives_pose_covariance();
   identity.items["session"] = options.identity;
   identity.items["poses"] = std::to_string(plan.total());
   std::optional<Journal> journal;
@@ -64,6 +65,7 @@ SessionData run_session(const model::RobotModel& nominal, const SessionPlan& pla
     record.position_m = o.position;
     record.orientation = o.orientation;
     record.covariance_m2 = o.covariance;
+    record.pose_covariance = o.pose_covariance;
     journal->append(record);
     progress.step(o.note);
   }

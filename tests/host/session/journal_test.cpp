@@ -189,6 +189,68 @@ TEST_CASE("journal: a journal without orientation or covariance") {
   CHECK(csv_of(resumed).rfind("q1,q2,q3,q4,q5,q6,x,y,z\n", 0) == 0);
 }
 
+TEST_CASE("journal: the full pose covariance (issue #26) round-trips into the dataset's 6x6 columns") {
+  TempDir dir("pose_covariance");
+  const std::string path = dir.file("pose.journal");
+  JournalIdentity id = identity();
+  id.pose_covariance = true;
+  // A pose record: the position block of a random positive definite 6x6 is the covariance.
+  auto pose_record = [](int pose) {
+    JournalRecord r = record_for(pose);
+    std::mt19937_64 rng(static_cast<std::uint64_t>(pose) + 99u);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    Eigen::Matrix<double, 6, 6> a;
+    for (int i = 0; i < 36; ++i) a.data()[i] = u(rng);
+    const Eigen::Matrix<double, 6, 1> scale(1e-4, 1e-4, 1e-4, 1e-3, 1e-3, 1e-3);  // m, rad
+    kincal::model::Matrix6 c =
+        scale.asDiagonal() * (a * a.transpose() + kincal::model::Matrix6::Identity()) * scale.asDiagonal();
+    c = ((c + c.transpose()) / 2).eval();
+    r.pose_covariance = c;
+    r.covariance_m2 = c.topLeftCorner<3, 3>();
+    return r;
+  };
+  std::string csv;
+  {
+    Journal journal = Journal::create(path, id);
+    journal.append(pose_record(1));
+    journal.append(pose_record(0));
+    JournalRecord bad = pose_record(2);
+    bad.covariance_m2->operator()(0, 0) *= 2;
+    CHECK_THROWS_WITH_AS(journal.append(bad),
+                         doctest::Contains("pose 2: the pose covariance's position block is not the covariance"),
+                         JournalError);
+    bad = pose_record(2);
+    bad.pose_covariance->operator()(5, 5) = -1e-6;
+    CHECK_THROWS_WITH_AS(journal.append(bad),
+                         doctest::Contains("pose 2: the pose covariance is not symmetric positive definite"),
+                         JournalError);
+    CHECK_THROWS_WITH_AS(journal.append(record_for(2)), doctest::Contains("pose 2: no pose covariance"), JournalError);
+    csv = csv_of(journal);
+  }
+  CHECK(read_file(path).find(" pose_covariance=1 ") != std::string::npos);
+  // A journal of positions only is another session's.
+  CHECK(error_of(path, identity()).find("pose covariance is on in the journal, off now") != std::string::npos);
+  const Journal resumed = Journal::resume(path, id);
+  REQUIRE(resumed.records().size() == 2);
+  for (int k = 0; k < 36; ++k)
+    CHECK(same_bits(resumed.records()[0].pose_covariance->data()[k], pose_record(1).pose_covariance->data()[k]));
+  CHECK(csv_of(resumed) == csv);
+  std::istringstream in(csv);
+  const kincal::model::Dataset back = kincal::model::parse_dataset(in, "csv");
+  CHECK(back.has_pose_covariance);
+  REQUIRE(back.rows.size() == 2);
+  for (int i = 0; i < 2; ++i) {
+    const kincal::model::Matrix6 expected = *pose_record(i).pose_covariance;
+    REQUIRE(back.rows[static_cast<std::size_t>(i)].pose_covariance.has_value());
+    CHECK((*back.rows[static_cast<std::size_t>(i)].pose_covariance - expected).norm() == 0.0);
+  }
+  // Without the orientation and the covariance there is no pose covariance.
+  JournalIdentity lone = identity(true, false);
+  lone.pose_covariance = true;
+  CHECK_THROWS_WITH_AS(Journal::create(dir.file("lone.journal"), lone),
+                       doctest::Contains("needs the orientation and the covariance"), JournalError);
+}
+
 TEST_CASE("journal: a torn last line is cut off with a note, and appending goes on") {
   TempDir dir("torn");
   const std::string path = dir.file("torn.journal");
