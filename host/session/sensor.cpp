@@ -16,18 +16,28 @@ namespace {
 
 std::string at_pose(int index) { return "pose " + std::to_string(index) + ": "; }
 
-// The report's pose covariance, translation block (square frame, m^2), made positive definite:
-// the correlations' rounding (measurement_report.hpp) can leave a nearly singular block slightly
-// indefinite, so eigenvalues below 1e-6 of the largest are raised to it.
-model::Matrix3 square_translation_covariance(const shared::MeasurementReport& report) {
+// The report's pose covariance in the dataset's convention and the strip frame (sensor.hpp), made
+// positive definite. The report's errors are the truth's on the reported pose (true = exp([delta]x)
+// reported, and t_true = t_reported + dt: firmware/app/platform_measurement.cpp), the dataset's the
+// measurement's on the truth: both signs flip, so the covariance, cross block included, is the
+// same. Both errors are in the square's frame, on the left: strip_R_square turns them into the
+// strip's. The correlations' rounding can leave a nearly singular covariance slightly indefinite:
+// the correlation matrix's eigenvalues below 1e-6 of its largest are raised to it (in
+// correlations, not in m and rad, whose scales differ by orders).
+model::Matrix6 strip_pose_covariance(const shared::MeasurementReport& report, const model::Matrix3& strip_R_square) {
   const std::array<double, 36> c = shared::pose_covariance(report);
-  model::Matrix3 block;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) block(i, j) = c[static_cast<std::size_t>(i * 6 + j)];
-  const Eigen::SelfAdjointEigenSolver<model::Matrix3> eigen(block);
-  const double floor = std::max(eigen.eigenvalues().maxCoeff(), 1e-18) * 1e-6;
-  const model::Vector3 values = eigen.eigenvalues().cwiseMax(floor);
-  return eigen.eigenvectors() * values.asDiagonal() * eigen.eigenvectors().transpose();
+  const model::Matrix6 square = Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(c.data());
+  const Eigen::Matrix<double, 6, 1> sigma = square.diagonal().cwiseSqrt();
+  const model::Matrix6 rho = sigma.cwiseInverse().asDiagonal() * square * sigma.cwiseInverse().asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<model::Matrix6> eigen(rho);
+  const double floor = eigen.eigenvalues().maxCoeff() * 1e-6;
+  const Eigen::Matrix<double, 6, 1> values = eigen.eigenvalues().cwiseMax(floor);
+  model::Matrix6 turn = model::Matrix6::Zero();
+  turn.topLeftCorner<3, 3>() = strip_R_square;
+  turn.bottomRightCorner<3, 3>() = strip_R_square;
+  const model::Matrix6 strip = turn * sigma.asDiagonal() * eigen.eigenvectors() * values.asDiagonal() *
+                               eigen.eigenvectors().transpose() * sigma.asDiagonal() * turn.transpose();
+  return (strip + strip.transpose()) / 2;  // exactly symmetric, as the journal checks
 }
 
 // Rotation vector (rad) to a rotation matrix.
@@ -94,9 +104,10 @@ Observation PlatformPoseSensor::measure(int index, const model::Transform& predi
   Observation o;
   o.position = strip_T_camera.translation;
   o.orientation = Eigen::Quaterniond(strip_T_camera.rotation);
-  const model::Matrix3& strip_R_square = strip_T_square_[static_cast<std::size_t>(square)].rotation;
-  const model::Matrix3 covariance = strip_R_square * square_translation_covariance(report) * strip_R_square.transpose();
-  o.covariance = 0.5 * (covariance + covariance.transpose());  // exactly symmetric, as the journal checks
+  const model::Matrix6 covariance =
+      strip_pose_covariance(report, strip_T_square_[static_cast<std::size_t>(square)].rotation);
+  o.pose_covariance = covariance;
+  o.covariance = model::Matrix3(covariance.topLeftCorner<3, 3>());
   o.sequence = report.sequence;
   o.timestamp_s = report.timestamp_us * 1e-6;
   // The report's square is the pose's reference; the platform may have used its neighbours too.

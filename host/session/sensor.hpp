@@ -14,8 +14,10 @@
 //                        the observation's note shows it). The observation is a full pose, with
 //                        the position's covariance from the report's (protocol 2.0: the platform's
 //                        fused pose covariance; its translation block turned into the strip
-//                        frame), so identification weights each row by it. The orientation's
-//                        covariance is in the report too, but the dataset has no columns for it.
+//                        frame), so identification weights each row by it, and the full 6x6
+//                        pose covariance (issue #26: position and rotation, in the dataset's
+//                        convention and the strip frame), which the journal and the dataset
+//                        carry.
 //   StereoBeaconSensor   Kapucu & Baysec's rig: stereo_sensor.hpp.
 //   BoardPoseSensor      a camera and a printed board: board_sensor.hpp.
 //
@@ -71,6 +73,7 @@ class PlatformPoseSensor : public Sensor {
   std::string name() const override { return "sensor platform over CAN"; }
   bool gives_orientation() const override { return true; }
   bool gives_covariance() const override { return true; }
+  bool gives_pose_covariance() const override { return true; }
 
   // The square k for which strip_T_square[k] * square_T_camera is nearest `predicted`.
   int measured_square(const model::Transform& square_T_camera, const model::Transform& predicted) const;
