@@ -129,6 +129,24 @@ void write_text(const std::string& path, const std::string& text) {
 
 void write_storage(cv::FileStorage& fs, const std::string& path) { write_text(path, fs.releaseAndGetString()); }
 
+// A covariance read from a file (square CV_64F) and the corner sigma stored with it.
+void check_covariance(const cv::Mat& covariance, double corner_sigma_px, const std::string& path,
+                      const std::string& key) {
+  bool valid = std::isfinite(corner_sigma_px) && corner_sigma_px >= 0;
+  for (int i = 0; i < covariance.rows; ++i) {
+    valid = valid && covariance.at<double>(i, i) >= 0;
+    for (int j = 0; j < covariance.cols; ++j) {
+      const double a = covariance.at<double>(i, j), b = covariance.at<double>(j, i);
+      valid = valid && std::isfinite(a) && std::abs(a - b) <= 1e-9 * (std::abs(a) + std::abs(b));
+    }
+  }
+  if (!valid) {
+    throw CalibrationError(path + ": key '" + key +
+                           "' is not a symmetric covariance with a non-negative diagonal, or corner_sigma_px is "
+                           "negative");
+  }
+}
+
 }  // namespace
 
 void save_camera(const std::string& path, const IntrinsicCalibration& c, const std::string& board_text) {
@@ -288,20 +306,8 @@ std::optional<IntrinsicsCovariance> load_camera_uncertainty(const std::string& p
     throw CalibrationError(path + ": key 'intrinsics_covariance_order' is '" + files::excerpt(order) + "', not '" +
                            kIntrinsicsOrder + "'");
   }
+  check_covariance(covariance, out.corner_sigma_px, path, "intrinsics_covariance");
   out.covariance = cv::Matx<double, 9, 9>(covariance);
-  bool valid = std::isfinite(out.corner_sigma_px) && out.corner_sigma_px >= 0;
-  for (int i = 0; i < 9; ++i) {
-    valid = valid && out.covariance(i, i) >= 0;
-    for (int j = 0; j < 9; ++j) {
-      const double a = out.covariance(i, j), b = out.covariance(j, i);
-      valid = valid && std::isfinite(a) && std::abs(a - b) <= 1e-9 * (std::abs(a) + std::abs(b));
-    }
-  }
-  if (!valid) {
-    throw CalibrationError(path +
-                           ": key 'intrinsics_covariance' is not a symmetric covariance with a non-negative diagonal, "
-                           "or corner_sigma_px is negative");
-  }
   return out;
 }
 
@@ -316,6 +322,11 @@ void save_stereo(const std::string& path, const StereoCalibration& c) {
   fs << "P1" << cv::Mat(c.projection_left) << "P2" << cv::Mat(c.projection_right);
   fs << "Q" << cv::Mat(c.disparity_to_depth);
   fs << "baseline_m" << c.baseline_m << "avg_reprojection_error" << c.rms_px;
+  if (c.pose_uncertainty && !c.pose_uncertainty->calibration_covariance.empty()) {
+    fs << "calibration_covariance" << c.pose_uncertainty->calibration_covariance;
+    fs << "calibration_covariance_order" << kStereoCalibrationOrder;
+    fs << "corner_sigma_px" << c.pose_uncertainty->corner_sigma_px;
+  }
   write_storage(fs, path);
 }
 
@@ -338,6 +349,21 @@ StereoCalibration load_stereo(const std::string& path) {
   c.disparity_to_depth = cv::Matx44d(read_matrix(fs, path, "Q", 4, 4));
   c.baseline_m = cv::norm(c.right_t_left_m);
   c.rms_px = read_number(fs, path, "avg_reprojection_error");
+  if (!fs["calibration_covariance"].empty()) {
+    StereoPoseCovariance u;
+    u.calibration_covariance = read_matrix(fs, path, "calibration_covariance", 24, 24);
+    const std::string order = fs["calibration_covariance_order"].isString()
+                                  ? static_cast<std::string>(fs["calibration_covariance_order"])
+                                  : "";
+    if (order != kStereoCalibrationOrder) {
+      throw CalibrationError(path + ": key 'calibration_covariance_order' is '" + files::excerpt(order) + "', not '" +
+                             kStereoCalibrationOrder + "'");
+    }
+    u.corner_sigma_px = read_number(fs, path, "corner_sigma_px");
+    check_covariance(u.calibration_covariance, u.corner_sigma_px, path, "calibration_covariance");
+    u.covariance = cv::Matx66d(u.calibration_covariance(cv::Rect(18, 18, 6, 6)));
+    c.pose_uncertainty = u;
+  }
   return c;
 }
 

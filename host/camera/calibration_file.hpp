@@ -15,7 +15,11 @@
 //              and projection_sigma_grid_y_px (1x12), the centres of a 16x12 division of the
 //              image; .nan where the model does not invert)
 //   stereo     as stereo_calib.cpp: M1 D1 M2 D2 R T E F R1 R2 P1 P2 Q, plus image_width,
-//              image_height, baseline_m, avg_reprojection_error
+//              image_height, baseline_m, avg_reprojection_error, and when the calibration has
+//              its uncertainty (both cameras' intrinsics covariances given) extra keys:
+//              calibration_covariance (24x24: both cameras' intrinsics and right_T_left, its
+//              order in calibration_covariance_order, host/camera/uncertainty.hpp) and
+//              corner_sigma_px (the stereo solve's)
 //   hand-eye   gripper_T_camera and base_T_target (4x4, metres), method (the refinement's start),
 //              reprojection_rms_before_px, reprojection_rms_after_px
 // Only the keys a loader needs are required; the rest are for people and other tools.
@@ -70,7 +74,10 @@ CameraModel load_camera(const std::string& path);
 std::optional<IntrinsicsCovariance> load_camera_uncertainty(const std::string& path);
 
 void save_stereo(const std::string& path, const StereoCalibration& calibration);
-// The cameras, R, T, E, F, the rectification and the RMS (per-pair reports are not stored).
+// The cameras, R, T, E, F, the rectification, the RMS and, when the file has it, the
+// uncertainty (pose_uncertainty; per-pair reports are not stored). Errors: as load_camera's, and
+// CalibrationError naming the key when calibration_covariance is not 24x24, symmetric with a
+// non-negative diagonal, or its order or corner_sigma_px is missing or another.
 StereoCalibration load_stereo(const std::string& path);
 
 void save_hand_eye(const std::string& path, const HandEyeCalibration& calibration);

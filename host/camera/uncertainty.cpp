@@ -242,6 +242,13 @@ StereoPoseCovariance stereo_pose_covariance(const CameraModel& left, const Camer
     intrinsics_covariance.bottomRightCorner<9, 9>() = r;
     const Matrix6x18 sensitivity = -inverse * cross;
     covariance += sensitivity * intrinsics_covariance * sensitivity.transpose();
+    covariance = 0.5 * (covariance + covariance.transpose());
+    Eigen::Matrix<double, 24, 24> joint;
+    joint.topLeftCorner<18, 18>() = intrinsics_covariance;
+    joint.bottomLeftCorner<6, 18>() = sensitivity * intrinsics_covariance;
+    joint.topRightCorner<18, 6>() = joint.bottomLeftCorner<6, 18>().transpose();
+    joint.bottomRightCorner<6, 6>() = covariance;
+    cv::eigen2cv(Eigen::MatrixXd(joint), out.calibration_covariance);
   }
   covariance = 0.5 * (covariance + covariance.transpose());
   cv::eigen2cv(covariance, out.covariance);

@@ -75,9 +75,17 @@ IntrinsicsCovariance intrinsics_covariance(const CameraModel& camera, const std:
 // uncertainty; the Jacobian hardly changes).
 // Errors (CalibrationError): fewer than 3 pairs, a pair whose lists differ in length, or J^T J
 // singular (the pairs do not determine the pose).
+// With the intrinsics' covariances given, calibration_covariance is the joint covariance of the
+// whole pair (24 x 24, order kStereoCalibrationOrder: the left camera's intrinsics, the right's,
+// then right_r_left and right_t_left): diag(cov_left, cov_right) for the intrinsics, G times it
+// for their cross block with the pose, and `covariance` for the pose. Triangulation needs all of
+// it: an intrinsics error and the pose error it causes partly cancel in a triangulated point.
+inline constexpr const char* kStereoCalibrationOrder =
+    "left fx fy cx cy k1 k2 p1 p2 k3, right fx fy cx cy k1 k2 p1 p2 k3, rx ry rz tx ty tz";
 struct StereoPoseCovariance {
   cv::Matx66d covariance = cv::Matx66d::zeros();  // right_r_left (rad), right_t_left (m)
   double corner_sigma_px = 0;
+  cv::Mat calibration_covariance;  // 24 x 24 CV_64F (see above), or empty without the intrinsics'
 };
 struct StereoView {
   const std::vector<cv::Point3f>* board_m;

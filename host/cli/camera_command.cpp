@@ -83,19 +83,33 @@ int run_stereo(const CameraArgs& a) {
     std::cout << "unpaired " << (u.side == capture::Side::kLeft ? "left" : "right") << " frame: " << u.origin << " ("
               << u.timestamp_s << " s)\n";
   }
+  // Each camera with its intrinsics' covariance: from its file (none in files without it) or
+  // calibrated here.
+  struct Camera {
+    camera::CameraModel model;
+    std::optional<camera::IntrinsicsCovariance> uncertainty;
+  };
   const auto camera_for = [&](const std::string& file, const std::vector<camera::BoardDetection>& views,
                               const char* side) {
-    if (!file.empty()) return camera::load_camera(file);
+    if (!file.empty()) return Camera{camera::load_camera(file), camera::load_camera_uncertainty(file)};
     const camera::IntrinsicCalibration c = camera::calibrate_intrinsics(views);
     std::cout << side << " camera: reprojection RMS " << c.rms_px << " px over " << c.views_used << " views\n";
     for (const std::string& w : c.warnings) std::cout << side << " camera warning: " << w << "\n";
-    return c.camera;
+    return Camera{c.camera, c.uncertainty};
   };
-  const camera::CameraModel left_camera = camera_for(a.left_camera, left, "left");
-  const camera::CameraModel right_camera = camera_for(a.right_camera, right, "right");
+  const Camera left_camera = camera_for(a.left_camera, left, "left");
+  const Camera right_camera = camera_for(a.right_camera, right, "right");
   camera::StereoOptions options;
   options.refine_intrinsics = a.refine_intrinsics;
-  const camera::StereoCalibration s = camera::calibrate_stereo(left, right, left_camera, right_camera, options);
+  if (left_camera.uncertainty && right_camera.uncertainty) {
+    options.left_intrinsics = &*left_camera.uncertainty;
+    options.right_intrinsics = &*right_camera.uncertainty;
+  } else if (!a.refine_intrinsics) {
+    std::cout << "no uncertainty: the " << (left_camera.uncertainty ? "right" : "left")
+              << " camera's file has no intrinsics_covariance\n";
+  }
+  const camera::StereoCalibration s =
+      camera::calibrate_stereo(left, right, left_camera.model, right_camera.model, options);
   std::cout << camera::describe(s);
   camera::save_stereo(a.out, s);
   std::cout << "wrote " << a.out << "\n";

@@ -44,6 +44,9 @@
 #include <random>
 #include <sstream>
 
+#include <Eigen/Core>
+#include <opencv2/core/eigen.hpp>
+
 #include "firmware/core/camera_model.hpp"
 #include "host/camera/board.hpp"
 #include "host/camera/calibration_file.hpp"
@@ -297,6 +300,11 @@ session::StereoSetup stereo_setup(const SessionArgs& a) {
   setup.left_size_px = c.left.image_size;
   setup.right_size_px = c.right.image_size;
   setup.pixel_sigma_px = a.pixel_sigma_px;
+  if (c.pose_uncertainty && !c.pose_uncertainty->calibration_covariance.empty()) {
+    session::CalibrationCovariance covariance;
+    cv::cv2eigen(c.pose_uncertainty->calibration_covariance, covariance);
+    setup.calibration_covariance = covariance;
+  }
   if (!a.colour_table.empty()) setup.colour = read_colour_table(a.colour_table);
   return setup;
 }

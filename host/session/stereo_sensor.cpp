@@ -8,6 +8,9 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+
 #include "host/vision/image_labeling.hpp"
 
 namespace kincal::session {
@@ -121,11 +124,90 @@ const char* to_text(core::StereoStatus s) {
   return "unknown status";
 }
 
+// The point triangulated by `pair`, in the left camera's frame; `what` prefixes the error.
+model::Vector3 triangulate(const core::StereoPair& pair, const core::Vector2<float>& l, const core::Vector2<float>& r,
+                           float sigma_px, const std::string& what) {
+  core::StereoPoint point;
+  const core::StereoStatus status = core::triangulate_pair(pair, l, r, sigma_px, point);
+  if (status != core::StereoStatus::ok) {
+    char text[96];
+    std::snprintf(text, sizeof text, " at left (%.2f, %.2f) px, right (%.2f, %.2f) px", static_cast<double>(l.x()),
+                  static_cast<double>(l.y()), static_cast<double>(r.x()), static_cast<double>(r.y()));
+    throw SessionError(what + to_text(status) + text);
+  }
+  return point.point_left_m.cast<double>();
+}
+
 }  // namespace
+
+CalibrationDirections calibration_directions(const CalibrationCovariance& covariance) {
+  if (!covariance.allFinite() || !covariance.isApprox(covariance.transpose(), 1e-9))
+    throw SessionError("stereo sensor: the calibration covariance is not a finite symmetric matrix");
+  const Eigen::SelfAdjointEigenSolver<CalibrationCovariance> eigen(covariance);
+  const double largest = eigen.eigenvalues().cwiseAbs().maxCoeff();
+  CalibrationDirections directions;
+  for (int k = 0; k < 24; ++k) {
+    const double lambda = eigen.eigenvalues()(k);
+    if (lambda < -1e-9 * largest)
+      throw SessionError("stereo sensor: the calibration covariance has a negative eigenvalue");
+    if (lambda > 1e-12 * largest) directions.push_back(std::sqrt(lambda) * eigen.eigenvectors().col(k));
+  }
+  return directions;
+}
+
+core::StereoPair perturbed(const core::StereoPair& pair, const Eigen::Matrix<double, 24, 1>& delta) {
+  core::StereoPair out = pair;
+  const auto move = [&](core::CameraIntrinsics& c, int at) {
+    float* values[9] = {&c.fx_px,         &c.fy_px,         &c.cx_px,         &c.cy_px,        &c.distortion.k1,
+                        &c.distortion.k2, &c.distortion.p1, &c.distortion.p2, &c.distortion.k3};
+    for (int i = 0; i < 9; ++i) *values[i] = static_cast<float>(static_cast<double>(*values[i]) + delta(at + i));
+  };
+  move(out.left, 0);
+  move(out.right, 9);
+  core::RigidTransform<double> left_T_right;
+  left_T_right.rotation = pair.left_T_right.rotation.cast<double>();
+  left_T_right.translation = pair.left_T_right.translation.cast<double>();
+  const core::RigidTransform<double> right_T_left = left_T_right.inverse();
+  const Eigen::AngleAxisd rotation(right_T_left.rotation);
+  const Eigen::Vector3d r = rotation.angle() * rotation.axis() + delta.segment<3>(18);
+  core::RigidTransform<double> moved;
+  moved.rotation =
+      r.norm() > 0 ? Eigen::AngleAxisd(r.norm(), r.normalized()).toRotationMatrix() : Eigen::Matrix3d::Identity();
+  moved.translation = right_T_left.translation + delta.segment<3>(21);
+  const core::RigidTransform<double> moved_left_T_right = moved.inverse();
+  out.left_T_right.rotation = moved_left_T_right.rotation.cast<float>();
+  out.left_T_right.translation = moved_left_T_right.translation.cast<float>();
+  return out;
+}
+
+model::Matrix3 triangulation_covariance(const core::StereoPair& pair, const core::Vector2<float>& left_px,
+                                        const core::Vector2<float>& right_px, double pixel_sigma_px,
+                                        const CalibrationDirections& calibration_directions, const std::string& what) {
+  const auto sigma = static_cast<float>(pixel_sigma_px);
+  // A quarter pixel is far above float rounding and well inside the linear range.
+  constexpr float kStep = 0.25f;
+  Eigen::Matrix<double, 3, 4> jacobian;
+  for (int k = 0; k < 4; ++k) {
+    core::Vector2<float> lp = left_px, lm = left_px, rp = right_px, rm = right_px;
+    (k < 2 ? lp : rp)(k % 2) += kStep;
+    (k < 2 ? lm : rm)(k % 2) -= kStep;
+    jacobian.col(k) =
+        (triangulate(pair, lp, rp, sigma, what) - triangulate(pair, lm, rm, sigma, what)) / (2.0 * double{kStep});
+  }
+  model::Matrix3 covariance = pixel_sigma_px * pixel_sigma_px * jacobian * jacobian.transpose();
+  for (const Eigen::Matrix<double, 24, 1>& d : calibration_directions) {
+    const model::Vector3 change = (triangulate(perturbed(pair, d), left_px, right_px, sigma, what) -
+                                   triangulate(perturbed(pair, -d), left_px, right_px, sigma, what)) /
+                                  2.0;
+    covariance += change * change.transpose();
+  }
+  return covariance;
+}
 
 StereoBeaconSensor::StereoBeaconSensor(std::function<StereoFrames(int)> grab, StereoSetup setup)
     : grab_(std::move(grab)), setup_(std::move(setup)) {
   if (!(setup_.pixel_sigma_px > 0)) throw SessionError("stereo sensor: the pixel sigma must be positive");
+  if (setup_.calibration_covariance) calibration_directions_ = calibration_directions(*setup_.calibration_covariance);
 }
 
 Observation StereoBeaconSensor::measure(int index, const model::Transform&) {
@@ -151,32 +233,15 @@ Observation StereoBeaconSensor::measure(int index, const model::Transform&) {
     throw SessionError(where(index, hidden) + text);
   }
 
-  const auto sigma = static_cast<float>(setup_.pixel_sigma_px);
-  auto triangulate = [&](const core::Vector2<float>& l, const core::Vector2<float>& r) {
-    core::StereoPoint point;
-    const core::StereoStatus status = core::triangulate_pair(pair, l, r, sigma, point);
-    if (status != core::StereoStatus::ok) {
-      char text[96];
-      std::snprintf(text, sizeof text, " at left (%.2f, %.2f) px, right (%.2f, %.2f) px", static_cast<double>(l.x()),
-                    static_cast<double>(l.y()), static_cast<double>(r.x()), static_cast<double>(r.y()));
-      throw SessionError("pose " + std::to_string(index) + ": stereo triangulation failed: " + to_text(status) + text);
-    }
-    return model::Vector3(setup_.device_T_left * model::Vector3(point.point_left_m.cast<double>()));
-  };
+  const std::string what = "pose " + std::to_string(index) + ": stereo triangulation failed: ";
+  const model::Matrix3 covariance =
+      triangulation_covariance(pair, left.px, right.px, setup_.pixel_sigma_px, calibration_directions_, what);
+  const model::Matrix3& rotation = setup_.device_T_left.rotation;
   Observation o;
-  o.position = triangulate(left.px, right.px);
-  // A quarter pixel is far above float rounding and well inside the linear range.
-  constexpr float kStep = 0.25f;
-  constexpr double kStepPx = kStep;
-  Eigen::Matrix<double, 3, 4> jacobian;
-  for (int k = 0; k < 4; ++k) {
-    core::Vector2<float> lp = left.px, lm = left.px, rp = right.px, rm = right.px;
-    (k < 2 ? lp : rp)(k % 2) += kStep;
-    (k < 2 ? lm : rm)(k % 2) -= kStep;
-    jacobian.col(k) = (triangulate(lp, rp) - triangulate(lm, rm)) / (2.0 * kStepPx);
-  }
-  const model::Matrix3 covariance = setup_.pixel_sigma_px * setup_.pixel_sigma_px * jacobian * jacobian.transpose();
-  o.covariance = (covariance + covariance.transpose()) / 2;  // exactly symmetric, as a covariance is
+  o.position =
+      setup_.device_T_left * triangulate(pair, left.px, right.px, static_cast<float>(setup_.pixel_sigma_px), what);
+  const model::Matrix3 in_device = rotation * covariance * rotation.transpose();
+  o.covariance = (in_device + in_device.transpose()) / 2;  // exactly symmetric, as a covariance is
   o.timestamp_s = frames.timestamp_s;
   char note[96];
   std::snprintf(note, sizeof note, "beacon at (%.2f, %.2f) / (%.2f, %.2f) px", static_cast<double>(left.px.x()),

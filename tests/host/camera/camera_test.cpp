@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -416,12 +417,33 @@ TEST_CASE("calibration files round-trip in OpenCV YAML and name bad keys") {
   for (const Eigen::Isometry3d& v : scenes::board_views(board, 6)) {
     right.push_back(projected(board, truth, scenes::left_T_right().inverse() * v, "r", rng));
   }
-  const StereoCalibration s = calibrate_stereo(detections, right, truth, truth);
+  StereoOptions with_uncertainty;
+  with_uncertainty.left_intrinsics = with_uncertainty.right_intrinsics = &c.uncertainty;
+  const StereoCalibration s = calibrate_stereo(detections, right, truth, truth, with_uncertainty);
   save_stereo(dir.file("stereo.yaml"), s);
   const StereoCalibration s2 = load_stereo(dir.file("stereo.yaml"));
   CHECK(s2.baseline_m == doctest::Approx(s.baseline_m).epsilon(1e-12));
   CHECK(cv::norm(cv::Mat(s2.projection_right), cv::Mat(s.projection_right)) < 1e-9);
   CHECK(s2.rms_px == doctest::Approx(s.rms_px));
+  // The calibration's covariance (both intrinsics and right_T_left) is read back, and OpenCV reads it too.
+  REQUIRE(s.pose_uncertainty.has_value());
+  REQUIRE(s2.pose_uncertainty.has_value());
+  const cv::Mat& joint = s.pose_uncertainty->calibration_covariance;
+  CHECK(cv::norm(s2.pose_uncertainty->calibration_covariance - joint) <= 1e-12 * cv::norm(joint));
+  CHECK(cv::norm(cv::Mat(s2.pose_uncertainty->covariance), cv::Mat(s.pose_uncertainty->covariance)) <=
+        1e-12 * cv::norm(cv::Mat(s.pose_uncertainty->covariance)));
+  CHECK(s2.pose_uncertainty->corner_sigma_px == doctest::Approx(s.pose_uncertainty->corner_sigma_px));
+  cv::Mat opencv_joint;
+  cv::FileStorage(dir.file("stereo.yaml"), cv::FileStorage::READ)["calibration_covariance"] >> opencv_joint;
+  CHECK(opencv_joint.size() == cv::Size(24, 24));
+  {
+    std::ifstream in(dir.file("stereo.yaml"));
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    text.replace(text.find("left fx"), 7, "left fy");
+    std::ofstream(dir.file("stereo_order.yaml")) << text;
+  }
+  CHECK(contains(error_of([&] { (void)load_stereo(dir.file("stereo_order.yaml")); }),
+                 "key 'calibration_covariance_order' is 'left fy"));
 
   HandEyeCalibration h;
   h.gripper_T_camera = scenes::gripper_T_camera();
