@@ -32,7 +32,7 @@ void add_demo_command(CLI::App& app, int& status) {
   auto* demo = app.add_subcommand(
       "demo",
       "Run the main job end to end: calibrate the simulated ARID platform rig and Kapucu & Baysec's rig, "
-      "with the real firmware in the loop, and write the report");
+      "with the real firmware in the loop, and a camera-and-board rig, and write the report");
   demo->add_option("-o,--output", options->output_dir, "folder for the report, journals and bus logs")
       ->capture_default_str();
   demo->add_option("--seed", options->seed, "seed of the hidden errors and the noise")->capture_default_str();

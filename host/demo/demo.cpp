@@ -180,23 +180,28 @@ struct RigRun {
 
 RigRun run_rig(RigKind kind, const DemoOptions& options, std::ostream& out) {
   const auto start = std::chrono::steady_clock::now();
-  const bool platform = kind == RigKind::platform;
-  const std::string name = platform ? "arid" : "kapucu";
+  const bool platform = kind == RigKind::platform, stereo = kind == RigKind::stereo;
+  const std::string name = platform ? "arid" : stereo ? "kapucu" : "board";
   const std::filesystem::path dir(options.output_dir);
-  const model::RobotModel file =
-      model::load_model(options.robots_dir + (platform ? "/arid_prrr.yaml" : "/stanford_rrp.yaml"));
+  const model::RobotModel file = model::load_model(options.robots_dir + (platform ? "/arid_prrr.yaml"
+                                                                         : stereo ? "/stanford_rrp.yaml"
+                                                                                  : "/ur5.yaml"));
   RigOptions rig_options;
   rig_options.seed = options.seed;
   rig_options.candump_log = platform ? (dir / (name + ".candump.log")).string() : std::string();
+  // The camera rig's home: a bent UR5 (elbow up, wrist turned toward the board), the camera
+  // on its flange.
+  if (kind == RigKind::camera) rig_options.home = {0.3, -1.3, 1.5, -1.4, 1.2, 0.4};
   const std::unique_ptr<SimulatedRig> rig = make_simulated_rig(kind, file, rig_options);
   out << "\n== " << rig->description() << "\n";
 
-  std::mt19937_64 rng(options.seed * 7919u + (platform ? 1u : 2u));
+  std::mt19937_64 rng(options.seed * 7919u + (platform ? 1u : stereo ? 2u : 3u));
   SessionPlan plan;
   const int validation = options.quick ? 12 : 30;
-  if (platform) {
-    // Random poses the camera can use: the strip covers a band of the arm's reach, so most
-    // poses of a planner's pool over the whole joint space would not see it.
+  if (!stereo) {
+    // Random poses the camera can use: the strip covers a band of the arm's reach (the board a
+    // patch seen from near home), so most poses of a planner's pool over the whole joint space
+    // would not see it.
     plan.calibration = rig->random_poses(options.quick ? 24 : 40, rng);
   } else {
     // Their home posture; each sweep as wide as the cameras' view allows (at most 40 % of the
@@ -212,7 +217,9 @@ RigRun run_rig(RigKind kind, const DemoOptions& options, std::ostream& out) {
   }
   plan.validation = rig->random_poses(validation, rng);
   out << "plan: " << plan.calibration.size() << " calibration poses ("
-      << (platform ? "random poses in view of the strip, full pose" : "single-joint sweeps, 10 readings per joint")
+      << (platform ? "random poses in view of the strip, full pose"
+          : stereo ? "single-joint sweeps, 10 readings per joint"
+                   : "random poses near home with the whole board in view, full pose with its 6x6 covariance")
       << "), " << plan.validation.size() << " validation poses\n";
 
   SessionOptions session;
@@ -224,7 +231,7 @@ RigRun run_rig(RigKind kind, const DemoOptions& options, std::ostream& out) {
   identify::IdentifyOptions identify_options;
   identify_options.method = identify::Method::full;
   std::optional<identify::CpaResult> cpa;
-  if (!platform) {
+  if (stereo) {
     identify::CpaOptions c;
     cpa = identify::circle_point_analysis(rig->nominal(), data.calibration, c);
     identify_options.start = identify::Start::cpa;
@@ -243,19 +250,21 @@ RigRun run_rig(RigKind kind, const DemoOptions& options, std::ostream& out) {
 
   RunDescription description;
   description.title = platform ? "Doty's ARID with its camera-and-ranger platform (simulated)"
-                               : "Kapucu & Baysec's stereo rig and Stanford-type arm (simulated)";
+                      : stereo ? "Kapucu & Baysec's stereo rig and Stanford-type arm (simulated)"
+                               : "A camera on the flange and a printed board: the everyday rig (simulated)";
   description.robot = file.name;
-  description.method = platform ? "full nonlinear least squares (Ceres) from the nominal model"
-                                : "circle-point analysis, then full nonlinear least squares from it";
+  description.method = stereo ? "circle-point analysis, then full nonlinear least squares from it"
+                              : "full nonlinear least squares (Ceres) from the nominal model";
   description.data = platform ? "the platform's poses over CAN (loopback bus, real firmware)"
-                              : "beacon centroids and stereo triangulation (firmware core)";
+                     : stereo ? "beacon centroids and stereo triangulation (firmware core)"
+                              : "board poses from rendered views (solvePnP and LM through the lens model)";
   description.simulated = true;
   run.section = report_run(description, rig->nominal(), data, calibration, rig->truth(), cpa ? &*cpa : nullptr);
 
   out << "identified (" << calibration.result.identifiability.identified.size() << " parameters, "
       << calibration.result.identifiability.held_fixed.size() << " held fixed), beside the truth:\n";
   print_parameters(out, run.section);
-  if (!platform) {
+  if (stereo) {
     const report::Comparison table = kapucu_table(identified, rig->truth());
     print_comparison(out, table);
     run.section.comparisons.push_back(table);
@@ -296,12 +305,12 @@ RigRun run_rig(RigKind kind, const DemoOptions& options, std::ostream& out) {
 
 DemoResult run_demo(const DemoOptions& options, std::ostream& out) {
   std::filesystem::create_directories(options.output_dir);
-  out << "kincal demo: the calibration loop on two simulated rigs, seed " << options.seed << "\n";
+  out << "kincal demo: the calibration loop on three simulated rigs, seed " << options.seed << "\n";
   report::Report report;
   report.title = "kincal demo";
   report.date = report::utc_date_now();
   DemoResult result;
-  for (const RigKind kind : {RigKind::platform, RigKind::stereo}) {
+  for (const RigKind kind : {RigKind::platform, RigKind::stereo, RigKind::camera}) {
     RigRun run = run_rig(kind, options, out);
     result.rigs.push_back(run.result);
     report.runs.push_back(std::move(run.section));

@@ -1,5 +1,6 @@
 // `kincal demo` (issue #6): the whole calibration loop on the two simulated rigs of the papers,
-// with the real firmware and protocol in the loop, and the report.
+// with the real firmware and protocol in the loop, and on the everyday rig of a camera and a
+// printed board (issue #26), and the report.
 //
 // Per rig (simulated_rig.hpp): plan the poses, run the session (journal in the output folder),
 // identify, compare with the hidden truth, and write one section of the HTML report.
@@ -13,6 +14,10 @@
 //   Kapucu    Kapucu & Baysec's stereo rig: their single-joint sweeps, 10 readings per joint +
 //             30 random validation poses (beacon in view); circle-point analysis, then the full
 //             identification started from it; the DH table beside their Table 1 and the truth.
+//   board     a camera on a UR5's flange and a printed 9 x 6 chessboard (0.3 m) fixed in the cell:
+//             40 random poses near home with the whole board in view + 30 validation poses, each
+//             view a full pose with its 6x6 covariance; full identification from the nominal
+//             model, the board's place (base) and the camera's (tool, hand-eye) with the arm.
 // Printed: the identified parameters beside the truth, before/after accuracy on the validation
 // poses, and the identified model's error against the true tool positions in units of the
 // measurement noise floor (the RMS distance of the measured positions from the true ones on the
@@ -33,7 +38,7 @@
 namespace kincal::session {
 
 struct DemoOptions {
-  std::string robots_dir;  // holds arid_prrr.yaml and stanford_rrp.yaml
+  std::string robots_dir;  // holds arid_prrr.yaml, stanford_rrp.yaml and ur5.yaml
   std::string output_dir = "kincal-demo";
   std::uint64_t seed = 1;
   bool quick = false;  // about half the poses (for tests)

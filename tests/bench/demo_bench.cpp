@@ -1,10 +1,10 @@
-// Issue #6: the demo's figures -- `kincal demo` run in full (both rigs, seed 1), as the README's
-// first command runs it, timed on this machine.
+// Issue #6: the demo's figures -- `kincal demo` run in full (its three rigs, seed 1), as the
+// README's first command runs it, timed on this machine.
 //   demo_validation_rms_over_noise_<rig>  the identified model's RMS error against the simulated
 //                                         robot's true tool positions on the validation poses,
 //                                         over the measurement noise floor (RMS of measured minus
 //                                         true positions on the same poses); goal <= 2
-//   demo_validation_rms_over_noise        the larger of the two
+//   demo_validation_rms_over_noise        the largest of them
 //   demo_correction_rms_mm                ARID: tool error at the platform's corrected targets
 //   demo_arid_identified_vs_truth_mm      ARID: the identified model vs the true tool positions on
 //                                         the validation poses, RMS; goal <= 0.15 mm (issue #13)
