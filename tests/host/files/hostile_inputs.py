@@ -638,6 +638,81 @@ case("plan:out=candidates", P + ["--candidates", "plan_candidates.csv", "-o", "p
      r"-o plan_candidates\.csv is the same file as --candidates", protect=plan_inputs)
 case("plan:Cartesian candidates", P + ["--candidates", "target_points.csv"], r"the candidates are Cartesian targets")
 
+# --- kincal board-poses (issue #26): views of the board with their joint readings (camera_images'
+# poses.csv is also a joints file: its q1 column), the joints table at every hostile class of the
+# table above, and recordings that go wrong: a view without the board, the board half out of view,
+# another board, rows and views that do not pair up
+def grey_png(path):
+    """The 8-bit grey pixels of a non-interlaced PNG (as OpenCV writes the views): width, height, rows."""
+    with open(path, "rb") as f:
+        data = f.read()
+    at, idat = 8, b""
+    while at < len(data):
+        n, kind = struct.unpack(">I4s", data[at:at + 8])
+        if kind == b"IHDR":
+            w, h = struct.unpack(">II", data[at + 8:at + 16])
+        elif kind == b"IDAT":
+            idat += data[at + 8:at + 8 + n]
+        at += 12 + n
+    raw, rows, prior = zlib.decompress(idat), [], bytearray(w)
+    for y in range(h):
+        kind, line = raw[y * (w + 1)], bytearray(raw[y * (w + 1) + 1:(y + 1) * (w + 1)])
+        for x in range(w):
+            a, b = line[x - 1] if x else 0, prior[x]
+            c = prior[x - 1] if x else 0
+            p = a + b - c
+            predictor = [0, a, b, (a + b) >> 1,
+                         a if abs(p - a) <= abs(p - b) and abs(p - a) <= abs(p - c) else b if abs(p - b) <= abs(p - c) else c][kind]
+            line[x] = (line[x] + predictor) & 0xFF
+        rows.append(line)
+        prior = line
+    return w, h, rows
+
+
+def write_grey_png(path, w, h, rows):
+    chunk = lambda t, d: struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d))
+    data = zlib.compress(b"".join(b"\0" + bytes(r) for r in rows), 9)
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 0, 0, 0, 0)) + chunk(b"IDAT", data) + chunk(b"IEND", b""))
+
+
+view_w, view_h, grey_rows = grey_png(os.path.join(bg, pngs[0]))
+write_grey_png("half_out.png", view_w, view_h,  # the right half past the image's edge
+               [r[:view_w // 2] + bytearray([r[view_w // 2]]) * (view_w - view_w // 2) for r in grey_rows])
+n_views = 4  # of the views, enough for a dataset and quick under ASan
+view_paths = [os.path.join(bg, p) for p in pngs[:n_views]]
+pose_q = [r.split(",")[0] for r in pose_rows[1:]]
+with open("bp_joints.csv", "w") as f:  # a joints row per view, then one for an extra view
+    f.write("q1\n" + "\n".join(pose_q[:n_views] + ["0.5"]) + "\n")
+with open("bp_joints_nan.csv", "w") as f:
+    f.write("q1\n" + "\n".join(pose_q[:3] + ["nan"] + pose_q[4:]) + "\n")
+with open("bp_joints2.csv", "w") as f:
+    f.write("q1\n0.1\n0.2\n")
+with open("bp_joints1.csv", "w") as f:
+    f.write("q1\n0.1\n")
+BP = ["board-poses"] + board + ["--camera", os.path.join(work, "cam.yaml"), "--mount", "hand"]
+readers += [("board-poses --joints", "dataset", "in.csv", os.path.join(camera_dir, "poses.csv"),
+             BP + ["--images", bg, "--joints", "{in}", "-o", "o.csv"], ["o.csv"], True)]
+bp_inputs = ["half_out.png", "bp_joints.csv", os.path.join(camera_dir, "poses.csv"), os.path.join(work, "cam.yaml")]
+case("board-poses:a view without the board", BP + ["--images"] + view_paths + [os.path.join(camera_dir, "blank.png"), "--joints",
+     "bp_joints.csv", "-o", "bp1.csv"], rf"blank\.png: refused: pattern not found\n.*wrote bp1\.csv \({n_views} of {n_views + 1} views\)",
+     rc_ok=True, protect=bp_inputs)
+case("board-poses:the board half out of view", BP + ["--images"] + view_paths + ["half_out.png", "--joints", "bp_joints.csv",
+     "-o", "bp2.csv"], rf"half_out\.png: refused: [^\n]+\n.*wrote bp2\.csv \({n_views} of {n_views + 1} views\)", rc_ok=True,
+     protect=bp_inputs)
+case("board-poses:only views without the board", BP + ["--images", os.path.join(camera_dir, "blank.png"), "half_out.png",
+     "--joints", "bp_joints2.csv", "-o", "bp3.csv"], r"blank\.png: refused: pattern not found\n.*no usable view of 2", protect=bp_inputs)
+case("board-poses:another board", ["board-poses", "--board", "chessboard:8x6:0.03", "--camera", os.path.join(work, "cam.yaml"),
+     "--mount", "hand", "--images", view_paths[0], "--joints", "bp_joints1.csv", "-o", "bp4.csv"],
+     r"view_00\.png: the board has 9x6 inner corners, not 8x6 .*give --board chessboard:9x6:0\.03", protect=bp_inputs)
+case("board-poses:more rows than views", BP + ["--images"] + view_paths + ["--joints", "bp_joints.csv", "-o", "bp5.csv"],
+     rf"bp_joints\.csv: {n_views + 1} joint rows but {n_views} images", protect=bp_inputs)
+case("board-poses:NaN joint", BP + ["--images", bg, "--joints", "bp_joints_nan.csv", "-o", "bp6.csv"],
+     r"bp_joints_nan\.csv:5", protect=bp_inputs)
+case("board-poses:out=joints", BP + ["--images"] + view_paths + ["--joints", "bp_joints.csv", "-o", "bp_joints.csv"],
+     r"-o bp_joints\.csv is the same file as --joints", protect=bp_inputs)
+
+
 table_cases()
 only = re.compile(os.environ.get("KINCAL_HOSTILE_ONLY", ""))  # a developer's filter of the table's cases by name
 with ThreadPoolExecutor(max_workers=int(os.environ.get("KINCAL_HOSTILE_JOBS", "3"))) as pool:
