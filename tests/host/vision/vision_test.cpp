@@ -114,13 +114,25 @@ TEST_CASE("automatic threshold: Otsu as OpenCV's THRESH_OTSU computes it") {
   }
 }
 
-TEST_CASE("colour classes: a table built from beacon samples finds the beacon, not the clutter") {
+namespace {
+
+// The crimson beacon (B, G, R = 40, 20, 200 at full light) lit by `light`.
+cv::Vec3b crimson(double light) {
+  return {static_cast<std::uint8_t>(40 * light), static_cast<std::uint8_t>(20 * light),
+          static_cast<std::uint8_t>(200 * light)};
+}
+
+// 200 samples of the beacon lit from 0.6 to 1.0.
+vision::ColourTableSamples crimson_samples() {
   vision::ColourTableSamples samples;
-  for (int i = 0; i < 200; ++i) {
-    const double light = 0.6 + 0.4 * i / 199.0;
-    samples.positive_bgr.emplace_back(static_cast<std::uint8_t>(40 * light), static_cast<std::uint8_t>(20 * light),
-                                      static_cast<std::uint8_t>(200 * light));
-  }
+  for (int i = 0; i < 200; ++i) samples.positive_bgr.push_back(crimson(0.6 + 0.4 * i / 199.0));
+  return samples;
+}
+
+}  // namespace
+
+TEST_CASE("colour classes: a table built from beacon samples finds the beacon, not the clutter") {
+  vision::ColourTableSamples samples = crimson_samples();
   samples.negative_bgr = {cv::Vec3b(90, 90, 90), cv::Vec3b(250, 250, 250), cv::Vec3b(30, 140, 240)};
   for (const auto space : {core::ColourSpace::kRgb565, core::ColourSpace::kYuv422}) {
     const core::ColourClassTable table = vision::build_colour_table(samples, space);
@@ -156,12 +168,7 @@ TEST_CASE("colour classes: lighting that changes across the beacon does not move
   // class's flat core, so its weights are equal and the centroid does not move; the score peaked
   // at the samples' mean colour (255 exp(-d^2 / 2), before issue #22's fix) pulled it toward the
   // side lit nearest that mean: 0.13 px in RGB565, 0.014 px in YUV422.
-  vision::ColourTableSamples samples;
-  for (int i = 0; i < 200; ++i) {
-    const double light = 0.6 + 0.4 * i / 199.0;
-    samples.positive_bgr.emplace_back(static_cast<std::uint8_t>(40 * light), static_cast<std::uint8_t>(20 * light),
-                                      static_cast<std::uint8_t>(200 * light));
-  }
+  vision::ColourTableSamples samples = crimson_samples();
   samples.negative_bgr = {cv::Vec3b(90, 90, 90)};
   // The disc with light slope `per_px` (0: evenly lit at 0.85).
   const auto centroid = [&](core::ColourSpace space, double per_px) {
@@ -169,10 +176,7 @@ TEST_CASE("colour classes: lighting that changes across the beacon does not move
     for (int y = 0; y < scene.rows; ++y)
       for (int x = 0; x < scene.cols; ++x)
         if (std::hypot(x - 60, y - 40) <= 8) {
-          const double light = 0.85 + per_px * (x - 60);
-          scene.at<cv::Vec3b>(y, x) =
-              cv::Vec3b(static_cast<std::uint8_t>(40 * light), static_cast<std::uint8_t>(20 * light),
-                        static_cast<std::uint8_t>(200 * light));
+          scene.at<cv::Vec3b>(y, x) = crimson(0.85 + per_px * (x - 60));
         }
     vision::LabelOptions options;
     options.colour = vision::build_colour_table(samples, space);
