@@ -133,7 +133,10 @@ vision::ColourTableSamples crimson_samples() {
 
 TEST_CASE("colour classes: a table built from beacon samples finds the beacon, not the clutter") {
   vision::ColourTableSamples samples = crimson_samples();
-  samples.negative_bgr = {cv::Vec3b(90, 90, 90), cv::Vec3b(250, 250, 250), cv::Vec3b(30, 140, 240)};
+  // emplace_back, not an initializer list of cv::Vec3b: GCC 12 -O3 warns maybe-uninitialized on that.
+  samples.negative_bgr.emplace_back(90, 90, 90);
+  samples.negative_bgr.emplace_back(250, 250, 250);
+  samples.negative_bgr.emplace_back(30, 140, 240);
   for (const auto space : {core::ColourSpace::kRgb565, core::ColourSpace::kYuv422}) {
     const core::ColourClassTable table = vision::build_colour_table(samples, space);
     cv::Mat scene(80, 120, CV_8UC3, cv::Scalar(90, 90, 90));
@@ -169,7 +172,7 @@ TEST_CASE("colour classes: lighting that changes across the beacon does not move
   // at the samples' mean colour (255 exp(-d^2 / 2), before issue #22's fix) pulled it toward the
   // side lit nearest that mean: 0.13 px in RGB565, 0.014 px in YUV422.
   vision::ColourTableSamples samples = crimson_samples();
-  samples.negative_bgr = {cv::Vec3b(90, 90, 90)};
+  samples.negative_bgr.emplace_back(90, 90, 90);
   // The disc with light slope `per_px` (0: evenly lit at 0.85).
   const auto centroid = [&](core::ColourSpace space, double per_px) {
     cv::Mat scene(80, 120, CV_8UC3, cv::Scalar(90, 90, 90));
