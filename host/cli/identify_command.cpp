@@ -130,9 +130,10 @@ std::string next_steps(const IdentifyArgs& a, const identify::IdentifyResult& re
 
 // --model-select: auto (cross-validation over the candidate models, model_selection.hpp, with
 // enough rows), off (every parameter the model names, the default priors), or a candidate's name.
-void choose_model(const IdentifyArgs& a, const model::RobotModel& nominal, const model::Dataset& data,
-                  identify::IdentifyOptions& options) {
-  if (a.model_select == "off") return;
+// Returns the model to identify from (the nominal, or the nominal with scales added).
+model::RobotModel choose_model(const IdentifyArgs& a, const model::RobotModel& nominal, const model::Dataset& data,
+                               identify::IdentifyOptions& options) {
+  if (a.model_select == "off") return nominal;
   std::string not_here;
   if (!a.params.empty()) not_here = "--params";
   if (a.no_prior) not_here = "--no-prior";
@@ -144,21 +145,23 @@ void choose_model(const IdentifyArgs& a, const model::RobotModel& nominal, const
           "--model-select " + a.model_select + ": not with " + not_here +
           " (the candidates are full solves from the nominal with their own parameters and priors)");
     std::cout << "model selection: off (" << not_here << " chooses the model)\n";
-    return;
+    return nominal;
   }
   if (a.model_select != "auto") {
-    options = identify::find_candidate(nominal, options, a.model_select).options;
+    const identify::Candidate chosen = identify::find_candidate(nominal, options, a.model_select);
+    options = chosen.options;
     std::cout << "model: " << a.model_select << " (--model-select)\n";
-    return;
+    return chosen.model;
   }
   if (static_cast<int>(data.rows.size()) < identify::kMinRowsForSelection) {
     std::cout << "model selection: off (" << data.rows.size() << " rows, fewer than " << identify::kMinRowsForSelection
               << " for cross-validation): every parameter the model names, the default priors\n";
-    return;
+    return nominal;
   }
   const identify::Selection selection = identify::select_model(nominal, data, options);
   std::cout << identify::format_selection(selection);
   options = selection.chosen.options;
+  return selection.chosen.model;
 }
 
 int run_identify(const IdentifyArgs& a) {
@@ -198,8 +201,8 @@ int run_identify(const IdentifyArgs& a) {
     }
     if (!a.accept_implausible)
       identify::require_plausible(nominal, data, "--accept-implausible", {.noise_given = a.sigma_m > 0});
-    choose_model(a, nominal, data, options);
-    identify::IdentifyResult result = identify::identify(nominal, data, options);
+    const model::RobotModel start = choose_model(a, nominal, data, options);
+    identify::IdentifyResult result = identify::identify(start, data, options);
     std::cout << "kincal identify: " << nominal.name << " from " << a.data << '\n' << identify::format_report(result);
     // The baseline: the nominal geometry registered to the device, its tool fitted.
     std::optional<identify::IdentifyResult> registered;
@@ -291,7 +294,8 @@ void add_identify_command(CLI::App& app, int& status) {
                   "auto (default, with at least 100 rows): the candidate model with the lowest mean of its 5-fold and "
                   "out-of-range cross-validated RMS (registration, joint-offsets, geometry-x2, geometry, "
                   "geometry-x0.5, geometry-noprior, geometry+nongeometric when the model has scales or "
-                  "compliances); off: every parameter, default priors; or a candidate's name");
+                  "compliances, geometry+scales when a joint has no scale); off: every parameter, default priors; or a "
+                  "candidate's name");
   cmd->add_flag("--no-prior", a->no_prior,
                 "no priors: plain least squares (the parameters the data see poorly may run off)");
   cmd->add_flag("--no-model-error", a->no_model_error,

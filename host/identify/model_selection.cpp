@@ -10,9 +10,9 @@ namespace kincal::identify {
 
 namespace {
 
-Candidate make(std::string name, std::string description, const IdentifyOptions& base, double strength,
-               const std::vector<std::string>& fixed) {
-  Candidate c{std::move(name), std::move(description), base};
+Candidate make(std::string name, std::string description, const RobotModel& model, const IdentifyOptions& base,
+               double strength, const std::vector<std::string>& fixed) {
+  Candidate c{std::move(name), std::move(description), model, base};
   c.options.prior.strength *= strength;
   c.options.fixed.insert(c.options.fixed.end(), fixed.begin(), fixed.end());
   return c;
@@ -33,10 +33,10 @@ model::Dataset subset(const model::Dataset& data, const std::vector<int>& rows) 
 
 // The candidate identified from `train`, its squared errors over `test`; false (why set) when
 // the candidate cannot be identified from those rows.
-bool predict(const RobotModel& nominal, const model::Dataset& data, const Candidate& c, const std::vector<int>& train,
+bool predict(const model::Dataset& data, const Candidate& c, const std::vector<int>& train,
              const std::vector<int>& test, double& sum2, int* parameters, std::string& why) {
   try {
-    const IdentifyResult r = identify(nominal, subset(data, train), c.options);
+    const IdentifyResult r = identify(c.model, subset(data, train), c.options);
     sum2 += squared_errors(r.model, data, test);
     if (parameters != nullptr) *parameters = static_cast<int>(r.identifiability.identified.size());
     return true;
@@ -67,15 +67,25 @@ std::vector<Candidate> candidate_models(const RobotModel& nominal, const Identif
   registration.insert(registration.end(), joint_map.begin(), joint_map.end());
   offsets.insert(offsets.end(), joint_map.begin(), joint_map.end());
   std::vector<Candidate> out{
-      make("registration", "base and tool only, the geometry nominal", base, 1.0, registration),
-      make("joint-offsets", "base, tool and each joint's zero offset", base, 1.0, offsets),
-      make("geometry-x2", "every geometric parameter, priors twice as strong", base, 2.0, joint_map),
-      make("geometry", "every geometric parameter, the default priors", base, 1.0, joint_map),
-      make("geometry-x0.5", "every geometric parameter, priors half as strong", base, 0.5, joint_map),
-      make("geometry-noprior", "every geometric parameter, no priors", base, 0.0, joint_map)};
+      make("registration", "base and tool only, the geometry nominal", nominal, base, 1.0, registration),
+      make("joint-offsets", "base, tool and each joint's zero offset", nominal, base, 1.0, offsets),
+      make("geometry-x2", "every geometric parameter, priors twice as strong", nominal, base, 2.0, joint_map),
+      make("geometry", "every geometric parameter, the default priors", nominal, base, 1.0, joint_map),
+      make("geometry-x0.5", "every geometric parameter, priors half as strong", nominal, base, 0.5, joint_map),
+      make("geometry-noprior", "every geometric parameter, no priors", nominal, base, 0.0, joint_map)};
   if (!joint_map.empty())
+    out.push_back(make("geometry+nongeometric", "every parameter with the model file's scales and compliances", nominal,
+                       base, 1.0, {}));
+  RobotModel with_scales = nominal;
+  bool added = false;
+  for (model::Joint& j : with_scales.joints)
+    if (!j.scale) {
+      j.scale = 1.0;
+      added = true;
+    }
+  if (added)
     out.push_back(
-        make("geometry+nongeometric", "every parameter with the model file's scales and compliances", base, 1.0, {}));
+        make("geometry+scales", "every parameter and a scale for each joint's reading", with_scales, base, 1.0, {}));
   return out;
 }
 
@@ -131,13 +141,13 @@ Selection select_model(const RobotModel& nominal, const model::Dataset& data, co
     for (int k = 0; k < options.folds && ok; ++k) {
       std::vector<int> train, test;
       for (int i = 0; i < n; ++i) (i % options.folds == k ? test : train).push_back(order[static_cast<std::size_t>(i)]);
-      ok = predict(nominal, data, candidates[c], train, test, sum2, k == 0 ? &score.parameters : nullptr, score.why);
+      ok = predict(data, candidates[c], train, test, sum2, k == 0 ? &score.parameters : nullptr, score.why);
     }
     if (ok) score.kfold_rms_m = std::sqrt(sum2 / n);
     double out2 = 0.0;
     std::string why;
     if (ok && !range.inside.empty() && !range.outside.empty() &&
-        predict(nominal, data, candidates[c], range.inside, range.outside, out2, nullptr, why))
+        predict(data, candidates[c], range.inside, range.outside, out2, nullptr, why))
       score.out_of_range_rms_m = std::sqrt(out2 / static_cast<double>(range.outside.size()));
     else if (ok && !range.inside.empty() && !range.outside.empty())
       score.why = "out-of-range fold: " + why;

@@ -91,14 +91,14 @@ void figure(const std::string& name, double value, const char* unit) {
 
 // identify's default (kincal identify): the model chosen by cross-validation with enough rows,
 // every parameter with the default priors below that.
-identify::IdentifyOptions chosen(const model::RobotModel& nominal, const model::Dataset& train, const char* label) {
-  if (static_cast<int>(train.rows.size()) < identify::kMinRowsForSelection) return {};
+identify::Candidate chosen(const model::RobotModel& nominal, const model::Dataset& train, const char* label) {
+  if (static_cast<int>(train.rows.size()) < identify::kMinRowsForSelection) return {"", "", nominal, {}};
   const auto start = std::chrono::steady_clock::now();
   const identify::Selection s = identify::select_model(nominal, train, {});
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf("%s (%zu rows): %s", label, train.rows.size(), identify::format_selection(s).c_str());
   figure(std::string("realdata_ur10_selection_seconds_") + label, seconds, "s");
-  return s.chosen.options;
+  return s.chosen;
 }
 
 // The flange's orientation in the device frame: the tool pose less the flange-to-tool turn.
@@ -134,11 +134,12 @@ int main() {
     const std::vector<int> rows(split.train_order.begin(), split.train_order.begin() + n);
     const model::Dataset train = realdata::subset(all, rows);
     const std::string suffix = "_n" + std::to_string(n);
-    identify::IdentifyOptions o = chosen(nominal, train, ("n" + std::to_string(n)).c_str());
-    const Outcome cov = run(nominal, train, held_out, o);
-    const Outcome nocov = run(nominal, without_covariance(train), held_out, o);
+    identify::Candidate c = chosen(nominal, train, ("n" + std::to_string(n)).c_str());
+    identify::IdentifyOptions& o = c.options;
+    const Outcome cov = run(c.model, train, held_out, o);
+    const Outcome nocov = run(c.model, without_covariance(train), held_out, o);
     o.robust = false;
-    const Outcome norej = run(nominal, train, held_out, o);
+    const Outcome norej = run(c.model, train, held_out, o);
     const double ratio = cov.rms_m / nocov.rms_m, rejection_ratio = cov.rms_m / norej.rms_m;
     worst_ratio = std::max(worst_ratio, ratio);
     worst_rejection_ratio = std::max(worst_rejection_ratio, rejection_ratio);
@@ -159,8 +160,9 @@ int main() {
       model::Dataset points = train;
       points.has_orientation = false;
       for (model::Measurement& m : points.rows) m.orientation.reset();
-      const identify::IdentifyOptions p = chosen(nominal, points, "positions_only_n300");
-      figure("realdata_ur10_positions_only_heldout_rms_mm_n300", run(nominal, points, held_out, p).rms_m * 1e3, "mm");
+      const identify::Candidate p = chosen(nominal, points, "positions_only_n300");
+      figure("realdata_ur10_positions_only_heldout_rms_mm_n300", run(p.model, points, held_out, p.options).rms_m * 1e3,
+             "mm");
       identify::IdentifyOptions r;
       r.requested = {"base", "tool"};
       figure("realdata_ur10_nominal_registered_rms_mm", run(nominal, train, held_out, r).rms_m * 1e3, "mm");
@@ -175,7 +177,8 @@ int main() {
     const identify::RowSplit central = identify::out_of_range_split(all, 0.7);
     const model::Dataset inside = realdata::subset(all, central.inside);
     const model::Dataset outside = realdata::subset(all, central.outside);
-    const Outcome now = run(nominal, inside, outside, chosen(nominal, inside, "extrapolation"));
+    const identify::Candidate c = chosen(nominal, inside, "extrapolation");
+    const Outcome now = run(c.model, inside, outside, c.options);
     const Outcome before = run(nominal, inside, outside, {});  // the default before model selection
     const Outcome old = run(nominal, inside, outside, old_default);
     figure("realdata_ur10_extrapolation_train_rows", static_cast<double>(inside.rows.size()), "rows");
@@ -186,9 +189,9 @@ int main() {
     figure("realdata_ur10_extrapolation_coverage_95", now.coverage, "fraction");
     figure("realdata_ur10_extrapolation_default_before_coverage_95", before.coverage, "fraction");
     // Every candidate on this split, for orientation (the choice above sees the training rows only).
-    for (const identify::Candidate& c : identify::candidate_models(nominal, {}))
-      figure("realdata_ur10_extrapolation_rms_mm_" + c.name, run(nominal, inside, outside, c.options).rms_m * 1e3,
-             "mm");
+    for (const identify::Candidate& each : identify::candidate_models(nominal, {}))
+      figure("realdata_ur10_extrapolation_rms_mm_" + each.name,
+             run(each.model, inside, outside, each.options).rms_m * 1e3, "mm");
     // The worked example's two routes on the same 300 rows.
     const model::RobotModel urdf =
         model::load_model(KINCAL_ROBOTS_DIR "/ur10.urdf", model::UrdfChainEnds{"", "tracker_probe"});

@@ -180,7 +180,7 @@ TEST_CASE("model selection: the out-of-range split, the candidates, and the choi
   const RobotModel ur10 = robot("ur10.yaml");
   std::string names;
   for (const identify::Candidate& c : identify::candidate_models(ur10, {})) names += c.name + " ";
-  CHECK(names == "registration joint-offsets geometry-x2 geometry geometry-x0.5 geometry-noprior ");
+  CHECK(names == "registration joint-offsets geometry-x2 geometry geometry-x0.5 geometry-noprior geometry+scales ");
   CHECK(identify::find_candidate(ur10, {}, "geometry-x2").options.prior.strength == 2.0);
   std::string error;
   try {
@@ -196,9 +196,10 @@ TEST_CASE("model selection: the out-of-range split, the candidates, and the choi
   const model::Dataset train =
       realdata::subset(all, std::vector<int>(split.train_order.begin(), split.train_order.begin() + 100));
   const identify::Selection selection = identify::select_model(ur10, train, {});
-  REQUIRE(selection.scores.size() == 6);
+  REQUIRE(selection.scores.size() == 7);
   CHECK(selection.scores[0].parameters == 12);  // base and tool
   CHECK(selection.scores[1].parameters == 16);  // and four joint offsets (theta1, theta6 go to base, tool)
+  CHECK(selection.scores[6].parameters == selection.scores[3].parameters + 6);  // and six scales
   // The nominal geometry leaves about 1.1 mm; every geometric candidate about half that.
   CHECK(selection.scores[0].kfold_rms_m > 1.5 * selection.scores[3].kfold_rms_m);
   CHECK(selection.chosen.name.starts_with("geometry"));
