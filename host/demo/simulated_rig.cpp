@@ -77,6 +77,19 @@ class SimulatedDriver : public RobotDriver {
   std::function<void(int, const std::vector<double>&)> moved_;
 };
 
+// A rig whose sensor is on the host (no platform on a bus): the simulated driver and the sensor.
+class HostSensorRig : public SimulatedRig {
+ public:
+  RobotDriver& driver() override { return *driver_; }
+  Sensor& sensor() override { return *sensor_; }
+  can::PlatformClient* platform() override { return nullptr; }
+  bool fd() const override { return false; }
+
+ protected:
+  std::unique_ptr<Sensor> sensor_;
+  std::unique_ptr<SimulatedDriver> driver_;
+};
+
 // ---- Doty's ARID with the sensor platform ----------------------------------------------------
 
 constexpr double kStandOffM = 0.3;    // camera to strip at the rail's nearest reading
@@ -209,7 +222,7 @@ class PlatformRig : public SimulatedRig {
 // beacon (tests/host/session: the spread of the centroid over noise seeds).
 constexpr double kBeaconCentroidSigmaPx = 0.05;
 
-class StereoRig : public SimulatedRig {
+class StereoRig : public HostSensorRig {
  public:
   StereoRig(const model::RobotModel& file, const RigOptions& options)
       : options_(options), robot_(file, options.seed, {}, sim::typical_imperfections(sim::reach_m(file))) {
@@ -232,10 +245,6 @@ class StereoRig : public SimulatedRig {
 
   const model::RobotModel& nominal() const override { return robot_.nominal(); }
   const model::RobotModel& truth() const override { return robot_.truth(); }
-  RobotDriver& driver() override { return *driver_; }
-  Sensor& sensor() override { return *sensor_; }
-  can::PlatformClient* platform() override { return nullptr; }
-  bool fd() const override { return false; }
   std::string description() const override {
     return "Kapucu & Baysec's rig (" + robot_.nominal().name +
            "): a beacon on the tool, a parallel stereo pair 4.54 m away, baseline 12.6 cm";
@@ -278,8 +287,6 @@ class StereoRig : public SimulatedRig {
   sim::StereoRigSpec spec_;
   sim::BeaconSpec beacon_;
   StereoFrames frames_;
-  std::unique_ptr<StereoBeaconSensor> sensor_;
-  std::unique_ptr<SimulatedDriver> driver_;
 };
 
 // ---- A camera and a printed board -----------------------------------------------------------
@@ -337,7 +344,7 @@ sim::BoardRig place_board_rig(const model::RobotModel& arm, const camera::Board&
   }
 }
 
-class CameraRig : public SimulatedRig {
+class CameraRig : public HostSensorRig {
  public:
   CameraRig(const model::RobotModel& file, const RigOptions& options)
       : options_(options),
@@ -356,10 +363,6 @@ class CameraRig : public SimulatedRig {
 
   const model::RobotModel& nominal() const override { return rig_.nominal; }
   const model::RobotModel& truth() const override { return robot_.truth(); }
-  RobotDriver& driver() override { return *driver_; }
-  Sensor& sensor() override { return *sensor_; }
-  can::PlatformClient* platform() override { return nullptr; }
-  bool fd() const override { return false; }
   std::string description() const override {
     return std::string("a camera and a printed board (") + rig_.nominal.name + "): a VGA camera " +
            (options_.camera_on_hand ? "on the flange, the board fixed in the cell"
@@ -406,8 +409,6 @@ class CameraRig : public SimulatedRig {
   sim::BoardRig rig_;
   sim::SimulatedRobot robot_;
   BoardFrame frame_;
-  std::unique_ptr<BoardPoseSensor> sensor_;
-  std::unique_ptr<SimulatedDriver> driver_;
 };
 
 }  // namespace
