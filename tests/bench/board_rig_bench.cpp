@@ -20,8 +20,8 @@
 //   board_rig_prediction_rms_over_crlb_hand     held-out tool position RMS (calibrated model
 //   board_rig_prediction_rms_over_crlb_world    against the truth) over the bound's RMS,
 //       sqrt(mean_k trace(J_k F^-1 J_k^T)), F = sum_i J_i^T V_i^-1 J_i over the training views
-//       (J: parameter_jacobian of identify's identified parameters at its start model; V_i the
-//       view's 6x6 as written in the dataset) (target <= 1.15)
+//       (J: the Jacobian of identify's identified parameters at its start model; V_i the view's 6x6
+//       as written in the dataset; simulation::prediction_bound) (target <= 1.15)
 //   board_rig_prediction_rms_over_crlb_hand_least_squares / _world_least_squares  the same with
 //       identify's priors off (--no-prior): the bound is the data's alone, which a prior adds to
 //   board_rig_held_out_rms_hand / _world        the held-out RMS itself (mm)
@@ -42,6 +42,7 @@
 #include "host/sim/robot.hpp"
 #include "tests/host/camera/board_rig_scene.hpp"
 #include "tests/host/camera/camera_scenes.hpp"
+#include "tests/host/identify/simulation.hpp"
 
 using namespace kincal;
 
@@ -139,18 +140,9 @@ void run(sim::BoardMount mount, std::uint64_t seed, PoseStats& poses, MountResul
 
   // The bound: Fisher information of the identified parameters from the views' covariances.
   const std::vector<core::ParameterId>& ids = fit.identifiability.identified;
-  const int n = static_cast<int>(ids.size());
-  Eigen::MatrixXd information = Eigen::MatrixXd::Zero(n, n);
-  for (const model::Measurement& m : data.rows) {
-    const Eigen::MatrixXd j = model::parameter_jacobian(fit.start, m.q, ids);
-    information += j.transpose() * m.pose_covariance->ldlt().solve(j);
-  }
-  const Eigen::MatrixXd inverse = information.ldlt().solve(Eigen::MatrixXd::Identity(n, n));
-  double bound = 0;
-  for (const model::Measurement& m : held_out.rows) {
-    const Eigen::MatrixXd j = model::parameter_jacobian(fit.start, m.q, ids).topRows(3);
-    bound += (j * inverse * j.transpose()).trace();
-  }
+  const std::vector<std::vector<double>> held_out_q(plan.begin() + kTraining, plan.end());
+  const double bound =
+      simulation::prediction_bound(fit.start, ids, data, identify::make_weights(data, 1.0, 1.0), held_out_q);
   identify::IdentifyOptions tracker_options;
   const identify::IdentifyResult tracker_fit = identify::identify(rig.nominal, tracker, tracker_options);
   const identify::AccuracyStats t = identify::accuracy(tracker_fit.model, held_out);

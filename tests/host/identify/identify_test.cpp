@@ -396,19 +396,9 @@ TEST_CASE("pose rows with a full 6x6 covariance: whitened by it, and identified 
   // Held out against the truth, over the bound from the same covariances.
   const auto held_out = sim::random_configurations(nominal, 50, rng);
   const identify::IdentifyResult full = identify::identify(nominal, d, {});
-  const std::vector<core::ParameterId>& ids = full.identifiability.identified;
-  const auto n = static_cast<Eigen::Index>(ids.size());
-  Eigen::MatrixXd information = Eigen::MatrixXd::Zero(n, n);
-  for (const model::Measurement& m : d.rows) {
-    const Eigen::MatrixXd j = model::parameter_jacobian(full.start, m.q, ids);
-    information += j.transpose() * m.pose_covariance->ldlt().solve(j);
-  }
-  const Eigen::MatrixXd inverse = information.ldlt().solve(Eigen::MatrixXd::Identity(n, n));
-  double bound2 = 0.0;
-  for (const auto& q : held_out) {
-    const Eigen::MatrixXd j = model::parameter_jacobian(full.start, q, ids).topRows(3);
-    bound2 += (j * inverse * j.transpose()).trace() / static_cast<double>(held_out.size());
-  }
+  const double bound2 = simulation::prediction_bound(full.start, full.identifiability.identified, d,
+                                                     identify::make_weights(d, 1.0, 1.0), held_out) /
+                        static_cast<double>(held_out.size());
   const double full_rms = simulation::prediction_rms(full.model, truth, held_out);
   CHECK(full_rms < 1.5 * std::sqrt(bound2));
   CHECK(full.chi_square_per_dof == doctest::Approx(1.0).epsilon(0.25));
