@@ -17,28 +17,16 @@ board of another size, a view missing (the counts differ). Each must fail with e
 a message naming the pose and the frame's origin (or the counts).
 Exit status 0 on success, 1 with a message saying what went wrong."""
 import csv
-import math
 import os
 import re
 import shutil
-import subprocess
 import sys
 
-
-def run(args, expect_ok=True):
-    p = subprocess.run(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    if expect_ok and p.returncode != 0:
-        print("failed:", " ".join(args), "\n", p.stdout, p.stderr)
-        sys.exit(1)
-    return p
+from session_checks import check_refused, rms_mm, run, verdict
 
 
 def positions(rows):
     return [(float(r["x"]), float(r["y"]), float(r["z"])) for r in rows]
-
-
-def rms_mm(a, b):
-    return 1e3 * math.sqrt(sum((p - q) ** 2 for u, v in zip(a, b) for p, q in zip(u, v)) / len(a))
 
 
 def session_args(kincal, d, views, extra=()):
@@ -101,13 +89,8 @@ def main(kincal, make_views, work):
         if extra:
             args[args.index("chessboard:9x6:0.03")] = extra[1]
         p = run(args, expect_ok=False)
-        message = [l for l in p.stderr.splitlines() if l.startswith("kincal session:")]
-        print(f"{name}: exit {p.returncode}: {message[0] if message else p.stderr}")
-        if p.returncode != 1 or not all(e in p.stderr for e in expected):
-            failures.append(f"{name}: expected exit 1 and {expected} in:\n{p.stderr}")
-    for f in failures:
-        print("FAILED:", f)
-    return 1 if failures else 0
+        check_refused(name, p, expected, failures)
+    return verdict(failures)
 
 
 if __name__ == "__main__":

@@ -14,11 +14,11 @@ left, mostly hidden in the right, a right frame missing (the counts differ). Eac
 with exit status 1 and a message naming the pose and the camera (or the counts).
 Exit status 0 on success, 1 with a message saying what went wrong."""
 import csv
-import math
 import os
 import shutil
-import subprocess
 import sys
+
+from session_checks import check_refused, rms_mm, run, verdict
 
 HOSTILE_POSE = 2
 # The identified model must predict the held-out points this much nearer the truth than the
@@ -27,22 +27,10 @@ HOSTILE_POSE = 2
 MIN_IMPROVEMENT = 2.0
 
 
-def run(args, expect_ok=True):
-    p = subprocess.run(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    if expect_ok and p.returncode != 0:
-        print("failed:", " ".join(args), "\n", p.stdout, p.stderr)
-        sys.exit(1)
-    return p
-
-
 def predict(kincal, model, joints):
     out = run([kincal, "predict", "--model", model, "--joints", joints]).stdout.splitlines()
     rows = list(csv.DictReader(out))
     return [(float(r["x"]), float(r["y"]), float(r["z"])) for r in rows]
-
-
-def rms_mm(a, b):
-    return 1e3 * math.sqrt(sum((p - q) ** 2 for u, v in zip(a, b) for p, q in zip(u, v)) / len(a))
 
 
 def session_args(kincal, d, extra=()):
@@ -85,13 +73,8 @@ def main(kincal, render, model, work):
         shutil.copytree(good, d, ignore=shutil.ignore_patterns("*.journal", "identified.yaml"))
         run(render_args + ["--out", d, "--only", str(HOSTILE_POSE)] + flag + [str(HOSTILE_POSE)])
         p = run(session_args(kincal, d), expect_ok=False)
-        message = [l for l in p.stderr.splitlines() if l.startswith("kincal session:")]
-        print(f"{name}: exit {p.returncode}: {message[0] if message else p.stderr}")
-        if p.returncode != 1 or not all(e in p.stderr for e in expected):
-            failures.append(f"{name}: expected exit 1 and {expected} in:\n{p.stderr}")
-    for f in failures:
-        print("FAILED:", f)
-    return 1 if failures else 0
+        check_refused(name, p, expected, failures)
+    return verdict(failures)
 
 
 if __name__ == "__main__":
