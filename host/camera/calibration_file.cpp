@@ -377,6 +377,16 @@ void save_hand_eye(const std::string& path, const HandEyeCalibration& c) {
   write_storage(fs, path);
 }
 
+std::string rig_hand_eye_text(bool camera_on_flange, const Eigen::Isometry3d& flange_T_tool,
+                              const Eigen::Isometry3d& frame0_T_device) {
+  cv::FileStorage fs(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+  fs << (camera_on_flange ? "gripper_T_camera" : "gripper_T_target") << matrix_of(flange_T_tool);
+  fs << (camera_on_flange ? "base_T_target" : "base_T_camera") << matrix_of(frame0_T_device);
+  fs << "method"
+     << "identify: the kinematics, the device's place and the hand-eye in one solve";
+  return fs.releaseAndGetString();
+}
+
 HandEyeCalibration load_hand_eye(const std::string& path) {
   cv::FileStorage fs = open_for_reading(path, read_camera_text(path));
   HandEyeCalibration c;

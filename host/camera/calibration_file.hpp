@@ -84,6 +84,16 @@ void save_hand_eye(const std::string& path, const HandEyeCalibration& calibratio
 // gripper_T_camera, base_T_target, the method and the RMS before and after.
 HandEyeCalibration load_hand_eye(const std::string& path);
 
+// The hand-eye found together with the kinematics (issue #26: `identify --hand-eye`): a
+// calibrated model's tool and device registration in the keys `camera hand-eye` writes, so that
+// the two can be compared. Mount hand (the camera on the flange, the board the measuring device):
+// gripper_T_camera = flange_T_tool and base_T_target = frame0_T_device; mount world (the board
+// on the flange, the camera the device): gripper_T_target and base_T_camera. "gripper" is the
+// model's flange, "base" its frame 0; an identification has no reprojection RMS to write. The
+// file's text (OpenCV YAML), for the caller to write with its other outputs.
+std::string rig_hand_eye_text(bool camera_on_flange, const Eigen::Isometry3d& flange_T_tool,
+                              const Eigen::Isometry3d& frame0_T_device);
+
 shared::CameraIntrinsics to_platform(const CameraModel& camera);
 CameraModel from_platform(const shared::CameraIntrinsics& intrinsics);
 

@@ -7,6 +7,7 @@
 #include <optional>
 #include <sstream>
 
+#include "host/camera/calibration_file.hpp"
 #include "host/cli/model_option.hpp"
 #include "host/cli/number_options.hpp"
 #include "host/cli/urdf_command.hpp"
@@ -17,6 +18,7 @@
 #include "host/identify/model_selection.hpp"
 #include "host/identify/plausibility.hpp"
 #include "host/model/dataset.hpp"
+#include "host/model/isometry.hpp"
 #include "host/model/model_file.hpp"
 #include "host/model/ur_kinematics.hpp"
 #include "host/model/urdf.hpp"
@@ -27,7 +29,8 @@ namespace {
 
 struct IdentifyArgs {
   ModelOption model;
-  std::string data, out, method = "full", start = "nominal", validate, urdf, model_select = "auto";
+  std::string data, out, method = "full", start = "nominal", validate, urdf, model_select = "auto", hand_eye,
+                         mount = "hand";
   std::vector<std::string> fix, params, prior;
   double sigma_m = 0.0, orientation_sigma_deg = 0.0, outlier_probability = 1e-3, max_rejected_fraction = 0.05;
   bool no_robust = false, no_model_error = false, accept_implausible = false, no_prior = false;
@@ -179,7 +182,7 @@ int run_identify(const IdentifyArgs& a) {
   options.max_rejected_fraction = a.max_rejected_fraction;
   options.model_error = !a.no_model_error;
   try {
-    files::refuse_overwriting({{"--out", a.out}, {"--urdf", a.urdf}},
+    files::refuse_overwriting({{"--out", a.out}, {"--urdf", a.urdf}, {"--hand-eye", a.hand_eye}},
                               {{"--model", a.model.path}, {"--data", a.data}, {"--validate", a.validate}});
     const model::RobotModel nominal = a.model.load();
     // Priors: the model file's (a YAML model), then --prior's; later entries win.
@@ -193,6 +196,10 @@ int run_identify(const IdentifyArgs& a) {
       }
     }
     if (a.no_prior) options.prior.strength = 0.0;
+    if (!a.hand_eye.empty() && nominal.tool != model::ToolKind::frame)
+      throw model::InputError(
+          "--hand-eye: the model's tool is a point; a camera or a board on the flange is a frame "
+          "(tool: frame in the model file)");
     const model::Dataset data = model::read_dataset(a.data);
     std::optional<model::Dataset> held_out;  // read before the solve: a bad file fails in a second
     if (!a.validate.empty()) {
@@ -229,8 +236,16 @@ int run_identify(const IdentifyArgs& a) {
     } else if (!a.urdf.empty()) {
       urdf_text = model::write_urdf(result.model);
     }
+    const std::string hand_eye_text =
+        a.hand_eye.empty() ? std::string()
+                           : camera::rig_hand_eye_text(a.mount == "hand", model::isometry(result.model.flange_T_tool),
+                                                       model::isometry(result.model.base_T_frame0).inverse());
     files::write_file_atomically(a.out, model_text);
     std::cout << "wrote " << a.out << '\n';
+    if (!a.hand_eye.empty()) {
+      files::write_file_atomically(a.hand_eye, hand_eye_text);
+      std::cout << "wrote " << a.hand_eye << " (the hand-eye, mount " << a.mount << ", from this solve)\n";
+    }
     if (!a.urdf.empty()) {
       files::write_file_atomically(a.urdf, urdf_text);
       std::cout << "wrote " << a.urdf;
@@ -259,6 +274,12 @@ void add_identify_command(CLI::App& app, int& status) {
          std::string("measurements (CSV: q1..qN,x,y,z[,qw,qx,qy,qz][,cxx..czz|,sigma]; ") + files::kTextLimitText + ")")
       ->required();
   cmd->add_option("--out", a->out, "calibrated model to write (YAML, same schema)")->required();
+  cmd->add_option("--hand-eye", a->hand_eye,
+                  "also write the identified tool and device registration as `camera hand-eye` does (OpenCV YAML)");
+  cmd->add_option("--mount", a->mount,
+                  "with --hand-eye: hand (a camera on the flange, the board measures) or world (a board on the flange)")
+      ->check(CLI::IsMember({"hand", "world"}))
+      ->capture_default_str();
   cmd->add_option("--method", a->method,
                   "full (default): nonlinear least squares; first-order: Doty's linear model; "
                   "cpa: circle-point analysis")

@@ -4,7 +4,7 @@
 //                  [--validation N | --validation-plan FILE]
 //                  [--robot sim|manual | --robot-cmd 'CMD {q}'] [--can IF [--fd]] [--squares N]
 //                  [--left SRC... --right SRC... --stereo FILE [--colour-table FILE] [--pixel-sigma PX]]
-//                  [--board B --mount hand|world [--camera FILE --source SRC...]]
+//                  [--board B --mount hand|world [--camera FILE --source SRC...] [--hand-eye FILE]]
 //                  [--discover --joints N --home Q [--prismatic J,...] [--sweep-deg D] [--sweep-m M]
 //                   [--discovered FILE]]
 //                  [--journal FILE] [--resume] [--out FILE] [--report FILE] [--dataset FILE] [--seed S]
@@ -60,6 +60,7 @@
 #include "host/files/output_file.hpp"
 #include "host/identify/discover.hpp"
 #include "host/identify/plausibility.hpp"
+#include "host/model/isometry.hpp"
 #include "host/model/model_file.hpp"
 #include "host/report/report.hpp"
 #include "host/session/board_sensor.hpp"
@@ -79,7 +80,7 @@ struct SessionArgs {
   std::vector<std::string> left, right;  // real stereo pair: frame sources
   std::string stereo, colour_table;
   std::vector<std::string> source;  // real camera rig: frame source
-  std::string camera, board = "chessboard:9x6:0.03", mount = "hand";
+  std::string camera, board = "chessboard:9x6:0.03", mount = "hand", hand_eye;
   double pixel_sigma_px = 0.1, pair_tolerance_s = 0.5;
   // Discovery of an unknown arm: its joint count, the joints read in metres, the sweeps' spans.
   bool discover = false;
@@ -310,17 +311,21 @@ session::StereoSetup stereo_setup(const SessionArgs& a) {
 }
 
 int run(const SessionArgs& a) {
-  files::refuse_overwriting(
-      {{"--out", a.out}, {"--report", a.report}, {"--dataset", a.dataset}, {"--discovered", a.discovered}},
-      {{"--journal", a.journal},
-       {"--model", a.model.path},
-       {"--plan", a.plan},
-       {"--validation-plan", a.validation_plan},
-       {"--stereo", a.stereo},
-       {"--colour-table", a.colour_table},
-       {"--camera", a.camera}});
+  files::refuse_overwriting({{"--out", a.out},
+                             {"--report", a.report},
+                             {"--dataset", a.dataset},
+                             {"--discovered", a.discovered},
+                             {"--hand-eye", a.hand_eye}},
+                            {{"--journal", a.journal},
+                             {"--model", a.model.path},
+                             {"--plan", a.plan},
+                             {"--validation-plan", a.validation_plan},
+                             {"--stereo", a.stereo},
+                             {"--colour-table", a.colour_table},
+                             {"--camera", a.camera}});
   const bool simulated = a.robot == "sim" && a.robot_cmd.empty();
   const bool platform = a.rig == "platform", stereo = a.rig == "stereo", camera_rig = a.rig == "camera";
+  if (!a.hand_eye.empty() && !camera_rig) throw model::InputError("--hand-eye: the camera rig's (--rig camera)");
   if (a.discover) {
     if (!stereo)
       throw model::InputError(
@@ -503,6 +508,13 @@ int run(const SessionArgs& a) {
               << " RMS " << calibration.before.rms_m * 1e3 << " mm, identified RMS " << calibration.after.rms_m * 1e3
               << " mm\n";
   if (!a.out.empty()) model::save_model(calibration.result.model, a.out);
+  if (!a.hand_eye.empty()) {
+    const model::RobotModel& m = calibration.result.model;
+    files::write_file_atomically(a.hand_eye,
+                                 camera::rig_hand_eye_text(a.mount == "hand", model::isometry(m.flange_T_tool),
+                                                           model::isometry(m.base_T_frame0).inverse()));
+    std::cout << "wrote " << a.hand_eye << " (the hand-eye, mount " << a.mount << ", identified with the arm)\n";
+  }
 
   std::optional<session::CorrectionCheck> check;
   can::PlatformClient* platform_client = rig ? rig->platform() : client.get();
@@ -589,6 +601,9 @@ void add_session_command(CLI::App& app, int& status) {
       ->check(CLI::IsMember({"hand", "world"}))
       ->capture_default_str();
   cmd->add_option("--camera", a->camera, "real camera rig: the camera's calibration (`kincal camera calibrate`)");
+  cmd->add_option("--hand-eye", a->hand_eye,
+                  "camera rig: also write the identified mount and board or camera place as `kincal camera hand-eye` "
+                  "does (OpenCV YAML)");
   cmd->add_option("--source", a->source,
                   "real camera rig: the camera's frames, as --left: a V4L2 device, a video, a directory of images or "
                   "image files, one per pose of --plan then --validation-plan; a live camera's frame is taken after "

@@ -11,6 +11,7 @@
 
 #include "host/camera/board.hpp"
 #include "host/can/loopback.hpp"
+#include "host/model/isometry.hpp"
 #include "host/session/board_sensor.hpp"
 #include "host/session/stereo_sensor.hpp"
 #include "host/sim/beacon.hpp"
@@ -26,19 +27,8 @@ namespace kincal::session {
 
 namespace {
 
-Eigen::Isometry3d isometry(const model::Transform& t) {
-  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
-  out.linear() = t.rotation;
-  out.translation() = t.translation;
-  return out;
-}
-
-model::Transform transform(const Eigen::Isometry3d& t) {
-  model::Transform out;
-  out.rotation = t.linear();
-  out.translation = t.translation();
-  return out;
-}
+using model::isometry;
+using model::transform;
 
 // The noise of pose `index`: the same whatever happened before (a resumed session sees what an
 // uninterrupted one would).

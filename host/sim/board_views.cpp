@@ -5,23 +5,14 @@
 #include <stdexcept>
 #include <string>
 
+#include "host/model/isometry.hpp"
+
 namespace kincal::sim {
 
 namespace {
 
-Eigen::Isometry3d isometry(const model::Transform& t) {
-  Eigen::Isometry3d i = Eigen::Isometry3d::Identity();
-  i.linear() = t.rotation;
-  i.translation() = t.translation;
-  return i;
-}
-
-model::Transform transform(const Eigen::Isometry3d& i) {
-  model::Transform t;
-  t.rotation = i.linear();
-  t.translation = i.translation();
-  return t;
-}
+using model::isometry;
+using model::transform;
 
 Eigen::Isometry3d pose(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation) {
   Eigen::Isometry3d i = Eigen::Isometry3d::Identity();

@@ -4,6 +4,9 @@
 //   camera.yaml       the test camera (ROS camera_info, the true intrinsics, no covariance)
 //   views/view_NN.png the true arm's views at the training readings;  joints.csv  their readings
 //   held_out.csv      the true device_T_tool at held-out readings (q, x, y, z, qw..qz)
+//   robot_poses.csv   base_T_flange at the training readings as the controller reports them (the
+//                     nominal kinematics): x,y,z,qw,qx,qy,qz, for `kincal camera hand-eye`
+//   true_hand_eye.yaml the true arm's tool and device registration as `identify --hand-eye` writes
 //   hostile/          three views, the board missing (a blank view) and the board half out of
 //                     view; hostile_joints.csv their readings
 // Usage: make_board_rig_views DIR hand|world [TRAINING HELD_OUT SEED]
@@ -19,6 +22,7 @@
 
 #include "host/camera/calibration_file.hpp"
 #include "host/model/dataset.hpp"
+#include "host/model/isometry.hpp"
 #include "host/model/model_file.hpp"
 #include "host/model/number_text.hpp"
 #include "host/sim/board_views.hpp"
@@ -79,6 +83,24 @@ int main(int argc, char** argv) {
     cv::imwrite((dir / "views" / numbered("view", i)).string(),
                 sim::render_board_view(robot, mount, train[i], spec, target, scenes::board_rig_conditions(i + 1)));
   write_joints((dir / "joints.csv").string(), train);
+  {
+    std::ofstream poses(dir / "robot_poses.csv");
+    poses << "x,y,z,qw,qx,qy,qz\n";
+    const Eigen::Isometry3d frame0_T_device = model::isometry(rig.nominal.base_T_frame0).inverse();
+    const Eigen::Isometry3d tool_T_flange = model::isometry(rig.nominal.flange_T_tool).inverse();
+    for (const std::vector<double>& q : train) {
+      const Eigen::Isometry3d base_T_flange =
+          frame0_T_device * model::isometry(model::forward_kinematics(rig.nominal, q)) * tool_T_flange;
+      const Eigen::Quaterniond r(base_T_flange.linear());
+      const Eigen::Vector3d t = base_T_flange.translation();
+      const double row[] = {t.x(), t.y(), t.z(), r.w(), r.x(), r.y(), r.z()};
+      for (std::size_t k = 0; k < 7; ++k) poses << (k > 0 ? "," : "") << model::shortest_number_text(row[k]);
+      poses << '\n';
+    }
+  }
+  std::ofstream(dir / "true_hand_eye.yaml")
+      << camera::rig_hand_eye_text(mount == sim::BoardMount::hand, model::isometry(robot.truth().flange_T_tool),
+                                   model::isometry(robot.truth().base_T_frame0).inverse());
 
   model::Dataset truth;
   truth.joint_count = rig.nominal.joint_count();

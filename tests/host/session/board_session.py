@@ -42,8 +42,15 @@ def main(kincal, make_views, work):
     views = os.path.join(work, "views")
     dataset = os.path.join(work, "dataset.csv")
     identified = os.path.join(work, "identified.yaml")
-    p = run(session_args(kincal, work, views, ["--dataset", dataset, "--out", identified]))
+    hand_eye = os.path.join(work, "session_hand_eye.yaml")
+    p = run(session_args(kincal, work, views, ["--dataset", dataset, "--out", identified, "--hand-eye", hand_eye]))
     failures = []
+    # The hand-eye beside the model, in camera hand-eye's keys (cli.board_rig_hand_eye_agree
+    # judges its values against camera hand-eye and the truth).
+    with open(hand_eye) as f:
+        text = f.read()
+    if "gripper_T_camera: !!opencv-matrix" not in text or "base_T_target: !!opencv-matrix" not in text:
+        failures.append(f"the session's --hand-eye file lacks gripper_T_camera or base_T_target:\n{text}")
 
     with open(dataset) as f:
         rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
