@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "host/identify/cpa.hpp"
+#include "host/identify/model_selection.hpp"
 #include "host/identify/statistics.hpp"
 #include "host/model/axes.hpp"
 
@@ -490,7 +491,10 @@ RobotModel reparameterize_for_identification(const RobotModel& m, double toleran
   return rewritten;
 }
 
-IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options) {
+namespace {
+
+// identify() without the rejection gate.
+IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options) {
   check_data(nominal, data);
   IdentifyResult result;
   const int n = nominal.joint_count();
@@ -759,6 +763,51 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
   return result;
 }
 
+// How many standard errors rejection must lower the K-fold squared errors by (see identify.hpp).
+constexpr double kGateT = 2.0;
+
+// The paired t statistic of the differences a_i - b_i: their mean over its standard error (0
+// when they are all equal).
+double paired_t(const std::vector<double>& a, const std::vector<double>& b) {
+  const auto n = static_cast<double>(a.size());
+  double mean = 0.0, variance = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) mean += (a[i] - b[i]) / n;
+  for (std::size_t i = 0; i < a.size(); ++i) variance += (a[i] - b[i] - mean) * (a[i] - b[i] - mean) / (n - 1.0);
+  return variance > 0.0 ? mean / std::sqrt(variance / n) : 0.0;
+}
+
+}  // namespace
+
+IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options) {
+  IdentifyResult result = identify_ungated(nominal, data, options);
+  if (!options.rejection_gate || result.rejections.empty()) return result;
+  IdentifyOptions without = options;
+  without.robust = false;
+  const CrossValidation with_cv = cross_validate(nominal, data, options);
+  const CrossValidation without_cv = cross_validate(nominal, data, without);
+  if (with_cv.kfold_rms_m < 0.0 || without_cv.kfold_rms_m < 0.0) {
+    result.notes.push_back("rejection gate: cross-validation cannot judge the rejections (" +
+                           (with_cv.why.empty() ? without_cv.why : with_cv.why) + "); they stand");
+    return result;
+  }
+  RejectionGate gate;
+  gate.judged = true;
+  gate.kfold_with_m = with_cv.kfold_rms_m;
+  gate.kfold_without_m = without_cv.kfold_rms_m;
+  gate.kfold_t = paired_t(with_cv.kfold_error2, without_cv.kfold_error2);
+  if (with_cv.out_of_range_rms_m >= 0.0 && without_cv.out_of_range_rms_m >= 0.0) {
+    gate.out_of_range_with_m = with_cv.out_of_range_rms_m;
+    gate.out_of_range_without_m = without_cv.out_of_range_rms_m;
+  }
+  gate.kept = gate.kfold_t <= -kGateT && gate.out_of_range_with_m <= gate.out_of_range_without_m;
+  if (!gate.kept) {
+    gate.undone = std::move(result.rejections);
+    result = identify_ungated(nominal, data, without);
+  }
+  result.rejection_gate = std::move(gate);
+  return result;
+}
+
 std::string format_noise(const IdentifyResult& r) {
   std::ostringstream out;
   out.setf(std::ios::fixed);
@@ -791,6 +840,19 @@ std::string format_noise(const IdentifyResult& r) {
     out << "  rejected line " << x.line << x.id << ": residual " << x.residual_m * 1e3 << " mm, studentized statistic "
         << x.statistic_ratio << " x the threshold; removing it moves the predicted tool by up to "
         << x.tool_shift_max_m * 1e3 << " mm over the data\n";
+  const RejectionGate& g = r.rejection_gate;
+  if (g.judged) {
+    out << "  rejection gate: 5-fold cross-validated RMS with rejection " << std::setprecision(4)
+        << g.kfold_with_m * 1e3 << " mm, without " << g.kfold_without_m * 1e3 << " mm (paired t "
+        << std::setprecision(2) << g.kfold_t << std::setprecision(4) << ")";
+    if (g.out_of_range_with_m >= 0.0)
+      out << "; out-of-range fold " << g.out_of_range_with_m * 1e3 << " mm, without " << g.out_of_range_without_m * 1e3
+          << " mm";
+    out << ": "
+        << (g.kept ? "the rejections stand" : "no rejection (it does not clearly lower the held-out error); undone:");
+    for (const Rejection& x : g.undone) out << " line " << x.line << x.id;
+    out << '\n';
+  }
   if (!r.rejections.empty())
     out << "  model error before rejection " << r.model_error_before_rejection_m * 1e3 << " mm, after "
         << r.model_error_position_m * 1e3 << " mm\n";

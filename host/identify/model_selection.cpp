@@ -18,12 +18,6 @@ Candidate make(std::string name, std::string description, const RobotModel& mode
   return c;
 }
 
-// Sum of squared position errors of `model` over `rows`.
-double squared_errors(const RobotModel& model, const model::Dataset& data, const std::vector<int>& rows) {
-  const AccuracyStats s = accuracy(model, data, rows);
-  return s.rms_m * s.rms_m * s.count;
-}
-
 model::Dataset subset(const model::Dataset& data, const std::vector<int>& rows) {
   model::Dataset out = data;
   out.rows.clear();
@@ -31,19 +25,29 @@ model::Dataset subset(const model::Dataset& data, const std::vector<int>& rows) 
   return out;
 }
 
-// The candidate identified from `train`, its squared errors over `test`; false (why set) when
-// the candidate cannot be identified from those rows.
-bool predict(const model::Dataset& data, const Candidate& c, const std::vector<int>& train,
-             const std::vector<int>& test, double& sum2, int* parameters, std::string& why) {
+// The model identified from `train`, its squared position errors over `test` appended to
+// `error2`; false (why set) when it cannot be identified from those rows.
+bool predict(const model::Dataset& data, const RobotModel& model, const IdentifyOptions& options,
+             const std::vector<int>& train, const std::vector<int>& test, std::vector<double>& error2, int* parameters,
+             std::string& why) {
   try {
-    const IdentifyResult r = identify(c.model, subset(data, train), c.options);
-    sum2 += squared_errors(r.model, data, test);
+    const IdentifyResult r = identify(model, subset(data, train), options);
+    for (const int i : test) {
+      const model::Measurement& m = data.rows[static_cast<std::size_t>(i)];
+      error2.push_back((model::forward_kinematics(r.model, m.q).translation - m.position).squaredNorm());
+    }
     if (parameters != nullptr) *parameters = static_cast<int>(r.identifiability.identified.size());
     return true;
   } catch (const model::InputError& e) {
     why = e.what();
     return false;
   }
+}
+
+double root_mean(const std::vector<double>& v) {
+  double sum = 0.0;
+  for (const double x : v) sum += x;
+  return std::sqrt(sum / static_cast<double>(v.size()));
 }
 
 }  // namespace
@@ -120,38 +124,48 @@ RowSplit out_of_range_split(const model::Dataset& d, double fraction) {
   return s;
 }
 
-Selection select_model(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& base,
-                       const SelectionOptions& options) {
+CrossValidation cross_validate(const RobotModel& model, const model::Dataset& data, const IdentifyOptions& options,
+                               const SelectionOptions& selection) {
+  IdentifyOptions o = options;
+  o.rejection_gate = false;
   const int n = static_cast<int>(data.rows.size());
   std::vector<int> order(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) order[static_cast<std::size_t>(i)] = i;
   std::mt19937_64 rng(23);
   std::shuffle(order.begin(), order.end(), rng);
+  CrossValidation cv;
+  bool ok = true;
+  for (int k = 0; k < selection.folds && ok; ++k) {
+    std::vector<int> train, test;
+    for (int i = 0; i < n; ++i) (i % selection.folds == k ? test : train).push_back(order[static_cast<std::size_t>(i)]);
+    ok = predict(data, model, o, train, test, cv.kfold_error2, k == 0 ? &cv.parameters : nullptr, cv.why);
+  }
+  if (!ok) {
+    cv.kfold_error2.clear();
+    return cv;
+  }
+  cv.kfold_rms_m = root_mean(cv.kfold_error2);
+  const RowSplit range = out_of_range_split(data, selection.central_fraction);
+  if (range.inside.empty() || range.outside.empty()) return cv;
+  std::string why;
+  if (predict(data, model, o, range.inside, range.outside, cv.out_of_range_error2, nullptr, why))
+    cv.out_of_range_rms_m = root_mean(cv.out_of_range_error2);
+  else
+    cv.why = "out-of-range fold: " + why;
+  return cv;
+}
+
+Selection select_model(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& base,
+                       const SelectionOptions& options) {
   const RowSplit range = out_of_range_split(data, options.central_fraction);
   Selection s;
   s.out_of_range_train_rows = static_cast<int>(range.inside.size());
   s.out_of_range_test_rows = static_cast<int>(range.outside.size());
   const std::vector<Candidate> candidates = candidate_models(nominal, base);
   int best = -1;
-  for (std::size_t c = 0; c < candidates.size(); ++c) {
-    CandidateScore score;
-    score.name = candidates[c].name;
-    double sum2 = 0.0;
-    bool ok = true;
-    for (int k = 0; k < options.folds && ok; ++k) {
-      std::vector<int> train, test;
-      for (int i = 0; i < n; ++i) (i % options.folds == k ? test : train).push_back(order[static_cast<std::size_t>(i)]);
-      ok = predict(data, candidates[c], train, test, sum2, k == 0 ? &score.parameters : nullptr, score.why);
-    }
-    if (ok) score.kfold_rms_m = std::sqrt(sum2 / n);
-    double out2 = 0.0;
-    std::string why;
-    if (ok && !range.inside.empty() && !range.outside.empty() &&
-        predict(data, candidates[c], range.inside, range.outside, out2, nullptr, why))
-      score.out_of_range_rms_m = std::sqrt(out2 / static_cast<double>(range.outside.size()));
-    else if (ok && !range.inside.empty() && !range.outside.empty())
-      score.why = "out-of-range fold: " + why;
-    s.scores.push_back(score);
+  for (const Candidate& candidate : candidates) {
+    const CrossValidation cv = cross_validate(candidate.model, data, candidate.options, options);
+    s.scores.push_back({candidate.name, cv.parameters, cv.kfold_rms_m, cv.out_of_range_rms_m, -1.0, cv.why});
   }
   // The out-of-range fold counts when every candidate the K folds could judge was identified on
   // its in-range rows: a fold that only the small models can be fitted to would favour them.

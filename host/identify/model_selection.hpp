@@ -74,6 +74,24 @@ struct SelectionOptions {
   double central_fraction = 0.7;
 };
 
+// One model's scores above: identified from each fold's training rows by `options` (with
+// options.rejection_gate off: the folds judge the rule as it is, identify.hpp), the K-fold RMS and,
+// when there is an out-of-range fold and the model can be identified from its rows, the
+// out-of-range RMS. What model selection scores each candidate by and identify's rejection gate
+// compares. A model that cannot be identified on some K-fold training rows has no K-fold RMS
+// (why says; out-of-range likewise).
+struct CrossValidation {
+  double kfold_rms_m = -1.0;         // < 0: not available
+  double out_of_range_rms_m = -1.0;  // < 0: not available
+  int parameters = 0;                // identified in the first fold's solve
+  std::string why;                   // why a score is missing
+  // Each held-out row's squared position error (m^2), in the same order for every model on the
+  // same data (rows fold by fold; the out-of-range fold's rows): the pairs the gate compares.
+  std::vector<double> kfold_error2, out_of_range_error2;
+};
+CrossValidation cross_validate(const RobotModel& model, const model::Dataset& data, const IdentifyOptions& options,
+                               const SelectionOptions& selection = {});
+
 struct CandidateScore {
   std::string name;
   int parameters = 0;                // identified in the first fold's solve
