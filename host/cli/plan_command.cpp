@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "host/cli/model_option.hpp"
@@ -21,6 +22,8 @@ namespace {
 struct PlanArgs {
   ModelOption model;
   std::string out, candidates, constraints;
+  identify::ConstraintOptions constraint_options;
+  std::vector<std::string> joint_ranges;  // NAME=LOWER,UPPER
   int count = 30, pool = 1000;
   std::uint64_t seed = 1;
   bool orientation = false;
@@ -80,6 +83,24 @@ std::string summary(const PlanArgs& a, const model::RobotModel& m, const identif
   return out.str();
 }
 
+// The constraint options as the constraints file's keys; none given: nothing.
+std::optional<identify::ConstraintOptions> constraint_options(const PlanArgs& a) {
+  identify::ConstraintOptions o = a.constraint_options;
+  if (o.floor.size() == 1) o.floor = {"0", "0", o.floor[0], "0", "0", "1"};  // --floor Z: the plane z = Z, z up
+  for (const std::string& text : a.joint_ranges) {
+    const std::size_t equals = text.rfind('=');
+    if (equals == std::string::npos || equals == 0)
+      throw model::InputError("--joint-range '" + text + "': expected NAME=LOWER,UPPER (a joint name or qN)");
+    std::vector<std::string> range;
+    std::istringstream values(text.substr(equals + 1));
+    for (std::string value; std::getline(values, value, ',');) range.push_back(value);
+    o.joints.emplace_back(text.substr(0, equals), std::move(range));
+  }
+  const bool none = o.workspace.empty() && o.floor.empty() && o.joints.empty() && o.sight.empty();
+  if (none && o.angles.empty()) return std::nullopt;  // --angles alone: refused by the reader
+  return o;
+}
+
 int run_plan(const PlanArgs& a) {
   try {
     files::refuse_overwriting(
@@ -88,6 +109,10 @@ int run_plan(const PlanArgs& a) {
     const model::RobotModel m = a.model.load();
     identify::PlanOptions options;
     if (!a.constraints.empty()) options.constraints = identify::read_plan_constraints(a.constraints, m);
+    if (const std::optional<identify::ConstraintOptions> given = constraint_options(a)) {
+      options.constraints = identify::combine_plan_constraints(options.constraints, a.constraints,
+                                                               identify::plan_constraints_from_options(*given, m));
+    }
     std::vector<int> candidate_lines;
     if (!a.candidates.empty()) {
       const correct::TargetTable table = correct::read_target_table(a.candidates, m.joint_count());
@@ -148,6 +173,22 @@ void add_plan_command(CLI::App& app, int& status) {
   cmd->add_option("--constraints", a->constraints,
                   "YAML: workspace box, floor plane, joint ranges, line-of-sight cone (plan_constraints.hpp); "
                   "no planned configuration violates them");
+  cmd->add_option("--workspace", a->constraint_options.workspace,
+                  "the tool point inside this box of frame 0: MINX,MINY,MINZ,MAXX,MAXY,MAXZ (m)")
+      ->delimiter(',');
+  cmd->add_option("--floor", a->constraint_options.floor,
+                  "the tool point and every frame origin above this plane: Z (the plane z = Z, z up) or "
+                  "PX,PY,PZ,NX,NY,NZ (a point and the normal toward the allowed side; m)")
+      ->delimiter(',');
+  cmd->add_option("--joint-range", a->joint_ranges,
+                  "a joint's readings within LOWER..UPPER: NAME=LOWER,UPPER (a joint name or qN; rad or m, "
+                  "or deg with --angles deg); repeatable");
+  cmd->add_option("--sight", a->constraint_options.sight,
+                  "the tool point in the line of sight of a device at APEX: AX,AY,AZ,DX,DY,DZ,HALF_ANGLE (m; the "
+                  "cone's axis from the apex; rad, or deg with --angles deg)")
+      ->delimiter(',');
+  cmd->add_option("--angles", a->constraint_options.angles, "the unit of --joint-range and --sight angles: rad or deg")
+      ->check(CLI::IsMember({"rad", "deg"}));
   cmd->add_flag("--orientation", a->orientation, "plan for pose measurements (tool frame) instead of points");
   cmd->add_option("-o,--out", a->out, "output CSV q1..qN (default or '-': standard output)");
   cmd->callback([a, &status] { status = run_plan(*a); });

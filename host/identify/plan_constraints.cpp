@@ -238,4 +238,54 @@ PlanConstraints read_plan_constraints(const std::string& path, const model::Robo
   return parse_plan_constraints(files::read_text_or_throw<InputError>(path, files::kSettingsFile), path, model);
 }
 
+PlanConstraints plan_constraints_from_options(const ConstraintOptions& o, const model::RobotModel& model) {
+  // The document the file would hold; nodes built here carry no position, so errors name the key.
+  const auto three_and_rest = [](YAML::Node node, const char* first, const char* second,
+                                 const std::vector<std::string>& values) {
+    node[first] = YAML::Node(YAML::NodeType::Sequence);
+    node[second] = YAML::Node(YAML::NodeType::Sequence);
+    for (std::size_t i = 0; i < values.size(); ++i) node[i < 3 ? first : second].push_back(values[i]);
+  };
+  if (o.workspace.empty() && o.floor.empty() && o.joints.empty() && o.sight.empty())
+    throw InputError("the command line: no constraint (expected --workspace, --floor, --joint-range or --sight)");
+  YAML::Node root(YAML::NodeType::Map);
+  if (!o.angles.empty()) root["angles"] = o.angles;
+  if (!o.workspace.empty()) three_and_rest(root["workspace"], "min", "max", o.workspace);
+  if (!o.floor.empty()) three_and_rest(root["floor"], "point", "normal", o.floor);
+  std::set<std::string> ranged;  // a map keeps one value a key: the second would silently win
+  for (const auto& [name, range] : o.joints) {
+    if (!ranged.insert(name).second)
+      throw InputError("the command line: joints." + files::excerpt(name) + ": the joint is named twice");
+    root["joints"][name] = range;
+  }
+  if (!o.sight.empty()) {
+    if (o.sight.size() != 7)
+      throw InputError("the command line: sight: expected 7 numbers (apex x, y, z, axis x, y, z, half angle), got " +
+                       std::to_string(o.sight.size()));
+    three_and_rest(root["sight"], "apex", "axis", {o.sight.begin(), o.sight.end() - 1});
+    root["sight"]["half_angle"] = o.sight.back();
+  }
+  return read_root(root, Values{"the command line"}, model);
+}
+
+PlanConstraints combine_plan_constraints(const PlanConstraints& file, const std::string& file_name,
+                                         const PlanConstraints& options) {
+  const auto refuse_both = [&](bool both, const std::string& what) {
+    if (both) throw InputError("the command line and " + file_name + " both give " + what + ": give it in one place");
+  };
+  PlanConstraints c = file;
+  refuse_both(file.workspace && options.workspace, "a workspace");
+  refuse_both(file.floor && options.floor, "a floor");
+  refuse_both(file.sight && options.sight, "a sight cone");
+  if (options.workspace) c.workspace = options.workspace;
+  if (options.floor) c.floor = options.floor;
+  if (options.sight) c.sight = options.sight;
+  for (const JointRange& r : options.joint_ranges) {
+    for (const JointRange& f : file.joint_ranges)
+      refuse_both(f.joint == r.joint, "a range of q" + std::to_string(r.joint + 1));
+    c.joint_ranges.push_back(r);
+  }
+  return c;
+}
+
 }  // namespace kincal::identify

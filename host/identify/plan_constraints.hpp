@@ -91,4 +91,22 @@ PlanConstraints read_plan_constraints(const std::string& path, const model::Robo
 PlanConstraints parse_plan_constraints(const std::string& text, const std::string& source,
                                        const model::RobotModel& model);
 
+// The same constraints given as command-line options (`kincal plan --workspace ...`): each value
+// as the user typed it, read and checked exactly as the file's keys (the same units, `angles`
+// included); errors "the command line: KEY: what". At least one constraint must be given.
+struct ConstraintOptions {
+  std::string angles;                                                    // "deg" or "rad" (empty: rad)
+  std::vector<std::string> workspace;                                    // min x, y, z, max x, y, z
+  std::vector<std::string> floor;                                        // point x, y, z, normal x, y, z
+  std::vector<std::pair<std::string, std::vector<std::string>>> joints;  // name (or qN): lower, upper
+  std::vector<std::string> sight;                                        // apex x, y, z, axis x, y, z, half angle
+};
+PlanConstraints plan_constraints_from_options(const ConstraintOptions& options, const model::RobotModel& model);
+
+// A file's constraints and the command line's together. A workspace, floor or sight given by
+// both, or a joint ranged by both, is refused (InputError naming it and the file): neither
+// silently wins.
+PlanConstraints combine_plan_constraints(const PlanConstraints& file, const std::string& file_name,
+                                         const PlanConstraints& options);
+
 }  // namespace kincal::identify

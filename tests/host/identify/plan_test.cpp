@@ -249,3 +249,79 @@ TEST_CASE("the constraints file: read in SI or degrees; errors name the key and 
   CHECK(constraints_error("floor: [1, 2\n").starts_with("c.yaml:2:1: YAML syntax:"));
   CHECK(constraints_error("- 1\n") == "c.yaml:1:1: the file: expected a mapping");
 }
+
+TEST_CASE("the constraints as options: read as the file's keys; errors name the key; file and options combine") {
+  identify::ConstraintOptions o;
+  o.angles = "deg";
+  o.workspace = {"-1", "-1", "0.05", "1", "1", "1.5"};
+  o.floor = {"0", "0", "0.02", "0", "0", "2"};
+  o.joints = {{"shoulder_lift", {"-180", "0"}}, {"q5", {"-90", "90"}}};
+  o.sight = {"0.4", "-3.2", "0.2", "0", "1", "0", "30"};
+  const identify::PlanConstraints c = identify::plan_constraints_from_options(o, ur10());
+  const identify::PlanConstraints f = identify::parse_plan_constraints(
+      "angles: deg\nworkspace:\n  min: [-1, -1, 0.05]\n  max: [1, 1, 1.5]\nfloor:\n  point: [0, 0, 0.02]\n"
+      "  normal: [0, 0, 2]\njoints:\n  shoulder_lift: [-180, 0]\n  q5: [-90, 90]\nsight:\n  apex: [0.4, -3.2, 0.2]\n"
+      "  axis: [0, 1, 0]\n  half_angle: 30\n",
+      "c.yaml", ur10());
+  REQUIRE(c.workspace);
+  CHECK(c.workspace->min_m == f.workspace->min_m);
+  CHECK(c.workspace->max_m == f.workspace->max_m);
+  CHECK(c.floor->point_m == f.floor->point_m);
+  CHECK(c.floor->normal == f.floor->normal);
+  REQUIRE(c.joint_ranges.size() == 2);
+  for (std::size_t i = 0; i < 2; ++i) {
+    CHECK(c.joint_ranges[i].joint == f.joint_ranges[i].joint);
+    CHECK(c.joint_ranges[i].lower == f.joint_ranges[i].lower);
+    CHECK(c.joint_ranges[i].upper == f.joint_ranges[i].upper);
+  }
+  CHECK(c.sight->apex_m == f.sight->apex_m);
+  CHECK(c.sight->half_angle_rad == f.sight->half_angle_rad);
+
+  const auto error = [](const identify::ConstraintOptions& options) -> std::string {
+    try {
+      (void)identify::plan_constraints_from_options(options, ur10());
+    } catch (const model::InputError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  identify::ConstraintOptions bad;
+  bad.workspace = {"0", "0", "0", "1", "-1", "1"};
+  CHECK(error(bad) == "the command line: workspace: min must be below max on every axis");
+  bad.workspace = {"0", "0", "0", "1", "1"};
+  CHECK(error(bad) == "the command line: workspace.max: expected a list of 3 numbers");
+  bad.workspace = {"0", "0", "0", "1", "1", "inf"};
+  CHECK(error(bad) == "the command line: workspace.max: not finite");
+  bad = {};
+  bad.joints = {{"elbow", {"0", "1"}}, {"elbow", {"0", "2"}}};
+  CHECK(error(bad) == "the command line: joints.elbow: the joint is named twice");
+  bad.joints = {{"elbow", {"0", "x"}}};
+  CHECK(error(bad) == "the command line: joints.elbow: 'x' is not a number");
+  bad.joints = {{"wrist_9", {"0", "1"}}};
+  CHECK(error(bad) == "the command line: joints.wrist_9: the model 'ur10' has no such joint");
+  bad = {};
+  bad.sight = {"0", "0", "0", "0", "1", "0"};
+  CHECK(error(bad).starts_with("the command line: sight: expected 7 numbers"));
+  bad = {};
+  bad.angles = "deg";
+  CHECK(error(bad) == "the command line: no constraint (expected --workspace, --floor, --joint-range or --sight)");
+
+  // Together: the union, and a kind given twice refused, naming the file.
+  identify::PlanConstraints from_file;
+  from_file.floor = f.floor;
+  from_file.joint_ranges = {f.joint_ranges[0]};
+  identify::PlanConstraints options;
+  options.workspace = f.workspace;
+  options.joint_ranges = {f.joint_ranges[1]};
+  const identify::PlanConstraints both = identify::combine_plan_constraints(from_file, "c.yaml", options);
+  CHECK(both.floor);
+  CHECK(both.workspace);
+  CHECK(both.joint_ranges.size() == 2);
+  options.floor = f.floor;
+  CHECK_THROWS_WITH_AS(identify::combine_plan_constraints(from_file, "c.yaml", options),
+                       "the command line and c.yaml both give a floor: give it in one place", model::InputError);
+  options.floor.reset();
+  options.joint_ranges = {f.joint_ranges[0]};
+  CHECK_THROWS_WITH_AS(identify::combine_plan_constraints(from_file, "c.yaml", options),
+                       "the command line and c.yaml both give a range of q2: give it in one place", model::InputError);
+}
