@@ -8,7 +8,7 @@ set -eu
 main="
   cmake ninja-build g++ ccache python3
   libeigen3-dev libcli11-dev libopencv-dev nlohmann-json3-dev
-  libceres-dev libyaml-cpp-dev libtinyxml2-dev
+  libceres-dev libyaml-cpp-dev libtinyxml2-dev libapriltag-dev
 "
 # The Cortex-M4 cross build and QEMU: the test and the bench commands both build and run it.
 m4="gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib libnewlib-arm-none-eabi qemu-system-arm"

@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <new>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -12,6 +14,9 @@
 #include <opencv2/aruco.hpp>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include <apriltag/apriltag.h>
+#include <apriltag/tag36h11.h>
 
 namespace kincal::camera {
 
@@ -41,6 +46,12 @@ constexpr std::array<DictionaryName, 17> kDictionaries = {{
     {"DICT_ARUCO_ORIGINAL", cv::aruco::DICT_ARUCO_ORIGINAL},
 }};
 
+// Kalibr's AprilGrid tags: family 36h11 (587 codes), a 2-bit black border, 10 bits a side.
+constexpr int kAprilTagCodes = 587;
+constexpr int kAprilTagBorderBits = 2;
+constexpr int kAprilTagSideBits = 6 + 2 * kAprilTagBorderBits;
+constexpr double kGridInlierFraction = 0.9;
+
 std::vector<std::string> split(const std::string& text, char sep) {
   std::vector<std::string> parts;
   std::stringstream in(text);
@@ -50,9 +61,7 @@ std::vector<std::string> split(const std::string& text, char sep) {
 }
 
 [[noreturn]] void bad_board(const std::string& text, const std::string& why) {
-  throw std::invalid_argument(
-      "board '" + text + "': " + why +
-      " (expected chessboard:COLSxROWS:SQUARE_M or charuco:COLSxROWS:SQUARE_M:MARKER_M[:DICT])");
+  throw std::invalid_argument("board '" + text + "': " + why + " (expected " + kBoardForms + ")");
 }
 
 double positive_length(const std::string& text, const std::string& field, const std::string& value) {
@@ -220,12 +229,236 @@ cv::Size fitting_chessboard(const cv::Mat& grey, const std::vector<cv::Point2f>&
   return {cols + extra[0] + extra[1], rows + extra[2] + extra[3]};
 }
 
+// libapriltag's objects, each freed by its own function on every path.
+struct FamilyFree {
+  void operator()(apriltag_family_t* f) const { tag36h11_destroy(f); }
+};
+struct DetectorFree {
+  void operator()(apriltag_detector_t* d) const { apriltag_detector_destroy(d); }
+};
+struct DetectionsFree {
+  void operator()(zarray_t* z) const { apriltag_detections_destroy(z); }
+};
+using Family = std::unique_ptr<apriltag_family_t, FamilyFree>;
+using Detector = std::unique_ptr<apriltag_detector_t, DetectorFree>;
+using Detections = std::unique_ptr<zarray_t, DetectionsFree>;
+
+// libapriltag's tag36h11 with Kalibr's 2-bit border. tag36h11 puts its 6 x 6 data bits at 1..6
+// inside a 1-bit black border (width_at_border 8, with the white ring 10); Kalibr's tags carry
+// the same codes in the same places with a 2-bit border, so the bits move one further in, the
+// black square is 10 bits across and 12 with the white ring. The arrays changed are the
+// family's own (tag36h11_destroy frees them).
+Family kalibr_family() {
+  Family family(tag36h11_create());
+  if (!family) throw std::bad_alloc();
+  family->width_at_border = kAprilTagSideBits;
+  family->total_width = kAprilTagSideBits + 2;
+  for (std::uint32_t i = 0; i < family->nbits; ++i) {
+    family->bit_x[i] += 1;
+    family->bit_y[i] += 1;
+  }
+  return family;
+}
+
+// One decoded tag: its id and its corners in libapriltag's order, which is the tag's lower left,
+// lower right, upper right and upper left as it stands on the sheet.
+struct Tag {
+  int id = 0;
+  std::array<cv::Point2f, 4> corner_px;
+};
+
+// Two passes, the first on the image with its light grown by one pixel (a 3x3 cross): a tag's
+// border touches its corner squares, and where the blurred touching points turn dark the tag
+// and its squares are one dark region, no quad (on rendered 6x5 sheets at 4 px a bit the image
+// itself gives 0-12 of 30 tags, the grown one 27-30). Growing by two pixels erases 4-pixel
+// bits. The second pass, on the image itself, adds the ids the first missed.
+std::vector<Tag> find_tags(const cv::Mat& grey) {
+  const Family family = kalibr_family();
+  const Detector detector(apriltag_detector_create());
+  if (!detector) throw std::bad_alloc();
+  detector->nthreads = 1;
+  detector->quad_decimate = 1;  // quads found at full resolution: these tags are small
+  detector->refine_edges = true;
+  apriltag_detector_add_family_bits(detector.get(), family.get(), 2);
+  std::vector<Tag> tags;
+  for (const int grow_px : {1, 0}) {
+    // The detector may write into the image it is given (its blur): give it a copy.
+    cv::Mat pass;
+    if (grow_px > 0) {
+      cv::dilate(grey, pass, cv::getStructuringElement(cv::MORPH_CROSS, cv::Size(3, 3)), cv::Point(-1, -1), grow_px);
+    } else {
+      pass = grey.clone();
+    }
+    image_u8_t image{pass.cols, pass.rows, static_cast<std::int32_t>(pass.step[0]), pass.data};
+    const Detections found(apriltag_detector_detect(detector.get(), &image));
+    if (!found) throw std::bad_alloc();
+    const std::size_t earlier = tags.size();
+    for (int i = 0; i < zarray_size(found.get()); ++i) {
+      apriltag_detection_t* d = nullptr;
+      zarray_get(found.get(), i, &d);
+      const auto end = tags.begin() + static_cast<std::ptrdiff_t>(earlier);
+      if (std::any_of(tags.begin(), end, [&](const Tag& t) { return t.id == d->id; })) continue;
+      Tag t;
+      t.id = d->id;
+      for (std::size_t k = 0; k < 4; ++k)
+        t.corner_px[k] = cv::Point2f(static_cast<float>(d->p[k][0]), static_cast<float>(d->p[k][1]));
+      tags.push_back(t);
+    }
+  }
+  return tags;
+}
+
+// Tag `tag`'s corner ids in libapriltag's corner order on a grid of `cols` tags: Kalibr's
+// numbering (see the header).
+std::array<int, 4> tag_corner_ids(int tag, int cols) {
+  const int row_corners = 2 * cols, lower_left = (tag / cols) * 2 * row_corners + (tag % cols) * 2;
+  return {lower_left, lower_left + 1, lower_left + row_corners + 1, lower_left + row_corners};
+}
+
+// Which tags lie where a grid of `cols` columns (and rows enough for every id) puts them: a
+// homography from the board to the image, RANSAC at half the median tag side, holds all four of
+// their corners. All held for fewer than two tags (nothing to compare).
+std::vector<bool> on_grid(const Board& board, int cols, const std::vector<Tag>& tags, double tag_side_px) {
+  if (tags.size() < 2) return std::vector<bool>(tags.size(), true);
+  Board shape = board;
+  shape.cols = cols;
+  shape.rows = 0;
+  for (const Tag& t : tags) shape.rows = std::max(shape.rows, t.id / cols + 1);
+  std::vector<cv::Point2f> board_xy, image;
+  for (const Tag& t : tags) {
+    const std::array<int, 4> ids = tag_corner_ids(t.id, cols);
+    for (std::size_t k = 0; k < 4; ++k) {
+      const cv::Point3f p = shape.corner_m(ids[k]);
+      board_xy.emplace_back(p.x, p.y);
+      image.push_back(t.corner_px[k]);
+    }
+  }
+  cv::Mat inliers;
+  const cv::Mat h = cv::findHomography(board_xy, image, cv::RANSAC, 0.5 * tag_side_px, inliers);
+  std::vector<bool> held(tags.size(), false);
+  if (h.empty()) return held;
+  for (std::size_t i = 0; i < tags.size(); ++i) {
+    bool all = true;
+    for (int k = 0; k < 4; ++k) all = all && inliers.at<std::uint8_t>(static_cast<int>(4 * i) + k) != 0;
+    held[i] = all;
+  }
+  return held;
+}
+
+double held_fraction(const std::vector<bool>& held) {
+  if (held.empty()) return 0.0;
+  return static_cast<double>(std::count(held.begin(), held.end(), true)) / static_cast<double>(held.size());
+}
+
+double smallest_side_px(const Tag& t) {
+  double side = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < 4; ++k)
+    side = std::min(side, static_cast<double>(cv::norm(t.corner_px[(k + 1) % 4] - t.corner_px[k])));
+  return side;
+}
+
+// The AprilGrid size whose columns hold the most of these tags (the fewest columns among equals),
+// with rows enough for the largest id and at least the board's: empty when none holds
+// kGridInlierFraction of them.
+std::string fitting_aprilgrid(const Board& board, const std::vector<Tag>& tags, double tag_side_px) {
+  int best_cols = 0, largest = 0;
+  double best = 0;
+  for (const Tag& t : tags) largest = std::max(largest, t.id);
+  for (int cols = 2; cols <= 100; ++cols) {
+    const double f = held_fraction(on_grid(board, cols, tags, tag_side_px));
+    if (f > best + 1e-9) {
+      best = f;
+      best_cols = cols;
+    }
+  }
+  if (best < kGridInlierFraction) return "";
+  Board fits = board;
+  fits.cols = best_cols;
+  fits.rows = std::max(board.rows, largest / best_cols + 1);
+  return fits.text();
+}
+
+// AprilGrid detection (see the header): fills d.ids and corners, or d.reason (and
+// d.fitting_board) and returns false.
+bool detect_aprilgrid(const Board& board, const cv::Mat& grey, BoardDetection& d, std::vector<cv::Point2f>& corners) {
+  const std::vector<Tag> tags = find_tags(grey);
+  if (tags.empty()) {
+    d.reason = "pattern not found (no AprilTags of family 36h11 with a 2-bit border)";
+    return false;
+  }
+  // An id seen twice is ambiguous: drop every copy.
+  std::vector<Tag> once, beyond;
+  for (const Tag& t : tags) {
+    const bool twice = std::count_if(tags.begin(), tags.end(), [&](const Tag& o) { return o.id == t.id; }) > 1;
+    if (twice) continue;
+    (t.id < board.cols * board.rows ? once : beyond).push_back(t);
+  }
+  std::vector<double> sides;
+  for (const Tag& t : tags) sides.push_back(smallest_side_px(t));
+  std::nth_element(sides.begin(), sides.begin() + static_cast<std::ptrdiff_t>(sides.size() / 2), sides.end());
+  const double median_side_px = sides[sides.size() / 2];
+  const std::vector<bool> held = on_grid(board, board.cols, once, median_side_px);
+  // Tags beyond the board that lie on its grid extended: the sheet has more rows.
+  std::vector<Tag> extended = once;
+  extended.insert(extended.end(), beyond.begin(), beyond.end());
+  const std::vector<bool> extended_held = on_grid(board, board.cols, extended, median_side_px);
+  int beyond_on_grid = 0;
+  for (std::size_t i = once.size(); i < extended.size(); ++i) beyond_on_grid += extended_held[i] ? 1 : 0;
+  const bool other_columns = once.size() >= 2 && held_fraction(held) < kGridInlierFraction;
+  if (other_columns || (!beyond.empty() && 2 * beyond_on_grid > static_cast<int>(beyond.size()))) {
+    const std::string size = std::to_string(board.cols) + "x" + std::to_string(board.rows);
+    d.reason = other_columns ? "the tags do not lie on a grid of " + std::to_string(board.cols) + " columns"
+                             : std::to_string(beyond_on_grid) + " tag(s) with ids beyond the " + size + " board's " +
+                                   std::to_string(board.cols * board.rows) + " lie on its grid";
+    d.fitting_board = fitting_aprilgrid(board, extended, median_side_px);
+    if (!d.fitting_board.empty() && d.fitting_board != board.text()) {
+      d.reason += ": the board is " + d.fitting_board + ", give --board " + d.fitting_board;
+    } else {
+      d.fitting_board.clear();
+    }
+    return false;
+  }
+  std::vector<Tag> kept;
+  for (std::size_t i = 0; i < once.size(); ++i)
+    if (held[i]) kept.push_back(once[i]);
+  const std::size_t dropped = tags.size() - kept.size();
+  if (static_cast<int>(kept.size()) < kMinAprilTags) {
+    d.reason = "too few tags (" + std::to_string(kept.size()) + " of the board, at least " +
+               std::to_string(kMinAprilTags) + ")";
+    return false;
+  }
+  // The nearest other edges to a tag corner: the next corner of its corner square (the gap) and
+  // the inner edge of the tag's 2-bit border.
+  double smallest_px = std::numeric_limits<double>::infinity();
+  for (const Tag& t : kept) {
+    smallest_px = std::min(smallest_px, smallest_side_px(t));
+    const std::array<int, 4> ids = tag_corner_ids(t.id, board.cols);
+    for (std::size_t k = 0; k < 4; ++k) {
+      d.ids.push_back(ids[k]);
+      corners.push_back(t.corner_px[k]);
+    }
+  }
+  const double border_fraction = static_cast<double>(kAprilTagBorderBits) / kAprilTagSideBits;
+  d.refine_half_window_px = refine_half_window_px(smallest_px * std::min(board.spacing, border_fraction));
+  cv::cornerSubPix(
+      grey, corners, cv::Size(d.refine_half_window_px, d.refine_half_window_px), cv::Size(-1, -1),
+      cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, kRefineIterations, kRefineEpsilon_px));
+  const std::string window = std::to_string(2 * d.refine_half_window_px + 1);
+  d.detector = "apriltag_detector_detect (tag36h11, 2-bit border) + cornerSubPix " + window + "x" + window;
+  if (dropped > 0) d.detector += " (" + std::to_string(dropped) + " tag(s) dropped: off the grid or seen twice)";
+  return true;
+}
+
 }  // namespace
 
 std::string Board::text() const {
   std::ostringstream out;
-  out << (kind == BoardKind::kChessboard ? "chessboard:" : "charuco:") << cols << 'x' << rows << ':' << square_m;
+  out << (kind == BoardKind::kChessboard ? "chessboard:"
+          : kind == BoardKind::kCharuco  ? "charuco:"
+                                         : "aprilgrid:")
+      << cols << 'x' << rows << ':' << square_m;
   if (kind == BoardKind::kCharuco) out << ':' << marker_m << ':' << dictionary;
+  if (kind == BoardKind::kAprilGrid) out << ':' << spacing;
   return out.str();
 }
 
@@ -235,11 +468,29 @@ int refine_half_window_px(double smallest_spacing_px) {
                     kMaxRefineHalfWindow_px);
 }
 
-int Board::corner_count() const { return kind == BoardKind::kChessboard ? cols * rows : (cols - 1) * (rows - 1); }
+int Board::corner_count() const {
+  switch (kind) {
+    case BoardKind::kChessboard:
+      return cols * rows;
+    case BoardKind::kCharuco:
+      return (cols - 1) * (rows - 1);
+    case BoardKind::kAprilGrid:
+      return 4 * cols * rows;
+  }
+  return 0;
+}
 
 cv::Point3f Board::corner_m(int id) const {
   if (id < 0 || id >= corner_count()) throw std::out_of_range("board corner id " + std::to_string(id));
   if (kind == BoardKind::kCharuco) return charuco->chessboardCorners[static_cast<std::size_t>(id)];
+  if (kind == BoardKind::kAprilGrid) {
+    // Kalibr's grid of tag corners: column C, row R counted upwards, two a tag each way.
+    const int c = id % (2 * cols), r = id / (2 * cols);
+    const double pitch_m = (1 + spacing) * square_m, height_m = rows * square_m + (rows - 1) * spacing * square_m;
+    const double kalibr_y_m = (r / 2) * pitch_m + (r % 2) * square_m;
+    return {static_cast<float>((c / 2) * pitch_m + (c % 2) * square_m), static_cast<float>(height_m - kalibr_y_m),
+            0.0f};
+  }
   return {static_cast<float>((id % cols) * square_m), static_cast<float>((id / cols) * square_m), 0.0f};
 }
 
@@ -272,7 +523,26 @@ Board parse_board(const std::string& text) {
                                                 static_cast<float>(b.marker_m), dictionary);
     return b;
   }
-  if (f.empty() || (f[0] != "chessboard" && f[0] != "charuco")) bad_board(text, "unknown board type");
+  if (f.size() == 4 && f[0] == "aprilgrid") {
+    b.kind = BoardKind::kAprilGrid;
+    std::tie(b.cols, b.rows) = grid(text, f[1], 2);
+    b.square_m = positive_length(text, "tag size", f[2]);
+    std::size_t used = 0;
+    try {
+      b.spacing = std::stod(f[3], &used);
+    } catch (const std::exception&) {
+      bad_board(text, "spacing '" + f[3] + "' is not a number");
+    }
+    if (used != f[3].size() || !(b.spacing >= 0.1 && b.spacing <= 1.0))
+      bad_board(text, "spacing '" + f[3] + "' must be 0.1 to 1 (the gap between tags over a tag's side)");
+    if (b.cols * b.rows > kAprilTagCodes) {
+      bad_board(text, "the board needs " + std::to_string(b.cols * b.rows) + " tags, family 36h11 has " +
+                          std::to_string(kAprilTagCodes));
+    }
+    return b;
+  }
+  if (f.empty() || (f[0] != "chessboard" && f[0] != "charuco" && f[0] != "aprilgrid"))
+    bad_board(text, "unknown board type");
   bad_board(text, "wrong number of fields");
 }
 
@@ -283,6 +553,38 @@ cv::Mat draw_charuco(const Board& board, int px_per_square) {
   cv::Mat image;
   board.charuco->draw(cv::Size(board.cols * px_per_square, board.rows * px_per_square), image, 0, 1);
   return image;
+}
+
+int aprilgrid_gap_px(const Board& board, int px_per_bit) {
+  if (board.kind != BoardKind::kAprilGrid)
+    throw std::invalid_argument("draw_aprilgrid: " + board.text() + " is not an AprilGrid");
+  if (px_per_bit < 1) throw std::invalid_argument("draw_aprilgrid: px_per_bit must be >= 1");
+  const double gap = board.spacing * kAprilTagSideBits * px_per_bit;
+  if (std::abs(gap - std::round(gap)) > 1e-6) {
+    throw std::invalid_argument("draw_aprilgrid: a gap of " + std::to_string(gap) + " px at " +
+                                std::to_string(px_per_bit) + " px a bit is not whole pixels");
+  }
+  return static_cast<int>(std::lround(gap));
+}
+
+cv::Mat draw_aprilgrid(const Board& board, int px_per_bit) {
+  const int gap = aprilgrid_gap_px(board, px_per_bit), tag = kAprilTagSideBits * px_per_bit, pitch = tag + gap;
+  cv::Mat sheet(board.rows * pitch + gap, board.cols * pitch + gap, CV_8UC1, cv::Scalar(255));
+  const Family family = kalibr_family();
+  for (int id = 0; id < board.cols * board.rows; ++id) {
+    // Tag id at column id % cols, row id / cols counted upwards from the sheet's bottom.
+    const cv::Point origin(gap + (id % board.cols) * pitch, gap + (board.rows - 1 - id / board.cols) * pitch);
+    sheet(cv::Rect(origin, cv::Size(tag, tag))).setTo(0);
+    const std::uint64_t code = family->codes[id];
+    for (std::uint32_t i = 0; i < family->nbits; ++i) {
+      if (((code >> (family->nbits - 1 - i)) & 1U) == 0) continue;  // as apriltag_to_image draws it: 1 is white
+      const cv::Point bit(static_cast<int>(family->bit_x[i]), static_cast<int>(family->bit_y[i]));
+      sheet(cv::Rect(origin + bit * px_per_bit, cv::Size(px_per_bit, px_per_bit))).setTo(255);
+    }
+  }
+  for (int r = 0; r <= board.rows; ++r)
+    for (int c = 0; c <= board.cols; ++c) sheet(cv::Rect(c * pitch, r * pitch, gap, gap)).setTo(0);
+  return sheet;
 }
 
 BoardDetection detect_board(const Board& board, const cv::Mat& image, const std::string& view, int min_corners) {
@@ -336,6 +638,8 @@ BoardDetection detect_board(const Board& board, const cv::Mat& image, const std:
     }
     orient_chessboard(board, grey, corners);
     for (int id = 0; id < board.corner_count(); ++id) d.ids.push_back(id);
+  } else if (board.kind == BoardKind::kAprilGrid) {
+    if (!detect_aprilgrid(board, grey, d, corners)) return d;
   } else {
     std::vector<std::vector<cv::Point2f>> marker_corners, rejected;
     std::vector<int> marker_ids;

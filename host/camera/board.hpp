@@ -1,15 +1,31 @@
-// Calibration boards and their detection (issue #6): a plain chessboard or a ChArUco board
-// (OpenCV 4.6 contrib's cv::aruco API), described by a one-line text the command line takes,
-// found in an image as corners with their board coordinates.
+// Calibration boards and their detection (issues #6, #22): a plain chessboard, a ChArUco board
+// (OpenCV 4.6 contrib's cv::aruco API) or Kalibr's AprilGrid (libapriltag 3, Debian's
+// libapriltag-dev), described by a one-line text the command line takes, found in an image as
+// corners with their board coordinates.
 //
 // Text form (metres):
 //   chessboard:COLSxROWS:SQUARE_M                  COLS x ROWS inner corners
 //   charuco:COLSxROWS:SQUARE_M:MARKER_M[:DICT]     COLS x ROWS squares; DICT is an OpenCV
 //                                                  predefined dictionary such as DICT_4X4_50
 //                                                  (the default) or DICT_5X5_100
+//   aprilgrid:COLSxROWS:TAG_M:SPACING              Kalibr's target (its tagCols x tagRows,
+//                                                  tagSize, tagSpacing): COLS x ROWS AprilTags
+//                                                  of family 36h11 with a 2-bit black border,
+//                                                  TAG_M a side, SPACING * TAG_M apart (0.1 to
+//                                                  1), a black square of that gap's side at
+//                                                  every tag corner; tag 0 at the bottom left,
+//                                                  ids along the rows, upwards (as Kalibr's
+//                                                  kalibr_create_target_pdf prints it)
 // Board frame: chessboard inner corner (i, j) at (i * square, j * square, 0), id j * COLS + i
 // (as kincal::sim::chessboard draws it); ChArUco corners where cv::aruco::CharucoBoard puts them
-// (its chessboardCorners), id as OpenCV numbers them.
+// (its chessboardCorners), id as OpenCV numbers them. AprilGrid: Kalibr's corner numbering (its
+// GridCalibrationTargetAprilgrid): a grid of 2 ROWS x 2 COLS tag corners, corner id R * 2 COLS + C
+// with R counted upwards from tag 0's lower edge, so tag t's corners are b, b + 1, b + 2 COLS + 1
+// and b + 2 COLS (lower left, lower right, upper right, upper left on the sheet), b = (t / COLS)
+// * 4 COLS + (t % COLS) * 2. The frame is Kalibr's turned half a turn about x so that, like the
+// other boards, x runs right, y down the sheet and z into it: the origin is the top left tag's
+// upper left corner, and a corner at Kalibr's (x, y) is at (x, H - y, 0) here, H the height of
+// the tags' grid.
 //
 // Chessboard detection, one pipeline from VGA to 4K:
 //  1. find the grid: cv::findChessboardCornersSB (CALIB_CB_NORMALIZE_IMAGE); if it fails,
@@ -44,9 +60,29 @@
 //     COLS + ROWS even stay ambiguous: use COLS + ROWS odd, or ChArUco.
 // ChArUco detection: cv::aruco::detectMarkers, refineDetectedMarkers, interpolateCornersCharuco
 // (with its own cornerSubPix: a window sized to the square would reach the markers' edges).
+// AprilGrid detection:
+//  1. libapriltag's detector (apriltag_detector_detect: edge-based quad fit, quad_decimate 1,
+//     refine_edges on, one thread, up to 2 bits corrected) with its tag36h11 family given
+//     Kalibr's 2-bit border (the same codes; the data bits one bit further in). A detector and a
+//     family are made for each call and freed on every path (RAII): detect_board is thread-safe.
+//  2. tags are dropped when their id is seen twice (ambiguous) or when they do not lie where the
+//     board's grid puts them (a homography from the board to the image, RANSAC at half a tag's
+//     side: a misread id or another object's tag). Tags with ids beyond the board that lie on
+//     its grid extended, or tags of the board that fit no grid of COLS columns (fewer than 90 %
+//     held), mean a board of another size: the view is not found, with fitting_board the size
+//     whose columns hold the tags (and rows enough for the largest id) and the reason naming it.
+//     Tags beyond the board off its grid are dropped. A sheet with more rows than the board given
+//     and its last rows out of view cannot be told from a partial view and is not refused.
+//  3. at least kMinAprilTags tags must remain (a partial view is fine): a homography needs
+//     four points and the grid check needs several tags to mean anything (Kalibr's default
+//     minTagsForValidObs is 4 too).
+//  4. every tag corner (where the tag meets its corner square: a saddle point like a
+//     chessboard's) is refined by cv::cornerSubPix as step 2 above, its smallest spacing the
+//     smaller of the gap between tags and the tag's 2-bit border (the nearest other edges) for
+//     the smallest tag in this view.
 // Failures: parse_board throws std::invalid_argument quoting the text and saying which field is
 // wrong. detect_board does not throw for an image without the board: it returns found = false
-// with the reason ("pattern not found", "too few corners (N, at least M)", the wrong size); it throws
+// with the reason ("pattern not found", "too few corners (N, at least M)", "too few tags", the wrong size); it throws
 // std::invalid_argument for an empty image or one that is not 8-bit.
 // Cost: detection is tens of milliseconds for VGA (OpenCV's detectors dominate).
 #pragma once
@@ -59,12 +95,17 @@
 
 namespace kincal::camera {
 
-enum class BoardKind { kChessboard, kCharuco };
+enum class BoardKind { kChessboard, kCharuco, kAprilGrid };
+
+// The text forms parse_board reads, for help texts and messages.
+inline constexpr const char* kBoardForms =
+    "chessboard:COLSxROWS:SQUARE_M, charuco:COLSxROWS:SQUARE_M:MARKER_M[:DICT] or aprilgrid:COLSxROWS:TAG_M:SPACING";
 
 struct Board {
   BoardKind kind = BoardKind::kChessboard;
-  int cols = 0, rows = 0;  // chessboard: inner corners; ChArUco: squares
-  double square_m = 0;
+  int cols = 0, rows = 0;                    // chessboard: inner corners; ChArUco: squares; AprilGrid: tags
+  double square_m = 0;                       // AprilGrid: a tag's side
+  double spacing = 0;                        // AprilGrid only: the gap between tags over a tag's side
   double marker_m = 0;                       // ChArUco only
   std::string dictionary;                    // ChArUco only, e.g. "DICT_4X4_50"
   cv::Ptr<cv::aruco::CharucoBoard> charuco;  // ChArUco only
@@ -83,12 +124,22 @@ Board parse_board(const std::string& text);
 // margin: what sim::texture renders and what a user prints. Throws for a chessboard.
 cv::Mat draw_charuco(const Board& board, int px_per_square);
 
+// An AprilGrid sheet as Kalibr prints it, px_per_bit pixels a tag bit (10 bits a tag side), with
+// a margin of one gap around the tags (the outer corner squares lie in it): the board frame's
+// origin is the upper left corner of pixel (g, g), g = aprilgrid_gap_px. The tags are drawn from
+// libapriltag's tag36h11 codes (tag 0 is Kalibr's 0xd5d628584, read row by row from the top
+// left, black for 0). Throws std::invalid_argument for another board, px_per_bit < 1, or a gap
+// that is not a whole number of pixels at this size.
+cv::Mat draw_aprilgrid(const Board& board, int px_per_bit);
+int aprilgrid_gap_px(const Board& board, int px_per_bit);
+
 inline constexpr double kRefineWindowFraction = 0.35;
 inline constexpr int kMinRefineHalfWindow_px = 2;
 inline constexpr int kMaxRefineHalfWindow_px = 40;
 inline constexpr int kRefineIterations = 30;
 inline constexpr double kRefineEpsilon_px = 0.001;
 inline constexpr double kExtensionContrastRatio = 0.5;
+inline constexpr int kMinAprilTags = 4;
 
 // Step 2's half window (px) for a view whose closest corners are smallest_spacing_px apart.
 int refine_half_window_px(double smallest_spacing_px);
@@ -107,7 +158,7 @@ struct BoardDetection {
 };
 
 // min_corners: fewer detected corners than this is "too few corners" (a chessboard is all or
-// nothing; ChArUco boards are often seen in part). Colour images are converted to grey.
+// nothing; ChArUco boards and AprilGrids are often seen in part). Colour images are converted to grey.
 BoardDetection detect_board(const Board& board, const cv::Mat& image, const std::string& view, int min_corners = 6);
 
 }  // namespace kincal::camera

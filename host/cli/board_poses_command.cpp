@@ -93,8 +93,7 @@ void add_board_poses_command(CLI::App& app, int& status) {
   CLI::App* cmd = app.add_subcommand(
       "board-poses", "Pose measurements from board views and joint readings (a camera and a printed board)");
   cmd->add_option("--camera", a->camera, "the camera's calibration (OpenCV or ROS YAML)")->required();
-  cmd->add_option("--board", a->board, "chessboard:COLSxROWS:SQUARE_M or charuco:COLSxROWS:SQUARE_M:MARKER_M[:DICT]")
-      ->required();
+  cmd->add_option("--board", a->board, camera::kBoardForms)->required();
   cmd->add_option("--mount", a->mount, "hand: the camera on the flange; world: the board on the flange")
       ->check(CLI::IsMember({"hand", "world"}))
       ->required();

@@ -1,8 +1,10 @@
 // Accuracy of the camera calibrations on rendered images with known truth (issue #6): one
 // FIGURE line per number. Hand-eye: the error of every method against the true gripper_T_camera,
-// so the methods can be compared, and of the reprojection refinement.
+// so the methods can be compared, and of the reprojection refinement. AprilGrid (issue #22): the
+// detected corners against their true projections, at VGA and in the same scenes at 4K.
 #include <cmath>
 #include <cstdio>
+#include <string>
 #include <vector>
 
 #include "host/camera/hand_eye.hpp"
@@ -38,9 +40,46 @@ void hand_eye_figures(const std::string& name, const Eigen::Isometry3d& estimate
          kDeg * Eigen::AngleAxisd(estimate.rotation().transpose() * truth.rotation()).angle(), "deg");
 }
 
+// The camera scaled by `scale` in focal length and image size: the same scene at a higher
+// resolution.
+sim::CameraSpec scaled(sim::CameraSpec spec, int scale) {
+  spec.width_px *= scale;
+  spec.height_px *= scale;
+  spec.fx_px *= scale;
+  spec.fy_px *= scale;
+  spec.cx_px = (spec.cx_px + 0.5) * scale - 0.5;
+  spec.cy_px = (spec.cy_px + 0.5) * scale - 0.5;
+  return spec;
+}
+
+// AprilGrid corners of rendered views against their true projections: RMS (px) and the fraction
+// of the board's tags found.
+void aprilgrid_figures(const std::string& suffix, const sim::CameraSpec& spec, int views) {
+  const Board board = parse_board(scenes::aprilgrid_text());
+  const std::vector<Eigen::Isometry3d> poses = scenes::board_views(board, views);
+  const std::vector<BoardDetection> found = detect_rendered(board, spec, poses, 300);
+  double sum_sq = 0;
+  std::size_t corners = 0;
+  for (std::size_t v = 0; v < found.size(); ++v) {
+    cv::RNG no_noise(1);
+    const BoardDetection truth = scenes::projected(board, scenes::model_of(spec), poses[v], "truth", no_noise, 0.0);
+    for (std::size_t i = 0; i < found[v].ids.size(); ++i) {
+      const cv::Point2f e = found[v].image_px[i] - truth.image_px[static_cast<std::size_t>(found[v].ids[i])];
+      sum_sq += static_cast<double>(e.dot(e));
+      ++corners;
+    }
+  }
+  figure("aprilgrid_corner_rms_px_" + suffix, std::sqrt(sum_sq / static_cast<double>(corners)), "px");
+  figure("aprilgrid_tags_found_fraction_" + suffix,
+         static_cast<double>(corners) / static_cast<double>(board.corner_count() * views), "fraction");
+}
+
 }  // namespace
 
 int main() {
+  aprilgrid_figures("vga", scenes::test_camera(), 8);
+  aprilgrid_figures("4k", scaled(scenes::test_camera(), 6), 2);
+
   const Board board = parse_board(scenes::chessboard_text());
   const sim::CameraSpec spec = scenes::test_camera();
   const std::vector<Eigen::Isometry3d> views = scenes::board_views(board, 20);

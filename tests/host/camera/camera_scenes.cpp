@@ -27,6 +27,7 @@ sim::CameraSpec test_camera() {
 
 const char* chessboard_text() { return "chessboard:9x6:0.03"; }
 const char* charuco_text() { return "charuco:7x5:0.04:0.03:DICT_4X4_50"; }
+const char* aprilgrid_text() { return "aprilgrid:6x5:0.04:0.3"; }
 
 std::vector<Eigen::Isometry3d> board_views(const camera::Board& board, int n) {
   // The board's centre, where its corners are.
@@ -66,6 +67,16 @@ std::vector<Eigen::Isometry3d> board_views(const camera::Board& board, int n) {
 
 sim::PlanarTarget target_of(const camera::Board& board) {
   if (board.kind == camera::BoardKind::kChessboard) return sim::chessboard(board.cols, board.rows, board.square_m);
+  if (board.kind == camera::BoardKind::kAprilGrid) {
+    // The board's origin is the upper left corner of texel (gap, gap), whose centre sim::texture
+    // puts at gap texels from its own origin.
+    constexpr int kPxPerBit = 10;
+    const double metres_per_px = board.square_m / (10 * kPxPerBit);
+    const double shift_m = (camera::aprilgrid_gap_px(board, kPxPerBit) - 0.5) * metres_per_px;
+    const sim::PlanarTarget sheet = sim::texture(camera::draw_aprilgrid(board, kPxPerBit), metres_per_px);
+    return sim::PlanarTarget{
+        [sheet, shift_m](double x_m, double y_m) { return sheet.reflectance(x_m + shift_m, y_m + shift_m); }};
+  }
   constexpr int kPxPerSquare = 100;
   return sim::texture(camera::draw_charuco(board, kPxPerSquare), board.square_m / kPxPerSquare);
 }

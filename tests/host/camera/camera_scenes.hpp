@@ -18,16 +18,18 @@ namespace kincal::camera::scenes {
 // 640 x 480, fx 610, fy 606, principal point off centre, barrel distortion.
 sim::CameraSpec test_camera();
 
-// The boards the tests use: a 9 x 6 chessboard (COLS + ROWS odd) of 30 mm squares, and a 7 x 5
-// ChArUco board of 40 mm squares.
+// The boards the tests use: a 9 x 6 chessboard (COLS + ROWS odd) of 30 mm squares, a 7 x 5
+// ChArUco board of 40 mm squares and a 6 x 5 AprilGrid of 40 mm tags 12 mm apart.
 const char* chessboard_text();
 const char* charuco_text();
+const char* aprilgrid_text();
 
 // n camera_T_board poses, 0.5..0.75 m away, tilted 15..35 degrees in turning directions, aimed
 // at points spread over the board so that it moves over the image, rolled by up to 15 degrees.
 std::vector<Eigen::Isometry3d> board_views(const camera::Board& board, int n);
 
-// The board's reflectance: sim::chessboard, or OpenCV's ChArUco drawing as a texture.
+// The board's reflectance: sim::chessboard, or OpenCV's ChArUco or kincal's AprilGrid drawing as
+// a texture.
 sim::PlanarTarget target_of(const camera::Board& board);
 
 // One rendered view (2x supersampling, mild noise; `seed` varies the noise).

@@ -200,6 +200,124 @@ TEST_CASE("ChArUco boards drawn by OpenCV are detected with ids and calibrate th
   CHECK(c.rms_px < 0.5);
 }
 
+TEST_CASE("AprilGrid texts parse, number the corners as Kalibr does and name what is wrong") {
+  const Board april = parse_board("aprilgrid:6x5:0.04:0.3");
+  CHECK(april.kind == BoardKind::kAprilGrid);
+  CHECK(april.corner_count() == 120);
+  CHECK(parse_board(april.text()).text() == april.text());
+  // Kalibr's numbering over a 10 x 12 grid of tag corners, rows counted upwards: corner 0 is tag
+  // 0's lower left at the bottom of the sheet (y down here), 1 its lower right, 12 and 13 its
+  // upper left and right, 2 tag 1's lower left; the top left tag's upper left is the origin.
+  const double height = 5 * 0.04 + 4 * 0.012;
+  CHECK(april.corner_m(0).x == doctest::Approx(0.0));
+  CHECK(april.corner_m(0).y == doctest::Approx(height));
+  CHECK(april.corner_m(1).x == doctest::Approx(0.04));
+  CHECK(april.corner_m(12).y == doctest::Approx(height - 0.04));
+  CHECK(april.corner_m(13).x == doctest::Approx(0.04));
+  CHECK(april.corner_m(2).x == doctest::Approx(0.052));
+  CHECK(april.corner_m(108).x == doctest::Approx(0.0));
+  CHECK(april.corner_m(108).y == doctest::Approx(0.0).epsilon(1e-6));
+  CHECK(contains(error_of([] { parse_board("aprilgrid:6x5:0.04"); }), "wrong number of fields"));
+  CHECK(contains(error_of([] { parse_board("aprilgrid:6x5:0.04:3"); }), "spacing '3' must be 0.1 to 1"));
+  CHECK(contains(error_of([] { parse_board("aprilgrid:6x5:0.04:wide"); }), "spacing 'wide' is not a number"));
+  CHECK(contains(error_of([] { parse_board("aprilgrid:1x5:0.04:0.3"); }), "must be 2..100"));
+  CHECK(contains(error_of([] { parse_board("aprilgrid:30x30:0.04:0.3"); }), "needs 900 tags, family 36h11 has 587"));
+  CHECK(contains(error_of([] { (void)draw_aprilgrid(parse_board("aprilgrid:6x5:0.04:0.25"), 1); }),
+                 "a gap of 2.500000 px at 1 px a bit is not whole pixels"));
+  CHECK(contains(error_of([] { (void)draw_aprilgrid(parse_board(scenes::chessboard_text()), 4); }),
+                 "is not an AprilGrid"));
+}
+
+TEST_CASE("AprilGrid sheets are found to a fraction of a pixel and calibrate the camera") {
+  const Board board = parse_board(scenes::aprilgrid_text());
+  const sim::CameraSpec truth = scenes::test_camera();
+  const CameraModel camera = model_of(truth);
+  std::vector<Eigen::Isometry3d> views = scenes::board_views(board, 8);
+  // Two more: the sheet turned 15 degrees further away (about 45 degrees from the line of sight),
+  // and half of it out of the image.
+  Eigen::Isometry3d oblique = views[1];
+  oblique.linear() = oblique.linear() * Eigen::AngleAxisd(15 * kDeg, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  views.push_back(oblique);
+  Eigen::Isometry3d partial = views[0];
+  partial.translation().x() -= 0.2;
+  views.push_back(partial);
+  const std::vector<BoardDetection> detections = detect_rendered(board, truth, views, "april");
+  double sum_sq = 0;
+  std::size_t n = 0;
+  for (std::size_t v = 0; v < detections.size(); ++v) {
+    const BoardDetection& d = detections[v];
+    REQUIRE_MESSAGE(d.found, d.view << ": " << d.reason);
+    CHECK(contains(d.detector, "cornerSubPix"));
+    cv::RNG no_noise(1);
+    const BoardDetection exact = projected(board, camera, views[v], d.view, no_noise, 0.0);
+    // Every tag wholly inside the image is found (a tag's corner squares may reach out of it).
+    std::size_t inside = 0;
+    for (int tag = 0; tag < board.cols * board.rows; ++tag) {
+      const int lower_left = (tag / board.cols) * 4 * board.cols + (tag % board.cols) * 2;
+      bool all = true;
+      for (const int id : {lower_left, lower_left + 1, lower_left + 2 * board.cols, lower_left + 2 * board.cols + 1}) {
+        const cv::Point2f p = exact.image_px[static_cast<std::size_t>(id)];
+        all = all && p.x >= 0 && p.y >= 0 && p.x <= 639 && p.y <= 479;
+      }
+      inside += all ? 1 : 0;
+    }
+    double view_sq = 0;
+    for (std::size_t i = 0; i < d.ids.size(); ++i) {
+      const cv::Point2f e = d.image_px[i] - exact.image_px[static_cast<std::size_t>(d.ids[i])];
+      view_sq += static_cast<double>(e.dot(e));
+    }
+    MESSAGE(d.view << ": " << d.ids.size() / 4 << " of " << inside << " tags inside the image, corner RMS "
+                   << std::sqrt(view_sq / static_cast<double>(d.ids.size())) << " px, " << d.detector);
+    CHECK(d.ids.size() / 4 + 3 >= inside);
+    sum_sq += view_sq;
+    n += d.ids.size();
+  }
+  const double rms_px = std::sqrt(sum_sq / static_cast<double>(n));
+  MESSAGE("AprilGrid corner error against the truth: " << rms_px << " px RMS over " << n << " corners");
+  // Measured 0.169 px (0.13-0.17 px a view at about 3 px a tag bit, 0.30 px in the oblique view).
+  CHECK(rms_px < 0.22);
+  const IntrinsicCalibration c = calibrate_intrinsics(detections);
+  MESSAGE(describe(c));
+  CHECK(std::abs(c.camera.camera_matrix(0, 0) / truth.fx_px - 1) < 0.005);
+  CHECK(std::abs(c.camera.camera_matrix(1, 1) / truth.fy_px - 1) < 0.005);
+  CHECK(std::abs(c.camera.camera_matrix(0, 2) - truth.cx_px) < 3.0);
+  CHECK(std::abs(c.camera.camera_matrix(1, 2) - truth.cy_px) < 3.0);
+  CHECK(std::abs(c.camera.distortion[0] - truth.distortion[0]) < 0.03);
+  CHECK(c.rms_px < 0.3);
+}
+
+TEST_CASE("AprilGrid views of another size, without tags or with too few are refused with the reason") {
+  const Board board = parse_board(scenes::aprilgrid_text());
+  const sim::CameraSpec truth = scenes::test_camera();
+  const Eigen::Isometry3d whole = scenes::board_views(board, 8)[0];
+  const cv::Mat image = scenes::render(truth, whole, scenes::target_of(board), 7);
+  // One column too few, one row too few, one column too many.
+  for (const char* wrong : {"aprilgrid:5x5:0.04:0.3", "aprilgrid:6x4:0.04:0.3", "aprilgrid:7x5:0.04:0.3"}) {
+    CAPTURE(wrong);
+    const BoardDetection d = detect_board(parse_board(wrong), image, "whole.png");
+    CHECK_FALSE(d.found);
+    CHECK(d.fitting_board == "aprilgrid:6x5:0.04:0.3");
+    CHECK(contains(d.reason, "give --board aprilgrid:6x5:0.04:0.3"));
+    MESSAGE(d.reason);
+  }
+  // Another family's tags and a blank image hold no tag of the board.
+  const cv::Mat blank(480, 640, CV_8UC1, cv::Scalar(128));
+  CHECK(detect_board(board, blank, "blank.png").reason ==
+        "pattern not found (no AprilTags of family 36h11 with a 2-bit border)");
+  const BoardDetection charuco = detect_board(
+      board, scenes::render(truth, whole, scenes::target_of(parse_board(scenes::charuco_text())), 7), "charuco.png");
+  CHECK_FALSE(charuco.found);
+  MESSAGE(charuco.reason);
+  // Three tags in view: too few.
+  cv::Mat three(480, 640, CV_8UC1, cv::Scalar(255));
+  const cv::Mat sheet = draw_aprilgrid(board, 4);
+  const int gap = aprilgrid_gap_px(board, 4), pitch = 40 + gap;
+  sheet(cv::Rect(0, 0, 3 * pitch + gap, pitch + gap)).copyTo(three(cv::Rect(100, 100, 3 * pitch + gap, pitch + gap)));
+  const BoardDetection few = detect_board(board, three, "three.png");
+  CHECK_FALSE(few.found);
+  CHECK(few.reason == "too few tags (3 of the board, at least 4)");
+}
+
 TEST_CASE("stereo calibration recovers the baseline and rectifies") {
   const Board board = parse_board(scenes::chessboard_text());
   const std::vector<Eigen::Isometry3d> left_views = scenes::board_views(board, kViews);

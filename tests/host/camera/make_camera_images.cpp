@@ -8,6 +8,7 @@
 //                          vector), no joint columns
 //   poses_4x4.txt          the same poses as 4x4 matrices, row-major, 16 numbers a line
 //   blank.png              an image without a board;  not_an_image.png  text, not an image
+//   aprilgrid/april_NN.png 12 rendered views of the 6 x 5 AprilGrid (issue #22)
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -86,6 +87,14 @@ int main(int argc, char** argv) {
   write_poses((dir / "poses_swapped.csv").string(), swapped);
   write_controller_poses((dir / "poses_rotvec.csv").string(), (dir / "poses_4x4.txt").string(), poses);
   cv::imwrite((dir / "blank.png").string(), cv::Mat(480, 640, CV_8UC1, cv::Scalar(150)));
+  fs::create_directories(dir / "aprilgrid");
+  const camera::Board april = camera::parse_board(camera::scenes::aprilgrid_text());
+  const sim::PlanarTarget april_target = camera::scenes::target_of(april);
+  const std::vector<Eigen::Isometry3d> april_views = camera::scenes::board_views(april, 12);
+  for (std::size_t i = 0; i < april_views.size(); ++i) {
+    cv::imwrite((dir / "aprilgrid" / numbered("april", i)).string(),
+                camera::scenes::render(camera::scenes::test_camera(), april_views[i], april_target, 200 + i));
+  }
   std::ofstream(dir / "not_an_image.png") << "plain text, not a PNG\n";
   return 0;
 }
