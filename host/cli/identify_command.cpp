@@ -22,6 +22,7 @@
 #include "host/model/model_file.hpp"
 #include "host/model/ur_kinematics.hpp"
 #include "host/model/urdf.hpp"
+#include "host/report/identify_report.hpp"
 
 namespace kincal::cli {
 
@@ -30,7 +31,7 @@ namespace {
 struct IdentifyArgs {
   ModelOption model;
   std::string data, out, method = "full", start = "nominal", validate, urdf, model_select = "auto", hand_eye,
-                         mount = "hand";
+                         mount = "hand", report;
   std::vector<std::string> fix, params, prior;
   double sigma_m = 0.0, orientation_sigma_deg = 0.0, outlier_probability = 1e-3, max_rejected_fraction = 0.05;
   bool no_robust = false, no_model_error = false, accept_implausible = false, no_prior = false;
@@ -133,9 +134,12 @@ std::string next_steps(const IdentifyArgs& a, const identify::IdentifyResult& re
 
 // --model-select: auto (cross-validation over the candidate models, model_selection.hpp, with
 // enough rows), off (every parameter the model names, the default priors), or a candidate's name.
-// Returns the model to identify from (the nominal, or the nominal with scales added).
+// Returns the model to identify from (the nominal, or the nominal with scales added); `how` says
+// how it was chosen, `selection` holds the table when cross-validation ran.
 model::RobotModel choose_model(const IdentifyArgs& a, const model::RobotModel& nominal, const model::Dataset& data,
-                               identify::IdentifyOptions& options) {
+                               identify::IdentifyOptions& options, std::string& how,
+                               std::optional<identify::Selection>& selection) {
+  how = "every parameter the model names, the default priors (--model-select " + a.model_select + ")";
   if (a.model_select == "off") return nominal;
   std::string not_here;
   if (!a.params.empty()) not_here = "--params";
@@ -147,24 +151,28 @@ model::RobotModel choose_model(const IdentifyArgs& a, const model::RobotModel& n
       throw model::InputError(
           "--model-select " + a.model_select + ": not with " + not_here +
           " (the candidates are full solves from the nominal with their own parameters and priors)");
-    std::cout << "model selection: off (" << not_here << " chooses the model)\n";
+    how = not_here + " chooses the model";
+    std::cout << "model selection: off (" << how << ")\n";
     return nominal;
   }
   if (a.model_select != "auto") {
     const identify::Candidate chosen = identify::find_candidate(nominal, options, a.model_select);
     options = chosen.options;
-    std::cout << "model: " << a.model_select << " (--model-select)\n";
+    how = a.model_select + " (--model-select)";
+    std::cout << "model: " << how << '\n';
     return chosen.model;
   }
   if (static_cast<int>(data.rows.size()) < identify::kMinRowsForSelection) {
-    std::cout << "model selection: off (" << data.rows.size() << " rows, fewer than " << identify::kMinRowsForSelection
-              << " for cross-validation): every parameter the model names, the default priors\n";
+    how = "every parameter the model names, the default priors (" + std::to_string(data.rows.size()) +
+          " rows, fewer than " + std::to_string(identify::kMinRowsForSelection) + " for cross-validation)";
+    std::cout << "model selection: off: " << how << '\n';
     return nominal;
   }
-  const identify::Selection selection = identify::select_model(nominal, data, options);
-  std::cout << identify::format_selection(selection);
-  options = selection.chosen.options;
-  return selection.chosen.model;
+  selection = identify::select_model(nominal, data, options);
+  std::cout << identify::format_selection(*selection);
+  options = selection->chosen.options;
+  how = selection->chosen.name + " (chosen by cross-validation)";
+  return selection->chosen.model;
 }
 
 int run_identify(const IdentifyArgs& a) {
@@ -182,8 +190,9 @@ int run_identify(const IdentifyArgs& a) {
   options.max_rejected_fraction = a.max_rejected_fraction;
   options.model_error = !a.no_model_error;
   try {
-    files::refuse_overwriting({{"--out", a.out}, {"--urdf", a.urdf}, {"--hand-eye", a.hand_eye}},
-                              {{"--model", a.model.path}, {"--data", a.data}, {"--validate", a.validate}});
+    files::refuse_overwriting(
+        {{"--out", a.out}, {"--urdf", a.urdf}, {"--hand-eye", a.hand_eye}, {"--report", a.report}},
+        {{"--model", a.model.path}, {"--data", a.data}, {"--validate", a.validate}});
     const model::RobotModel nominal = a.model.load();
     // Priors: the model file's (a YAML model), then --prior's; later entries win.
     if (!model::is_urdf_path(a.model.path)) options.prior.sigma = model::load_model_priors(a.model.path);
@@ -208,7 +217,9 @@ int run_identify(const IdentifyArgs& a) {
     }
     if (!a.accept_implausible)
       identify::require_plausible(nominal, data, "--accept-implausible", {.noise_given = a.sigma_m > 0});
-    const model::RobotModel start = choose_model(a, nominal, data, options);
+    std::string model_choice;
+    std::optional<identify::Selection> selection;
+    const model::RobotModel start = choose_model(a, nominal, data, options, model_choice, selection);
     identify::IdentifyResult result = identify::identify(start, data, options);
     std::cout << "kincal identify: " << nominal.name << " from " << a.data << '\n' << identify::format_report(result);
     // The baseline: the nominal geometry registered to the device, its tool fitted.
@@ -240,6 +251,12 @@ int run_identify(const IdentifyArgs& a) {
         a.hand_eye.empty() ? std::string()
                            : camera::rig_hand_eye_text(a.mount == "hand", model::isometry(result.model.flange_T_tool),
                                                        model::isometry(result.model.base_T_frame0).inverse());
+    const std::string report_html = a.report.empty()
+                                        ? std::string()
+                                        : report::render_html(report::identify_report(
+                                              {nominal, data, result, model_choice, selection ? &*selection : nullptr,
+                                               registered ? &*registered : nullptr, held_out ? &*held_out : nullptr},
+                                              report::utc_date_now()));
     files::write_file_atomically(a.out, model_text);
     std::cout << "wrote " << a.out << '\n';
     if (!a.hand_eye.empty()) {
@@ -254,6 +271,10 @@ int run_identify(const IdentifyArgs& a) {
                   << print_registration(*calibrated_urdf);
       else
         std::cout << '\n';
+    }
+    if (!a.report.empty()) {
+      report::write_page(report_html, a.report);
+      std::cout << "wrote " << a.report << " (the HTML report)\n";
     }
     std::cout << next_steps(a, result);
     return 0;
@@ -274,6 +295,9 @@ void add_identify_command(CLI::App& app, int& status) {
          std::string("measurements (CSV: q1..qN,x,y,z[,qw,qx,qy,qz][,cxx..czz|,sigma]; ") + files::kTextLimitText + ")")
       ->required();
   cmd->add_option("--out", a->out, "calibrated model to write (YAML, same schema)")->required();
+  cmd->add_option("--report", a->report,
+                  "also write an HTML report: the model selection table, each parameter's prior and posterior, the "
+                  "residuals against each joint, the rejected rows with their line and id");
   cmd->add_option("--hand-eye", a->hand_eye,
                   "also write the identified tool and device registration as `camera hand-eye` does (OpenCV YAML)");
   cmd->add_option("--mount", a->mount,

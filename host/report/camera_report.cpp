@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdio>
 
 #include "host/report/report.hpp"
 #include "host/report/svg_plot.hpp"
@@ -14,12 +13,6 @@ namespace {
 
 constexpr std::array<const char*, 8> kViewColours = {"#d95f02", "#7570b3", "#1b9e77", "#e7298a",
                                                      "#66a61e", "#e6ab02", "#a6761d", "#666666"};
-
-std::string fixed_text(double v, int decimals) {
-  char text[48];
-  std::snprintf(text, sizeof text, "%.*f", decimals, v);
-  return text;
-}
 
 void require_that(bool ok, const std::string& what) {
   if (!ok) throw ReportError("camera report: " + what);

@@ -62,6 +62,9 @@ struct RowUnit {
 
 RowUnit row_unit(Quantity q, const std::vector<double>& values) {
   if (q == Quantity::length_m) return {" mm", kMm, 3};
+  if (q == Quantity::ratio) return {"", 1.0, 6};
+  if (q == Quantity::compliance_rad_per_nm) return {" &micro;rad/(N&middot;m)", kUm, 3};
+  if (q == Quantity::compliance_m_per_n) return {" &micro;m/N", kUm, 3};
   const bool small = std::all_of(values.begin(), values.end(), [](double v) { return std::abs(v) < 0.1; });
   return small ? RowUnit{" mrad", kMm, 3} : RowUnit{"&deg;", kDeg, 4};
 }
@@ -119,10 +122,13 @@ void validate(const RunContext& c) {
     if (p.stddev && !(*p.stddev >= 0.0)) c.fail("parameter " + p.name + ": its sigma is negative or not a number");
   for (const Accuracy& a : run.accuracy)
     if (a.count < 0) c.fail("accuracy '" + a.label + "': the pose count is negative");
-  for (std::size_t i = 0; i < run.validation.size(); ++i)
-    if (run.validation[i].q.size() != run.joints.size())
-      c.fail("validation pose " + std::to_string(i + 1) + ": " + std::to_string(run.validation[i].q.size()) +
-             " joint readings, the run names " + std::to_string(run.joints.size()) + " joints");
+  const auto check_readings = [&](const std::string& what, std::size_t i, const std::vector<double>& q) {
+    if (q.size() != run.joints.size())
+      c.fail(what + " " + std::to_string(i + 1) + ": " + std::to_string(q.size()) + " joint readings, the run names " +
+             std::to_string(run.joints.size()) + " joints");
+  };
+  for (std::size_t i = 0; i < run.validation.size(); ++i) check_readings("validation pose", i, run.validation[i].q);
+  for (std::size_t i = 0; i < run.fit_residuals.size(); ++i) check_readings("fit residual", i, run.fit_residuals[i].q);
   for (std::size_t i = 0; i < run.sweeps.size(); ++i) {
     const SweepPlot& s = run.sweeps[i];
     const std::string where = "sweep " + std::to_string(i + 1) + ": ";
@@ -168,18 +174,22 @@ std::string model_table(const RunContext& c) {
                                  [](const ParameterRow& p) { return p.truth.has_value(); });
   const bool identifiable = std::any_of(run.parameters.begin(), run.parameters.end(),
                                         [](const ParameterRow& p) { return p.identifiable_truth.has_value(); });
+  const bool priors = std::any_of(run.parameters.begin(), run.parameters.end(), [](const ParameterRow& p) {
+    return p.prior_sigma.has_value() || p.data_share.has_value();
+  });
   std::string html = "<section class=\"model\" id=\"" + c.id("model") +
                      "\"><h3>Identified model</h3><table class=\"model\"><tr>" + heading("parameter") +
                      heading("nominal") + heading("identified") + heading("change") + heading("1-sigma");
+  if (priors) html += heading("prior sigma") + heading("from data");
   if (truth) {
     html += heading("true");
     if (identifiable) html += heading("true, as the data identify it");
     html += heading(identifiable ? "error (identified \u2212 identifiable)" : "error (identified \u2212 true)");
   }
   html += "</tr>";
-  const int columns = 5 + (truth ? 2 : 0) + (truth && identifiable ? 1 : 0);
+  const int columns = 5 + (priors ? 2 : 0) + (truth ? 2 : 0) + (truth && identifiable ? 1 : 0);
   std::string group;
-  bool first = true, any_off = false, any_fixed = false, any_absorbed = false;
+  bool first = true, any_off = false, any_fixed = false, any_absorbed = false, any_beyond_prior = false;
   for (const ParameterRow& p : run.parameters) {
     if (first || p.group != group)
       html +=
@@ -190,10 +200,16 @@ std::string model_table(const RunContext& c) {
     for (const std::optional<double>& v : {p.truth, p.identifiable_truth})
       if (v) values.push_back(*v);
     const RowUnit u = row_unit(p.quantity, values);
+    const double change = p.identified - p.nominal;
+    const bool beyond_prior = p.prior_sigma && std::abs(change) > 3.0 * *p.prior_sigma;
+    any_beyond_prior = any_beyond_prior || beyond_prior;
     html += "<tr><td>" + escape_html(p.name) + "</td>" + cell(value_text(u, p.nominal)) +
-            cell(value_text(u, p.identified)) + cell(delta_text(u, p.identified - p.nominal)) +
+            cell(value_text(u, p.identified)) + cell(delta_text(u, change), beyond_prior ? "n off" : "n") +
             (p.stddev ? cell(delta_text(u, *p.stddev)) : cell("held fixed", "fixed"));
     any_fixed = any_fixed || !p.stddev;
+    if (priors)
+      html += cell(p.prior_sigma ? delta_text(u, *p.prior_sigma) : "none") +
+              cell(p.data_share ? format("%.1f %%", 100.0 * *p.data_share) : "");
     if (truth) {
       html += cell(p.truth ? value_text(u, *p.truth) : "");
       if (identifiable) {
@@ -230,6 +246,12 @@ std::string model_table(const RunContext& c) {
                                    "errors it takes up"
                                  : "") +
         "</li>";
+  if (priors)
+    html +=
+        "<li>prior sigma: the prior's 1-sigma on the deviation from the nominal; from data: the share of the "
+        "parameter's posterior information that the measurements give, the rest is its prior's</li>";
+  if (any_beyond_prior)
+    html += "<li><span class=\"off\">bold red change</span>: more than 3 prior sigmas from the nominal</li>";
   if (any_off) html += "<li><span class=\"off\">bold red</span>: the error is more than 3 sigma</li>";
   return html + "</ul></section>";
 }
@@ -274,13 +296,13 @@ std::string accuracy(const RunContext& c) {
   const Run& run = c.run();
   const bool orientation =
       std::any_of(run.accuracy.begin(), run.accuracy.end(), [](const Accuracy& a) { return a.mean_rad.has_value(); });
-  std::string html = "<section class=\"accuracy\" id=\"" + c.id("accuracy") +
-                     "\"><h3>Accuracy on validation poses</h3><table class=\"accuracy\"><tr>" + heading("model") +
+  std::string html = "<section class=\"accuracy\" id=\"" + c.id("accuracy") + "\"><h3>Accuracy on " +
+                     escape_html(run.accuracy_of) + "</h3><table class=\"accuracy\"><tr>" + heading("model") +
                      heading("poses") + heading("position mean") + heading("RMS") + heading("max");
   if (orientation) html += heading("orientation mean") + heading("RMS") + heading("max");
   html += "</tr>";
   PlotSpec plot;
-  plot.title = "Position error on the validation poses";
+  plot.title = "Position error on " + run.accuracy_of;
   plot.width_px = 560;
   plot.height_px = 90 + 30 * static_cast<int>(run.accuracy.size());
   plot.x = {"position error (mm)", true, {}, {}, {}};
@@ -306,6 +328,21 @@ std::string accuracy(const RunContext& c) {
   return html + "</table><div class=\"plots\">" + svg_plot(plot) + "</div></section>";
 }
 
+// A joint's reading as its plots show it: deg (revolute) or mm (prismatic).
+double reading(const JointInfo& joint, double q) { return q * (joint.prismatic ? kMm : kDeg); }
+
+// A small plot of position error (mm) against joint j's reading, without its series.
+PlotSpec joint_plot(const Run& run, std::size_t j, bool log_error) {
+  const JointInfo& joint = run.joints[j];
+  PlotSpec plot;
+  plot.title = "Joint " + std::to_string(j + 1) + (joint.name.empty() ? "" : " (" + joint.name + ")");
+  plot.width_px = 290;
+  plot.height_px = 220;
+  plot.x = {joint.prismatic ? "reading (mm)" : "reading (deg)", false, {}, {}, {}};
+  plot.y = {"position error (mm)", log_error, {}, {}, {}};
+  return plot;
+}
+
 std::string residuals(const RunContext& c) {
   const Run& run = c.run();
   std::string html = "<section class=\"residuals\" id=\"" + c.id("residuals") +
@@ -324,19 +361,35 @@ std::string residuals(const RunContext& c) {
   }
   html += svg_plot(per_pose) + "</div><h4>Against each joint's reading</h4><div class=\"plots\">";
   for (std::size_t j = 0; j < run.joints.size(); ++j) {
-    const JointInfo& joint = run.joints[j];
-    PlotSpec plot;
-    plot.title = "Joint " + std::to_string(j + 1) + (joint.name.empty() ? "" : " (" + joint.name + ")");
-    plot.width_px = 290;
-    plot.height_px = 220;
-    plot.x = {joint.prismatic ? "reading (mm)" : "reading (deg)", false, {}, {}, {}};
-    plot.y = {"position error (mm)", true, {}, {}, {}};
+    PlotSpec plot = joint_plot(run, j, true);
     plot.series = {{"before", kBefore, {}, {}, false}, {"after", kAfter, {}, {}, false}};
     for (const ValidationPose& pose : run.validation) {
-      const double reading = pose.q[j] * (joint.prismatic ? kMm : kDeg);
-      for (PlotSeries& s : plot.series) s.x.push_back(reading);
+      for (PlotSeries& s : plot.series) s.x.push_back(reading(run.joints[j], pose.q[j]));
       plot.series[0].y.push_back(pose.before_m * kMm);
       plot.series[1].y.push_back(pose.after_m * kMm);
+    }
+    html += svg_plot(plot);
+  }
+  return html + "</div></section>";
+}
+
+std::string fit_residuals(const RunContext& c) {
+  const Run& run = c.run();
+  const bool any_rejected =
+      std::any_of(run.fit_residuals.begin(), run.fit_residuals.end(), [](const FitResidual& r) { return r.rejected; });
+  std::string html = "<section class=\"fit-residuals\" id=\"" + c.id("fit-residuals") +
+                     "\"><h3>Residuals of the fit</h3><p>Position error of the identified model on each measurement "
+                     "it was identified from, against each joint's reading" +
+                     std::string(any_rejected ? "; the rows rejected as outliers (left out of the fit) marked" : "") +
+                     ".</p><div class=\"plots\">";
+  for (std::size_t j = 0; j < run.joints.size(); ++j) {
+    PlotSpec plot = joint_plot(run, j, false);
+    plot.series = {{"used", kAfter, {}, {}, false}};
+    if (any_rejected) plot.series.push_back({"rejected", kBefore, {}, {}, false});
+    for (const FitResidual& r : run.fit_residuals) {
+      PlotSeries& s = plot.series[r.rejected ? 1 : 0];
+      s.x.push_back(reading(run.joints[j], r.q[j]));
+      s.y.push_back(r.residual_m * kMm);
     }
     html += svg_plot(plot);
   }
@@ -610,6 +663,7 @@ std::string run_section(const RunContext& c) {
   if (!run.held_fixed.empty() || !run.notes.empty()) html += identifiability(c);
   if (!run.accuracy.empty()) html += accuracy(c);
   if (!run.validation.empty()) html += residuals(c);
+  if (!run.fit_residuals.empty()) html += fit_residuals(c);
   if (!run.sweeps.empty()) html += sweeps(c);
   if (run.bus) html += bus(c, *run.bus);
   for (std::size_t i = 0; i < run.comparisons.size(); ++i) html += comparison(c, run.comparisons[i], i);

@@ -13,12 +13,18 @@
 //                    given (the held-fixed parameters it absorbs named), so that a correct
 //                    result is never marked; errors beyond 3 sigma are marked, and a legend
 //                    under the table says what each mark means;
+//                    with a prior (identify's MAP, issue #23): its prior sigma and the share of
+//                    its information the data give; a change beyond 3 prior sigmas is marked;
 //   identifiability  the parameters held fixed and why, and free-text notes (a note's further
 //                    lines, after '\n', are listed under it one by one);
 //   accuracy         per model (e.g. nominal, identified): mean, RMS, max position error on the
-//                    validation poses (and orientation when given), as a table and a dot plot;
+//                    validation poses, or what accuracy_of names (and orientation when given), as
+//                    a table and a dot plot;
 //   residuals        position error per validation pose before/after, and after vs each joint's
 //                    reading, one small plot per joint;
+//   fit residuals    each measurement's position residual under the identified model against
+//                    each joint's reading, one small plot per joint, the rows rejected as
+//                    outliers marked;
 //   sweeps           each single-joint sweep in 3-D (an orthographic view from above the fit's
 //                    plane, the axis upright: the points, the fitted circle or line, the axis,
 //                    the device frame's directions, the points' offsets from the fit magnified
@@ -31,7 +37,8 @@
 //
 // Units: every input is SI (m, rad, s). Shown as the reader expects, one unit per table row:
 // lengths in mm; angles in deg, or in mrad in a row whose values are all below 0.1 rad (small
-// angles: base and tool rotations, angle offsets); joint readings in deg (revolute) or mm.
+// angles: base and tool rotations, angle offsets); ratios plain; compliances in urad/(N m) or
+// um/N; joint readings in deg (revolute) or mm.
 // Lengths in plot notes and axes are in um below 1 mm and in mm from there (one rule,
 // length_unit() in report.cpp, for every plot). All text is HTML-escaped.
 //
@@ -39,7 +46,7 @@
 // milliseconds into about 200 kB. Thread safety: pure functions.
 //
 // Errors: ReportError, its message naming the run (index and title) and the item at fault --
-// a validation pose whose joint readings do not match the run's joints; a comparison row or a
+// a validation pose or a fit residual whose joint readings do not match the run's joints; a comparison row or a
 // text table's row with more or fewer values than columns; a sweep of a joint the run does not have, with fewer than
 // 3 points or a zero axis direction; a non-finite number where a plot needs it; a negative
 // count or sigma. write_html() also throws ReportError when the file cannot be written.
@@ -60,7 +67,9 @@ class ReportError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-enum class Quantity { length_m, angle_rad };
+// What a parameter's value measures (SI): a joint's scale is a ratio; a compliance is rad/(N m)
+// on a revolute joint, m/N on a prismatic one.
+enum class Quantity { length_m, angle_rad, ratio, compliance_rad_per_nm, compliance_m_per_n };
 
 struct ParameterRow {
   std::string group;  // "joint 1", "base", "tool": rows of a group are shown together, in order
@@ -77,6 +86,10 @@ struct ParameterRow {
   // The error is measured from it when given.
   std::optional<double> identifiable_truth;
   std::string absorbs;
+  // The prior on the deviation from `nominal` (identify's MAP): its 1-sigma, SI (absent: no
+  // prior), and the share of the parameter's posterior information the data give, 0..1.
+  std::optional<double> prior_sigma;
+  std::optional<double> data_share;
 };
 
 struct HeldFixed {
@@ -96,6 +109,14 @@ struct ValidationPose {
   std::vector<double> q;  // joint readings, rad or m (one per Run::joints entry)
   double before_m = 0.0;  // position error of the nominal model
   double after_m = 0.0;   // position error of the identified model
+};
+
+// A measurement the model was identified from, and its position error under the identified
+// model (the fit's residual; for a rejected row, how far the model misses it).
+struct FitResidual {
+  std::vector<double> q;  // joint readings, rad or m (one per Run::joints entry)
+  double residual_m = 0.0;
+  bool rejected = false;  // left out of the fit as an outlier
 };
 
 struct JointInfo {
@@ -159,7 +180,9 @@ struct Run {
   std::vector<HeldFixed> held_fixed;
   std::vector<std::string> notes;
   std::vector<Accuracy> accuracy;
+  std::string accuracy_of = "the validation poses";  // what the accuracy rows measure on
   std::vector<ValidationPose> validation;
+  std::vector<FitResidual> fit_residuals;
   std::vector<SweepPlot> sweeps;
   std::optional<BusStatistics> bus;
   std::vector<Comparison> comparisons;

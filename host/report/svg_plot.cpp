@@ -198,6 +198,12 @@ double text_width_px(std::string_view text, double font_px, bool bold) {
   return em * font_px * (bold ? 1.12 : 1.0);
 }
 
+std::string fixed_text(double v, int decimals) {
+  char text[48];
+  std::snprintf(text, sizeof text, "%.*f", decimals, v);
+  return text;
+}
+
 std::string plot_style() {
   std::string css = "svg.plot text{fill:#333}";
   for (const Font& f : {kTitle, kLabel, kTick, kLegend, kNote}) {

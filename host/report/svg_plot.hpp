@@ -62,6 +62,9 @@ std::string svg_plot(const PlotSpec& spec);
 // The CSS of the plots' text (font sizes and weights), which svg_plot's layout assumes.
 std::string plot_style();
 
+// `v` with `decimals` digits after the point ("%.*f").
+std::string fixed_text(double v, int decimals);
+
 // The estimated width in px of `text` (UTF-8) at `font_px`, on the wide side (see above).
 double text_width_px(std::string_view text, double font_px, bool bold = false);
 

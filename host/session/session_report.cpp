@@ -14,19 +14,6 @@ namespace kincal::session {
 
 namespace {
 
-bool is_angle(core::ParameterKind k) {
-  using K = core::ParameterKind;
-  return k == K::link_theta || k == K::link_alpha || k == K::link_beta || (k >= K::base_rx && k <= K::base_rz) ||
-         k >= K::tool_rx;
-}
-
-std::string group_of(core::ParameterId id) {
-  using K = core::ParameterKind;
-  if (id.kind >= K::base_x && id.kind <= K::base_rz) return "base";
-  if (id.kind >= K::tool_x && !model::is_joint_map_parameter(id.kind)) return "tool";
-  return "joint " + std::to_string(id.link + 1);
-}
-
 double error_of(const model::RobotModel& model, std::span<const double> q, const model::Vector3& measured) {
   return (model::forward_kinematics(model, q).translation - measured).norm();
 }
@@ -125,31 +112,6 @@ IdentifiableTruth identifiable_truth(const identify::IdentifyResult& r, const mo
 
 }  // namespace
 
-double parameter_value(const model::RobotModel& model, const model::RobotModel& start, core::ParameterId id) {
-  using K = core::ParameterKind;
-  if (id.kind == model::kJointScale) return model.joints.at(id.link).scale.value_or(1.0);
-  if (id.kind == model::kJointCompliance) return model.joints.at(id.link).compliance.value_or(0.0);
-  if (id.kind >= K::base_x && id.kind <= K::base_rz)
-    return identify::small_motion(start.base_T_frame0,
-                                  model.base_T_frame0)(static_cast<int>(id.kind) - static_cast<int>(K::base_x));
-  if (id.kind >= K::tool_x)
-    return identify::small_motion(start.flange_T_tool,
-                                  model.flange_T_tool)(static_cast<int>(id.kind) - static_cast<int>(K::tool_x));
-  const core::LinkParameters<double> p = model::to_chain(model).links[id.link].parameters;
-  switch (id.kind) {
-    case K::link_d:
-      return p.d_m;
-    case K::link_theta:
-      return p.theta_rad;
-    case K::link_a:
-      return p.a_m;
-    case K::link_alpha:
-      return p.alpha_rad;
-    default:
-      return p.beta_rad;
-  }
-}
-
 report::Run report_run(const RunDescription& description, const model::RobotModel& nominal, const SessionData& data,
                        const Calibration& calibration, const std::optional<model::RobotModel>& truth,
                        const identify::CpaResult* cpa) {
@@ -172,9 +134,9 @@ report::Run report_run(const RunDescription& description, const model::RobotMode
                                               : std::nullopt;
   for (std::size_t k = 0; k < ids.size(); ++k) {
     report::ParameterRow row;
-    row.group = group_of(ids[k]);
+    row.group = report::parameter_group(ids[k]);
     row.name = model::parameter_name(ids[k]);
-    row.quantity = is_angle(ids[k].kind) ? report::Quantity::angle_rad : report::Quantity::length_m;
+    row.quantity = report::parameter_quantity(r.start, ids[k]);
     row.nominal = parameter_value(r.start, r.start, ids[k]);
     row.identified = parameter_value(r.model, r.start, ids[k]);
     if (static_cast<Eigen::Index>(k) < r.stddev.size()) row.stddev = r.stddev(static_cast<Eigen::Index>(k));
@@ -199,21 +161,6 @@ report::Run report_run(const RunDescription& description, const model::RobotMode
 
   if (cpa) run.sweeps = report_sweeps(data.calibration, cpa->fits);
   return run;
-}
-
-report::Accuracy report_accuracy(const std::string& label, const identify::AccuracyStats& s) {
-  report::Accuracy a;
-  a.label = label;
-  a.count = s.count;
-  a.mean_m = s.mean_m;
-  a.rms_m = s.rms_m;
-  a.max_m = s.max_m;
-  if (s.has_orientation) {
-    a.mean_rad = s.mean_rad;
-    a.rms_rad = s.rms_rad;
-    a.max_rad = s.max_rad;
-  }
-  return a;
 }
 
 std::vector<report::SweepPlot> report_sweeps(const model::Dataset& data, const std::vector<identify::SweepFit>& fits,

@@ -23,7 +23,7 @@
 #include <vector>
 
 #include "host/identify/cpa.hpp"
-#include "host/report/report.hpp"
+#include "host/report/identify_report.hpp"
 #include "host/session/session.hpp"
 
 namespace kincal::session {
@@ -37,18 +37,15 @@ report::Run report_run(const RunDescription& description, const model::RobotMode
                        const Calibration& calibration, const std::optional<model::RobotModel>& truth,
                        const identify::CpaResult* cpa);
 
-// identify's accuracy figures as a report row labelled `label` (orientation when it has them).
-report::Accuracy report_accuracy(const std::string& label, const identify::AccuracyStats& s);
+// identify's figures as the reports show them (host/report/identify_report.hpp).
+using report::parameter_value;
+using report::report_accuracy;
 
 // Each fit's sweep for the report: the fit (device frame) with the sweep's measured points,
 // found in `data` as identify::find_sweeps finds them; fits of joints without a sweep are left
 // out. report_run uses it for cpa; `kincal discover --report` for the discovered fits.
 std::vector<report::SweepPlot> report_sweeps(const model::Dataset& data, const std::vector<identify::SweepFit>& fits,
                                              double still_tolerance = 0.0);
-
-// The value of parameter `id` in `model`, as report_run shows it (see above); exported for the
-// demo's tables.
-double parameter_value(const model::RobotModel& model, const model::RobotModel& start, core::ParameterId id);
 
 // Frames, payload bytes, span and load of a candump -L log of a bus at `bit_rate` (worst-case
 // bit stuffing, as host/can/bus_budget counts frames).

@@ -382,3 +382,43 @@ TEST_CASE("report: a note's further lines are items of their own; text tables; l
   CHECK_THROWS_WITH_AS(render_html(report), doctest::Contains("table 'Joint-type tests', row 2: 4 cells for 5 columns"),
                        ReportError);
 }
+
+TEST_CASE("report: priors in the model table, a change beyond 3 prior sigmas marked; fit residuals per joint") {
+  Report report = testing::sample_report();
+  Run& run = report.runs[0];
+  for (ParameterRow& p : run.parameters) {  // every change well within 3 prior sigmas
+    p.prior_sigma = 0.01;
+    p.data_share = 0.25;
+  }
+  run.parameters[0].prior_sigma.reset();
+  std::string html = render_html(report);
+  CHECK(has(html, "<th>prior sigma</th><th>from data</th>"));
+  CHECK(has(html, "<td class=\"n\">none</td><td class=\"n\">25.0 %</td>"));
+  CHECK(has(html,
+            "<tr><td>base_rx</td><td class=\"n\">0.000 mrad</td><td class=\"n\">1.200 mrad</td><td "
+            "class=\"n\">1.2000 mrad</td><td class=\"n\">0.1000 mrad</td><td class=\"n\">10.0000 mrad</td><td "
+            "class=\"n\">25.0 %</td>"));
+  CHECK_FALSE(has(html, "more than 3 prior sigmas"));
+  for (ParameterRow& p : run.parameters)
+    if (p.name == "base_rx") p.prior_sigma = 0.3e-3;  // 1.2 mrad is 4 prior sigmas
+  html = render_html(report);
+  CHECK(has(html,
+            "<tr><td>base_rx</td><td class=\"n\">0.000 mrad</td><td class=\"n\">1.200 mrad</td><td "
+            "class=\"n off\">1.2000 mrad</td>"));
+  CHECK(has(html, "<li><span class=\"off\">bold red change</span>: more than 3 prior sigmas from the nominal</li>"));
+
+  CHECK_FALSE(has(html, "class=\"fit-residuals\""));
+  const int plots = count(html, "<svg class=\"plot\"");
+  run.fit_residuals = {{std::vector<double>(run.joints.size(), 0.1), 0.2e-3, false},
+                       {std::vector<double>(run.joints.size(), 0.3), 0.3e-3, false},
+                       {std::vector<double>(run.joints.size(), 0.5), 2.5e-3, true}};
+  html = render_html(report);
+  CHECK(count(html, "<svg class=\"plot\"") == plots + static_cast<int>(run.joints.size()));
+  const std::size_t section = html.find("<section class=\"fit-residuals\"");
+  REQUIRE(section != std::string::npos);
+  const std::string body = html.substr(section, html.find("</section>", section) - section);
+  CHECK(count(body, ">rejected</text>") == static_cast<int>(run.joints.size()));
+  CHECK(has(body, "the rows rejected as outliers (left out of the fit) marked"));
+  run.fit_residuals[1].q.pop_back();
+  CHECK_THROWS_WITH_AS(render_html(report), doctest::Contains("fit residual 2: "), ReportError);
+}

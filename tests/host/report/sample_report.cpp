@@ -55,14 +55,14 @@ Run arm_run(std::mt19937_64& rng) {
     add_joint_rows(run, rng, j + 1, d[j], a[j], alpha[j]);
   }
   for (const char* name : {"base_x", "base_y"})
-    run.parameters.push_back({"base", name, Quantity::length_m, 0.5, 0.5021, 3e-5, 0.50205, 0.50205, ""});
+    run.parameters.push_back({"base", name, Quantity::length_m, 0.5, 0.5021, 3e-5, 0.50205, 0.50205, "", {}, {}});
   // base_z takes up the true error of d1 (held fixed): 1.4 mm from its own true value, correct
   // as the data can identify it, so not marked.
-  run.parameters.push_back({"base", "base_z", Quantity::length_m, 0.5, 0.5021, 3e-5, 0.50065, 0.50205, "d1"});
-  run.parameters.push_back({"base", "base_rx", Quantity::angle_rad, 0.0, 1.2e-3, 1e-4, 1.1e-3, 1.1e-3, ""});
-  run.parameters.push_back({"tool", "tool_z", Quantity::length_m, 0.1, 0.1, std::nullopt, 0.1, 0.1, ""});
+  run.parameters.push_back({"base", "base_z", Quantity::length_m, 0.5, 0.5021, 3e-5, 0.50065, 0.50205, "d1", {}, {}});
+  run.parameters.push_back({"base", "base_rx", Quantity::angle_rad, 0.0, 1.2e-3, 1e-4, 1.1e-3, 1.1e-3, "", {}, {}});
+  run.parameters.push_back({"tool", "tool_z", Quantity::length_m, 0.1, 0.1, std::nullopt, 0.1, 0.1, "", {}, {}});
   // An identified value 5 sigma off the truth: the table marks it.
-  run.parameters.push_back({"tool", "tool_x", Quantity::length_m, 0.0, 2e-4, 1e-5, 1.5e-4, 1.5e-4, ""});
+  run.parameters.push_back({"tool", "tool_x", Quantity::length_m, 0.0, 2e-4, 1e-5, 1.5e-4, 1.5e-4, "", {}, {}});
   run.held_fixed = {{"theta1", "the same motion as base_rz"}, {"d1", "the same motion as base_z"}};
   run.notes = {"standard-DH links 2-3 promoted to Doty (axes 0.0 rad apart)", "rank 30 of 32 candidates",
                "noise: position: instrument sigma 0.0200 mm (given)\n  rejected line 14: residual 0.412 mm\n  "

@@ -1,0 +1,196 @@
+#include "host/report/identify_report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#include "host/identify/problem.hpp"
+#include "host/report/svg_plot.hpp"
+
+namespace kincal::report {
+
+namespace {
+
+std::string mm_text(double m) {
+  char text[48];
+  std::snprintf(text, sizeof text, "%.4f mm", m * 1e3);
+  return text;
+}
+
+TextTable selection_table(const identify::Selection& s) {
+  const identify::SelectionOptions options{};  // identify runs select_model with the defaults
+  TextTable t;
+  t.title = "Model selection";
+  t.columns = {"candidate",        "parameters", std::to_string(options.folds) + "-fold RMS",
+               "out-of-range RMS", "score",      "chosen / why not scored"};
+  for (const identify::CandidateScore& x : s.scores) {
+    const auto rms = [](double v) { return v < 0.0 ? std::string("-") : mm_text(v); };
+    t.rows.push_back({x.name, std::to_string(x.parameters), rms(x.kfold_rms_m), rms(x.out_of_range_rms_m),
+                      rms(x.score_m), x.name == s.chosen.name ? "chosen" : x.why});
+  }
+  t.note = "Position RMS of rows each candidate was not identified from: " + std::to_string(options.folds) +
+           "-fold cross-validation, and an out-of-range fold (train on the " +
+           std::to_string(s.out_of_range_train_rows) + " rows inside the central " +
+           fixed_text(options.central_fraction * 100.0, 0) + " % of every joint's range, predict the other " +
+           std::to_string(s.out_of_range_test_rows) + "). Chosen: " + s.reason;
+  return t;
+}
+
+TextTable rejection_table(const identify::IdentifyResult& r, const std::map<int, const model::Measurement*>& by_line) {
+  TextTable t;
+  t.title = "Rejected rows";
+  t.columns = {"line", "id / time stamp", "residual", "statistic / threshold", "removing it moves the tool by up to"};
+  for (const identify::Rejection& x : r.rejections) {
+    const auto row = by_line.find(x.line);
+    t.rows.push_back({std::to_string(x.line), row != by_line.end() ? row->second->id : std::string(),
+                      mm_text(x.residual_m), fixed_text(x.statistic_ratio, 2), mm_text(x.tool_shift_max_m)});
+  }
+  t.note =
+      "Rows left out of the fit as outliers: line in the dataset, the row's id or time stamp from the export "
+      "(kincal import --id), the position residual of the fit with the row, its studentized statistic over the "
+      "rejection threshold, and the largest change of the predicted tool position over the data when it is "
+      "removed (first order). Model error before rejection " +
+      mm_text(r.model_error_before_rejection_m) + ", after " + mm_text(r.model_error_position_m) + " per axis.";
+  return t;
+}
+
+}  // namespace
+
+Report identify_report(const IdentifyRun& in, const std::string& date) {
+  const identify::IdentifyResult& r = in.result;
+  Report report;
+  report.title = "kincal identify: " + in.nominal.name;
+  report.date = date;
+  Run run;
+  run.title = "Identification from " + in.data.source;
+  run.robot = in.nominal.name;
+  run.method = (r.model.calibration ? r.model.calibration->method : std::string("?")) + "; model: " + in.model_choice;
+  run.data = in.data.source + ": " + std::to_string(in.data.rows.size()) + " rows, " +
+             std::to_string(r.residuals.count) + " used, " + std::to_string(r.outlier_lines.size()) +
+             " rejected as outliers";
+  run.simulated = std::nullopt;
+  run.measurements = static_cast<int>(in.data.rows.size());
+  for (const model::Joint& j : in.nominal.joints) run.joints.push_back({j.name, j.type == core::JointType::prismatic});
+
+  const identify::ParameterIds& ids = r.identifiability.identified;
+  const bool priors = r.prior_sigma.size() == r.change.size() && r.prior_centre.size() == r.change.size();
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    const auto i = static_cast<Eigen::Index>(k);
+    ParameterRow row;
+    row.group = parameter_group(ids[k]);
+    row.name = model::parameter_name(ids[k]);
+    row.quantity = parameter_quantity(r.start, ids[k]);
+    // The nominal in the start's parameters: the prior's centre (0 but from a cpa start).
+    row.nominal = parameter_value(r.start, r.start, ids[k]) + (priors ? r.prior_centre(i) : 0.0);
+    row.identified = parameter_value(r.model, r.start, ids[k]);
+    if (i < r.stddev.size()) row.stddev = r.stddev(i);
+    if (priors && std::isfinite(r.prior_sigma(i))) row.prior_sigma = r.prior_sigma(i);
+    if (priors && i < r.prior_share.size()) row.data_share = 1.0 - r.prior_share(i);
+    run.parameters.push_back(row);
+  }
+  for (const identify::HeldFixed& h : r.identifiability.held_fixed)
+    run.held_fixed.push_back({model::parameter_name(h.id), h.reason});
+  if (!ids.empty()) {
+    char condition[48];
+    std::snprintf(condition, sizeof condition, "%.3g", r.identifiability.condition);
+    run.notes.push_back("identifiability: rank " + std::to_string(r.identifiability.rank) + " of " +
+                        std::to_string(r.identifiability.singular_values.size()) + " candidate parameters; " +
+                        std::to_string(ids.size()) + " identified, condition number (unit-scaled columns) " +
+                        condition);
+  }
+  run.notes.push_back("solver: " + r.termination +
+                      (r.iterations > 0 ? ", " + std::to_string(r.iterations) + " iterations" : std::string()));
+  run.notes.insert(run.notes.end(), r.notes.begin(), r.notes.end());
+  run.notes.insert(run.notes.end(), r.cpa_sweeps.begin(), r.cpa_sweeps.end());
+  run.notes.push_back(identify::format_noise(r));
+
+  run.accuracy_of = in.held_out ? "the rows used and the held-out rows" : "the rows used";
+  if (in.registered)
+    run.accuracy.push_back(report_accuracy("nominal, registered: rows used", in.registered->residuals));
+  run.accuracy.push_back(report_accuracy("calibrated: rows used", r.residuals));
+  if (in.held_out) {
+    if (in.registered)
+      run.accuracy.push_back(report_accuracy("nominal, registered: held out (" + in.held_out->source + ")",
+                                             identify::accuracy(in.registered->model, *in.held_out)));
+    run.accuracy.push_back(report_accuracy("calibrated: held out (" + in.held_out->source + ")",
+                                           identify::accuracy(r.model, *in.held_out)));
+  }
+
+  std::map<int, const model::Measurement*> by_line;
+  for (const model::Measurement& m : in.data.rows) by_line[m.line] = &m;
+  for (const model::Measurement& m : in.data.rows) {
+    if (m.q.size() != in.nominal.joints.size())
+      throw ReportError("identify report: " + in.data.source + ":" + std::to_string(m.line) + ": " +
+                        std::to_string(m.q.size()) + " joint readings, the model has " +
+                        std::to_string(in.nominal.joints.size()) + " joints");
+    const double residual = (model::forward_kinematics(r.model, m.q).translation - m.position).norm();
+    const bool rejected = std::find(r.outlier_lines.begin(), r.outlier_lines.end(), m.line) != r.outlier_lines.end();
+    run.fit_residuals.push_back({m.q, residual, rejected});
+  }
+  if (in.selection) run.tables.push_back(selection_table(*in.selection));
+  if (!r.rejections.empty()) run.tables.push_back(rejection_table(r, by_line));
+  report.runs.push_back(std::move(run));
+  return report;
+}
+
+double parameter_value(const model::RobotModel& model, const model::RobotModel& start, core::ParameterId id) {
+  using K = core::ParameterKind;
+  if (id.kind == model::kJointScale) return model.joints.at(id.link).scale.value_or(1.0);
+  if (id.kind == model::kJointCompliance) return model.joints.at(id.link).compliance.value_or(0.0);
+  if (id.kind >= K::base_x && id.kind <= K::base_rz)
+    return identify::small_motion(start.base_T_frame0,
+                                  model.base_T_frame0)(static_cast<int>(id.kind) - static_cast<int>(K::base_x));
+  if (id.kind >= K::tool_x)
+    return identify::small_motion(start.flange_T_tool,
+                                  model.flange_T_tool)(static_cast<int>(id.kind) - static_cast<int>(K::tool_x));
+  const core::LinkParameters<double> p = model::to_chain(model).links[id.link].parameters;
+  switch (id.kind) {
+    case K::link_d:
+      return p.d_m;
+    case K::link_theta:
+      return p.theta_rad;
+    case K::link_a:
+      return p.a_m;
+    case K::link_alpha:
+      return p.alpha_rad;
+    default:
+      return p.beta_rad;
+  }
+}
+
+Quantity parameter_quantity(const model::RobotModel& model, core::ParameterId id) {
+  using K = core::ParameterKind;
+  if (id.kind == model::kJointScale) return Quantity::ratio;
+  if (id.kind == model::kJointCompliance)
+    return model.joints.at(id.link).type == core::JointType::prismatic ? Quantity::compliance_m_per_n
+                                                                       : Quantity::compliance_rad_per_nm;
+  const bool angle = id.kind == K::link_theta || id.kind == K::link_alpha || id.kind == K::link_beta ||
+                     (id.kind >= K::base_rx && id.kind <= K::base_rz) || id.kind >= K::tool_rx;
+  return angle ? Quantity::angle_rad : Quantity::length_m;
+}
+
+std::string parameter_group(core::ParameterId id) {
+  using K = core::ParameterKind;
+  if (id.kind >= K::base_x && id.kind <= K::base_rz) return "base";
+  if (model::is_joint_map_parameter(id.kind)) return "joint readings: scales and compliances";
+  if (id.kind >= K::tool_x) return "tool";
+  return "joint " + std::to_string(id.link + 1);
+}
+
+Accuracy report_accuracy(const std::string& label, const identify::AccuracyStats& s) {
+  Accuracy a;
+  a.label = label;
+  a.count = s.count;
+  a.mean_m = s.mean_m;
+  a.rms_m = s.rms_m;
+  a.max_m = s.max_m;
+  if (s.has_orientation) {
+    a.mean_rad = s.mean_rad;
+    a.rms_rad = s.rms_rad;
+    a.max_rad = s.max_rad;
+  }
+  return a;
+}
+
+}  // namespace kincal::report
