@@ -763,16 +763,20 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
   return result;
 }
 
-// How many standard errors rejection must lower the K-fold squared errors by (see identify.hpp).
+// How many standard errors rejection must lower the K-fold errors by (see identify.hpp).
 constexpr double kGateT = 2.0;
 
-// The paired t statistic of the differences a_i - b_i: their mean over its standard error (0
-// when they are all equal).
-double paired_t(const std::vector<double>& a, const std::vector<double>& b) {
-  const auto n = static_cast<double>(a.size());
+// The paired t statistic of the position errors' differences sqrt(a2_i) - sqrt(b2_i) (from
+// squared errors): their mean over its standard error (0 when they are all equal). Errors, not
+// squared errors: a blunder in a held-out fold moves its own squared error by 2 b delta, its
+// size times the models' difference, and would drown what rejecting does to the other rows.
+double paired_t(const std::vector<double>& a2, const std::vector<double>& b2) {
+  const auto n = static_cast<double>(a2.size());
+  std::vector<double> d;
+  for (std::size_t i = 0; i < a2.size(); ++i) d.push_back(std::sqrt(a2[i]) - std::sqrt(b2[i]));
   double mean = 0.0, variance = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) mean += (a[i] - b[i]) / n;
-  for (std::size_t i = 0; i < a.size(); ++i) variance += (a[i] - b[i] - mean) * (a[i] - b[i] - mean) / (n - 1.0);
+  for (const double x : d) mean += x / n;
+  for (const double x : d) variance += (x - mean) * (x - mean) / (n - 1.0);
   return variance > 0.0 ? mean / std::sqrt(variance / n) : 0.0;
 }
 

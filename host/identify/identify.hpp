@@ -44,14 +44,14 @@
 // held out on the real UR10 set). So when rows were rejected, cross-validation decides, with
 // model selection's folds (model_selection.hpp: cross_validate) trained with the rejection rule
 // and without it, each held-out row's position error counted whether rejected or not. The
-// rejections stand only when they lower the 5-fold squared errors by at least 2 standard errors
-// of the paired differences (paired t <= -2: a difference within the folds' own noise is a tie,
+// rejections stand only when they lower the 5-fold position errors by at least 2 standard errors
+// of the rows' paired differences (paired t <= -2: a difference within the folds' own noise is a tie,
 // and a tie means no rejection) and do not raise the out-of-range fold's RMS (when there is one:
 // rejection must not cost beyond the data's range either). Otherwise the result is the fit
 // without rejection, and the undone rejections are reported. A blunder in a held-out fold costs
 // both variants alike, so the difference is what rejecting does to the other rows: three 1 mm
-// blunders in 80 rows give t = -4.6, the real UR10 rows' model error -0.1 and +0.1 (100 and 300
-// rows), a sagging arm's sweep ends +1.3 to +1.7 (tests, realdata_ur10_bench). Cost: 12 more
+// blunders in 80 rows give t = -7.2, the real UR10 rows' model error -0.8 (100 and 300 rows), a
+// sagging arm's sweep ends -0.4 to +0.3 (tests, realdata_ur10_bench). Cost: 12 more
 // solves, only when the test rejected rows (300 UR10 rows: 3.1 s against 0.29 s, Release).
 // When the folds cannot be identified (too few rows) the gate cannot judge: the rejections stand,
 // with a note.
