@@ -40,18 +40,6 @@ void hand_eye_figures(const std::string& name, const Eigen::Isometry3d& estimate
          kDeg * Eigen::AngleAxisd(estimate.rotation().transpose() * truth.rotation()).angle(), "deg");
 }
 
-// The camera scaled by `scale` in focal length and image size: the same scene at a higher
-// resolution.
-sim::CameraSpec scaled(sim::CameraSpec spec, int scale) {
-  spec.width_px *= scale;
-  spec.height_px *= scale;
-  spec.fx_px *= scale;
-  spec.fy_px *= scale;
-  spec.cx_px = (spec.cx_px + 0.5) * scale - 0.5;
-  spec.cy_px = (spec.cy_px + 0.5) * scale - 0.5;
-  return spec;
-}
-
 // AprilGrid corners of rendered views against their true projections: RMS (px) and the fraction
 // of the board's tags found.
 void aprilgrid_figures(const std::string& suffix, const sim::CameraSpec& spec, int views) {
@@ -78,7 +66,7 @@ void aprilgrid_figures(const std::string& suffix, const sim::CameraSpec& spec, i
 
 int main() {
   aprilgrid_figures("vga", scenes::test_camera(), 8);
-  aprilgrid_figures("4k", scaled(scenes::test_camera(), 6), 2);
+  aprilgrid_figures("4k", scenes::scaled(scenes::test_camera(), 6), 2);
 
   const Board board = parse_board(scenes::chessboard_text());
   const sim::CameraSpec spec = scenes::test_camera();

@@ -65,6 +65,16 @@ std::vector<Eigen::Isometry3d> board_views(const camera::Board& board, int n) {
   return views;
 }
 
+sim::CameraSpec scaled(sim::CameraSpec spec, int scale) {
+  spec.width_px *= scale;
+  spec.height_px *= scale;
+  spec.fx_px *= scale;
+  spec.fy_px *= scale;
+  spec.cx_px = (spec.cx_px + 0.5) * scale - 0.5;
+  spec.cy_px = (spec.cy_px + 0.5) * scale - 0.5;
+  return spec;
+}
+
 sim::PlanarTarget target_of(const camera::Board& board) {
   if (board.kind == camera::BoardKind::kChessboard) return sim::chessboard(board.cols, board.rows, board.square_m);
   if (board.kind == camera::BoardKind::kAprilGrid) {

@@ -28,6 +28,10 @@ const char* aprilgrid_text();
 // at points spread over the board so that it moves over the image, rolled by up to 15 degrees.
 std::vector<Eigen::Isometry3d> board_views(const camera::Board& board, int n);
 
+// The camera scaled by `scale` in focal length and image size (pixel centres kept): the same
+// scene at a higher resolution.
+sim::CameraSpec scaled(sim::CameraSpec spec, int scale);
+
 // The board's reflectance: sim::chessboard, or OpenCV's ChArUco or kincal's AprilGrid drawing as
 // a texture.
 sim::PlanarTarget target_of(const camera::Board& board);

@@ -797,13 +797,7 @@ TEST_CASE("a 17x28 board in a rendered 4K view: the primary detector, a window s
   camera_T_board.translation() = Eigen::Vector3d(-0.07, -0.11, 0.55);
   double error_per_square[2] = {0, 0};
   for (const int scale : {1, 6}) {
-    sim::CameraSpec spec = scenes::test_camera();
-    spec.width_px *= scale;
-    spec.height_px *= scale;
-    spec.fx_px *= scale;
-    spec.fy_px *= scale;
-    spec.cx_px = (spec.cx_px + 0.5) * scale - 0.5;
-    spec.cy_px = (spec.cy_px + 0.5) * scale - 0.5;
+    const sim::CameraSpec spec = scenes::scaled(scenes::test_camera(), scale);
     const BoardDetection d = detect_board(board, scenes::render(spec, camera_T_board, target, 5), "4k");
     CAPTURE(scale);
     REQUIRE_MESSAGE(d.found, d.reason);
