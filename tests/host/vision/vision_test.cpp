@@ -198,6 +198,47 @@ TEST_CASE("colour classes: lighting that changes across the beacon does not move
   CHECK(std::fabs(yuv.y - yuv_even.y) < 0.005);
 }
 
+TEST_CASE("colour classes: rim pixels weigh by the beacon's share in them, so the centroid does not lock to pixels") {
+  // A crimson disc of radius 6 px on grey 90, each pixel the area-weighted mix of the two (8 x 8
+  // sub-samples), at 25 sub-pixel positions. With the scene's grey among the negatives, rim
+  // pixels score their share of the beacon; with no negatives the class is the samples' ellipsoid
+  // alone and the rim drops out a quarter of the way to the grey: its centroid locks to the grid.
+  vision::ColourTableSamples samples = crimson_samples();
+  const auto errors_rms = [&](const vision::ColourTableSamples& s) {
+    vision::LabelOptions options;
+    options.colour = vision::build_colour_table(s, core::ColourSpace::kRgb565);
+    double sum = 0;
+    int n = 0;
+    for (int i = 0; i < 5; ++i)
+      for (int j = 0; j < 5; ++j) {
+        const double cx = 30.1 + 0.2 * i, cy = 20.1 + 0.2 * j;
+        cv::Mat scene(40, 60, CV_8UC3, cv::Scalar(90, 90, 90));
+        for (int y = 10; y < 31; ++y)
+          for (int x = 20; x < 41; ++x) {
+            int inside = 0;
+            for (int k = 0; k < 64; ++k)
+              inside += std::hypot(x - 0.5 + (k % 8 + 0.5) / 8 - cx, y - 0.5 + (k / 8 + 0.5) / 8 - cy) <= 6 ? 1 : 0;
+            const double a = inside / 64.0;
+            const cv::Vec3b c = crimson(0.85);
+            scene.at<cv::Vec3b>(y, x) = {static_cast<std::uint8_t>(std::lround(a * c[0] + (1 - a) * 90)),
+                                         static_cast<std::uint8_t>(std::lround(a * c[1] + (1 - a) * 90)),
+                                         static_cast<std::uint8_t>(std::lround(a * c[2] + (1 - a) * 90))};
+          }
+        const vision::LabelResult r = vision::label_colour(scene, options);
+        REQUIRE(r.blobs.size() == 1);
+        sum += std::pow(r.blobs[0].x_px.to_double() - cx, 2) + std::pow(r.blobs[0].y_px.to_double() - cy, 2);
+        ++n;
+      }
+    return std::sqrt(sum / n);
+  };
+  const double without_rim = errors_rms(samples);
+  for (int i = 0; i < 200; ++i) samples.negative_bgr.emplace_back(90, 90, 90);
+  const double with_rim = errors_rms(samples);
+  MESSAGE("centroid error RMS: ", with_rim, " px with the rim, ", without_rim, " px without");
+  CHECK(with_rim < 0.5 * without_rim);
+  CHECK(with_rim < 0.05);
+}
+
 TEST_CASE("image files: errors name the file") {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "kincal_vision_test";
   std::filesystem::create_directories(dir);
