@@ -157,7 +157,7 @@ struct RejectionGate {
   bool kept = false;                  // the rejections stand
   double kfold_with_m = 0.0;          // 5-fold cross-validated position RMS with the rejection rule
   double kfold_without_m = 0.0;       // and without it
-  double kfold_t = 0.0;               // paired t of the rows' squared-error differences (with - without)
+  double kfold_t = 0.0;               // paired t of the rows' position-error differences (with - without)
   double out_of_range_with_m = -1.0;  // the out-of-range fold's RMS with and without; < 0: no such fold
   double out_of_range_without_m = -1.0;
   std::vector<Rejection> undone;  // the test's rejections the gate undid (kept = false)
