@@ -25,26 +25,40 @@ constexpr double kDeg = 180.0 / 3.14159265358979323846;
 
 struct Residual {
   double rotation_rms_rad = 0, translation_rms_m = 0;
+  std::vector<double> pose_rotation_rms_rad, pose_translation_rms_m;  // over the pairs holding pose i
 };
 
 // RMS over all pairs i < j of (A X)^-1 (X B), A = H_i^-1 H_j, B = C_i C_j^-1 (from H_i X C_i =
-// base_T_target for every i).
+// base_T_target for every i), and per pose over the pairs holding it.
 Residual ax_xb(const std::vector<Isometry3d>& base_T_gripper, const std::vector<Isometry3d>& camera_T_target,
                const Isometry3d& gripper_T_camera) {
-  double rot2 = 0, trans2 = 0;
-  int n = 0;
-  for (std::size_t i = 0; i < base_T_gripper.size(); ++i) {
-    for (std::size_t j = i + 1; j < base_T_gripper.size(); ++j) {
+  const std::size_t n = base_T_gripper.size();
+  std::vector<double> rot2(n, 0.0), trans2(n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = i + 1; j < n; ++j) {
       const Isometry3d a = base_T_gripper[i].inverse() * base_T_gripper[j];
       const Isometry3d b = camera_T_target[i] * camera_T_target[j].inverse();
       const Isometry3d e = (a * gripper_T_camera).inverse() * (gripper_T_camera * b);
       const double angle = Eigen::AngleAxisd(e.rotation()).angle();
-      rot2 += angle * angle;
-      trans2 += e.translation().squaredNorm();
-      ++n;
+      for (std::size_t k : {i, j}) {
+        rot2[k] += angle * angle;
+        trans2[k] += e.translation().squaredNorm();
+      }
     }
   }
-  return {std::sqrt(rot2 / n), std::sqrt(trans2 / n)};
+  // Each pair is counted at both of its poses: the sums over poses hold every pair twice.
+  Residual r;
+  double rot2_all = 0, trans2_all = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    rot2_all += rot2[i];
+    trans2_all += trans2[i];
+    r.pose_rotation_rms_rad.push_back(std::sqrt(rot2[i] / static_cast<double>(n - 1)));
+    r.pose_translation_rms_m.push_back(std::sqrt(trans2[i] / static_cast<double>(n - 1)));
+  }
+  const double pairs = static_cast<double>(n * (n - 1));  // twice the number of pairs
+  r.rotation_rms_rad = std::sqrt(rot2_all / pairs);
+  r.translation_rms_m = std::sqrt(trans2_all / pairs);
+  return r;
 }
 
 HandEyeEstimate estimate(const char* method, const Isometry3d& gripper_T_camera,
@@ -152,6 +166,27 @@ Isometry3d from_parameters(const std::array<double, 6>& p) {
   return m;
 }
 
+// The squared reprojection error (px^2) summed over one view's corners at camera_T_target.
+double reprojection_ssr(const BoardDetection& detection, const CameraModel& camera, const Isometry3d& camera_T_target) {
+  cv::Mat r, rvec, tvec;
+  split(camera_T_target, r, tvec);
+  cv::Rodrigues(r, rvec);
+  std::vector<cv::Point2f> projected;
+  cv::projectPoints(detection.board_m, rvec, tvec, cv::Mat(camera.camera_matrix), camera.distortion_mat(), projected);
+  double sum2 = 0;
+  for (std::size_t k = 0; k < projected.size(); ++k) {
+    const cv::Point2f e = projected[k] - detection.image_px[k];
+    sum2 += static_cast<double>(e.dot(e));
+  }
+  return sum2;
+}
+
+// Where a hand-eye and board pose put the board in view i: X^-1 H_i^-1 W.
+Isometry3d chained_camera_T_target(const Isometry3d& base_T_gripper, const Isometry3d& gripper_T_camera,
+                                   const Isometry3d& base_T_target) {
+  return gripper_T_camera.inverse() * base_T_gripper.inverse() * base_T_target;
+}
+
 // RMS (px) of the corners' reprojection for a hand-eye and board pose, by cv::projectPoints.
 double reprojection_rms(const std::vector<const BoardDetection*>& detections,
                         const std::vector<Isometry3d>& base_T_gripper, const CameraModel& camera,
@@ -159,18 +194,9 @@ double reprojection_rms(const std::vector<const BoardDetection*>& detections,
   double sum2 = 0;
   std::size_t n = 0;
   for (std::size_t i = 0; i < detections.size(); ++i) {
-    const Isometry3d camera_T_target = gripper_T_camera.inverse() * base_T_gripper[i].inverse() * base_T_target;
-    cv::Mat r, rvec, tvec;
-    split(camera_T_target, r, tvec);
-    cv::Rodrigues(r, rvec);
-    std::vector<cv::Point2f> projected;
-    cv::projectPoints(detections[i]->board_m, rvec, tvec, cv::Mat(camera.camera_matrix), camera.distortion_mat(),
-                      projected);
-    for (std::size_t k = 0; k < projected.size(); ++k) {
-      const cv::Point2f e = projected[k] - detections[i]->image_px[k];
-      sum2 += static_cast<double>(e.dot(e));
-      ++n;
-    }
+    sum2 += reprojection_ssr(*detections[i], camera,
+                             chained_camera_T_target(base_T_gripper[i], gripper_T_camera, base_T_target));
+    n += detections[i]->board_m.size();
   }
   return std::sqrt(sum2 / static_cast<double>(n));
 }
@@ -206,6 +232,7 @@ HandEyeCalibration calibrate_hand_eye(const std::vector<HandEyeView>& views, con
   HandEyeCalibration result;
   std::vector<Isometry3d> base_T_gripper, camera_T_target;
   std::vector<const BoardDetection*> detections;
+  std::vector<std::size_t> used;  // indices into result.views
   const cv::Mat k(camera.camera_matrix), distortion = camera.distortion_mat();
   for (const HandEyeView& v : views) {
     HandEyeViewReport report;
@@ -226,6 +253,7 @@ HandEyeCalibration calibrate_hand_eye(const std::vector<HandEyeView>& views, con
       base_T_gripper.push_back(options.convention == PoseConvention::kGripperToBase ? v.robot_pose
                                                                                     : v.robot_pose.inverse());
       detections.push_back(&v.detection);
+      used.push_back(result.views.size());
     }
     result.views.push_back(std::move(report));
   }
@@ -346,6 +374,20 @@ HandEyeCalibration calibrate_hand_eye(const std::vector<HandEyeView>& views, con
   const Residual refined = ax_xb(base_T_gripper, camera_T_target, result.gripper_T_camera);
   result.rotation_rms_rad = refined.rotation_rms_rad;
   result.translation_rms_m = refined.translation_rms_m;
+  for (std::size_t i = 0; i < used.size(); ++i) {
+    HandEyeViewReport& v = result.views[used[i]];
+    const double corners = static_cast<double>(detections[i]->board_m.size());
+    v.refined_camera_T_target =
+        chained_camera_T_target(base_T_gripper[i], result.gripper_T_camera, result.base_T_target);
+    v.board_rms_px = std::sqrt(reprojection_ssr(*detections[i], camera, camera_T_target[i]) / corners);
+    v.refined_rms_px = std::sqrt(reprojection_ssr(*detections[i], camera, v.refined_camera_T_target) / corners);
+    v.pair_rotation_rms_rad = refined.pose_rotation_rms_rad[i];
+    v.pair_translation_rms_m = refined.pose_translation_rms_m[i];
+    const Isometry3d loop =
+        result.base_T_target.inverse() * base_T_gripper[i] * result.gripper_T_camera * camera_T_target[i];
+    v.loop_rotation_rad = Eigen::AngleAxisd(loop.rotation()).angle();
+    v.loop_translation_m = loop.translation().norm();
+  }
   if (result.rotation_rms_rad > options.max_rotation_rms_rad ||
       result.translation_rms_m > options.max_translation_rms_m ||
       result.rms_after_px > options.max_reprojection_rms_px) {

@@ -75,7 +75,20 @@ struct HandEyeViewReport {
   std::string view;
   bool used = false;
   std::string rejection;
-  Eigen::Isometry3d camera_T_target = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d camera_T_target = Eigen::Isometry3d::Identity();  // this view's own board pose
+  // Used views, at the refined result (X = gripper_T_camera, W = base_T_target, H this view's
+  // base_T_gripper, C its camera_T_target):
+  //   refined_camera_T_target  X^-1 H^-1 W, where the refined chain puts the board;
+  //   board_rms_px             the corners' reprojection RMS at C (the board pose's own fit);
+  //   refined_rms_px           the corners' reprojection RMS at refined_camera_T_target;
+  //   pair_rotation_rms_rad, pair_translation_rms_m   the AX = XB residual (step 5's measure)
+  //                            over the pairs of poses holding this one;
+  //   loop_rotation_rad, loop_translation_m   the AX = ZB loop closure W^-1 H X C: its angle and
+  //                            the length of its translation.
+  Eigen::Isometry3d refined_camera_T_target = Eigen::Isometry3d::Identity();
+  double board_rms_px = 0, refined_rms_px = 0;
+  double pair_rotation_rms_rad = 0, pair_translation_rms_m = 0;
+  double loop_rotation_rad = 0, loop_translation_m = 0;
 };
 
 struct HandEyeCalibration {

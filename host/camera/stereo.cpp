@@ -41,26 +41,52 @@ double angle_between_rad(const cv::Matx33d& a, const cv::Matx33d& b) {
   return cv::norm(v);
 }
 
+// RMS distance (px) of each corner from its match's epipolar line (see StereoPairReport).
+double epipolar_rms_px(const CameraModel& left, const CameraModel& right, const cv::Matx33d& fundamental,
+                       const std::vector<cv::Point2f>& left_px, const std::vector<cv::Point2f>& right_px) {
+  const auto undistorted = [](const CameraModel& camera, const std::vector<cv::Point2f>& px) {
+    CameraModel pinhole = camera;
+    pinhole.distortion = {};
+    return reproject(camera, pinhole, std::vector<cv::Point2d>(px.begin(), px.end()));
+  };
+  const std::vector<cv::Point2d> l = undistorted(left, left_px), r = undistorted(right, right_px);
+  std::vector<cv::Vec3d> in_right, in_left;  // lines a x + b y + c = 0 with a^2 + b^2 = 1
+  cv::computeCorrespondEpilines(l, 1, fundamental, in_right);
+  cv::computeCorrespondEpilines(r, 2, fundamental, in_left);
+  double sum2 = 0;
+  for (std::size_t i = 0; i < l.size(); ++i) {
+    const double dr = in_right[i].dot(cv::Vec3d(r[i].x, r[i].y, 1)), dl = in_left[i].dot(cv::Vec3d(l[i].x, l[i].y, 1));
+    sum2 += dr * dr + dl * dl;
+  }
+  return std::sqrt(sum2 / (2.0 * static_cast<double>(l.size())));
+}
+
 double median_of(std::vector<double> v) {
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
   return v[v.size() / 2];
 }
 
-// The pair-consistency gate (see the header).
-void refuse_disagreeing_pairs(const StereoCalibration& result, const std::vector<std::size_t>& used,
-                              const std::vector<std::vector<cv::Point3f>>& board_m,
-                              const std::vector<std::vector<cv::Point2f>>& left_px,
-                              const std::vector<std::vector<cv::Point2f>>& right_px, const StereoOptions& options) {
+// The pair-consistency gate (see the header). Each used pair's own pose (index as `used`) is
+// returned, its distance from the consensus written into result.pairs.
+std::vector<std::optional<PairPose>> refuse_disagreeing_pairs(StereoCalibration& result,
+                                                              const std::vector<std::size_t>& used,
+                                                              const std::vector<std::vector<cv::Point3f>>& board_m,
+                                                              const std::vector<std::vector<cv::Point2f>>& left_px,
+                                                              const std::vector<std::vector<cv::Point2f>>& right_px,
+                                                              const StereoOptions& options) {
+  std::vector<std::optional<PairPose>> own(used.size());
   std::vector<PairPose> poses;
   std::vector<std::size_t> posed;  // indices into used
   for (std::size_t k = 0; k < used.size(); ++k) {
-    if (const std::optional<PairPose> pose =
-            pair_pose(board_m[k], left_px[k], right_px[k], result.left, result.right)) {
-      poses.push_back(*pose);
+    own[k] = pair_pose(board_m[k], left_px[k], right_px[k], result.left, result.right);
+    if (own[k]) {
+      poses.push_back(*own[k]);
       posed.push_back(k);
+      result.pairs[used[k]].posed = true;
+      result.pairs[used[k]].consensus_distance = std::numeric_limits<double>::quiet_NaN();
     }
   }
-  if (poses.size() < 3) return;
+  if (poses.size() < 3) return own;
   // How far pose a is from pose b, in units of the gate's limits (above 1: disagrees).
   const auto distance = [&](const PairPose& a, const PairPose& b) {
     return std::max(angle_between_rad(a.right_R_left, b.right_R_left) / options.max_pair_rotation_rad,
@@ -79,9 +105,11 @@ void refuse_disagreeing_pairs(const StereoCalibration& result, const std::vector
   }
   std::vector<std::size_t> bad;
   for (std::size_t i = 0; i < poses.size(); ++i) {
-    if (distance(poses[i], poses[medoid]) > 1) bad.push_back(i);
+    const double d = distance(poses[i], poses[medoid]);
+    result.pairs[used[posed[i]]].consensus_distance = d;
+    if (d > 1) bad.push_back(i);
   }
-  if (bad.empty()) return;
+  if (bad.empty()) return own;
   const PairPose& first = poses[bad.front()];
   const PairPose& consensus = poses[medoid];
   const StereoPairReport& p = result.pairs[used[posed[bad.front()]]];
@@ -162,7 +190,8 @@ StereoCalibration calibrate_stereo(const std::vector<BoardDetection>& left, cons
     throw CalibrationError(message);
   }
 
-  refuse_disagreeing_pairs(result, used, object_points, left_points, right_points, options);
+  const std::vector<std::optional<PairPose>> own_poses =
+      refuse_disagreeing_pairs(result, used, object_points, left_points, right_points, options);
 
   cv::Mat k1(left_camera.camera_matrix), k2(right_camera.camera_matrix);
   cv::Mat d1 = left_camera.distortion_mat(), d2 = right_camera.distortion_mat();
@@ -198,13 +227,21 @@ StereoCalibration calibrate_stereo(const std::vector<BoardDetection>& left, cons
   result.essential = cv::Matx33d(e);
   result.fundamental = cv::Matx33d(f);
   for (std::size_t k = 0; k < used.size(); ++k) {
+    StereoPairReport& p = result.pairs[used[k]];
     // OpenCV gives the RMS of each camera per view; the pair's RMS is over both images.
-    const double el = per_view.at<double>(static_cast<int>(k), 0), er = per_view.at<double>(static_cast<int>(k), 1);
-    result.pairs[used[k]].rms_px = std::sqrt(0.5 * (el * el + er * er));
+    p.left_rms_px = per_view.at<double>(static_cast<int>(k), 0);
+    p.right_rms_px = per_view.at<double>(static_cast<int>(k), 1);
+    p.rms_px = std::sqrt(0.5 * (p.left_rms_px * p.left_rms_px + p.right_rms_px * p.right_rms_px));
+    p.epipolar_rms_px = epipolar_rms_px(result.left, result.right, result.fundamental, left_points[k], right_points[k]);
+    if (own_poses[k]) {
+      p.pose_rotation_rad = angle_between_rad(own_poses[k]->right_R_left, result.right_R_left);
+      p.pose_translation_m = cv::norm(own_poses[k]->right_t_left_m - result.right_t_left_m);
+    }
   }
   std::vector<double> pair_rms;
   for (std::size_t u : used) pair_rms.push_back(result.pairs[u].rms_px);
   const double limit_px = std::max(options.outlier_over_median * median_of(pair_rms), options.outlier_floor_px);
+  result.pair_rms_limit_px = limit_px;
   for (std::size_t u : used) {
     const StereoPairReport& p = result.pairs[u];
     if (p.rms_px > limit_px)

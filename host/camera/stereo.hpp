@@ -69,7 +69,18 @@ struct StereoPairReport {
   bool used = false;
   std::string rejection;
   int common_corners = 0;
-  double rms_px = 0;  // used pairs: RMS over both images
+  double rms_px = 0;                         // used pairs: RMS over both images
+  double left_rms_px = 0, right_rms_px = 0;  // used pairs: each camera's (OpenCV's per-view errors)
+  // Used pairs: the RMS distance (px) of each corner from the epipolar line of its match, both
+  // ways, on the corners undistorted by each camera (reproject to its pinhole) and the solved F.
+  double epipolar_rms_px = 0;
+  // Used pairs whose board poses were found (posed): the pair's own right_T_left, as the
+  // pair-consistency gate computes it; its distance from the gate's consensus in the gate's
+  // units (above 1 refused; NaN with fewer than 3 posed pairs, when the gate does not judge);
+  // and its difference from the calibrated right_T_left.
+  bool posed = false;
+  double consensus_distance = 0;
+  double pose_rotation_rad = 0, pose_translation_m = 0;
 };
 
 struct StereoCalibration {
@@ -78,6 +89,7 @@ struct StereoCalibration {
   cv::Vec3d right_t_left_m;
   double baseline_m = 0;
   double rms_px = 0;
+  double pair_rms_limit_px = 0;  // the epipolar-residual gate's limit (see Gates above)
   cv::Matx33d essential, fundamental;
   cv::Matx33d rectify_left, rectify_right;        // R1, R2
   cv::Matx34d projection_left, projection_right;  // P1, P2
