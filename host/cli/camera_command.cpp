@@ -85,17 +85,23 @@ int run_stereo(const CameraArgs& a) {
   }
   // Each camera with its intrinsics' covariance: from its file (none in files without it) or
   // calibrated here.
+  // With --report, the camera's report is made here, where its calibration is at hand.
   struct Camera {
     camera::CameraModel model;
     std::optional<camera::IntrinsicsCovariance> uncertainty;
+    report::CameraReport report;
   };
   const auto camera_for = [&](const std::string& file, const std::vector<camera::BoardDetection>& views,
                               const char* side) {
-    if (!file.empty()) return Camera{camera::load_camera(file), camera::load_camera_uncertainty(file)};
+    if (!file.empty()) {
+      Camera from_file{camera::load_camera(file), camera::load_camera_uncertainty(file), {}};
+      if (!a.report.empty()) from_file.report = lens_report(from_file.model, from_file.uncertainty, file);
+      return from_file;
+    }
     const camera::IntrinsicCalibration c = camera::calibrate_intrinsics(views);
     std::cout << side << " camera: reprojection RMS " << c.rms_px << " px over " << c.views_used << " views\n";
     for (const std::string& w : c.warnings) std::cout << side << " camera warning: " << w << "\n";
-    return Camera{c.camera, c.uncertainty};
+    return Camera{c.camera, c.uncertainty, a.report.empty() ? report::CameraReport{} : camera_report(c, views)};
   };
   const Camera left_camera = camera_for(a.left_camera, left, "left");
   const Camera right_camera = camera_for(a.right_camera, right, "right");
@@ -113,6 +119,10 @@ int run_stereo(const CameraArgs& a) {
   std::cout << camera::describe(s);
   camera::save_stereo(a.out, s);
   std::cout << "wrote " << a.out << "\n";
+  if (!a.report.empty()) {
+    report::write_camera_page(stereo_report(s, options, left_camera.report, right_camera.report), a.report);
+    std::cout << "wrote " << a.report << "\n";
+  }
   return 0;
 }
 
@@ -138,6 +148,10 @@ int run_hand_eye(const CameraArgs& a) {
   std::cout << camera::describe(h);
   camera::save_hand_eye(a.out, h);
   std::cout << "wrote " << a.out << "\n";
+  if (!a.report.empty()) {
+    report::write_camera_page(hand_eye_report(h, views, cam), a.report);
+    std::cout << "wrote " << a.report << "\n";
+  }
   return 0;
 }
 
@@ -195,6 +209,9 @@ void add_camera_command(CLI::App& app, int& status) {
   stereo->add_option("--tolerance", args->tolerance_s, "largest time difference of a pair (s)")
       ->check(finite_non_negative())
       ->capture_default_str();
+  stereo->add_option("--report", args->report,
+                     "HTML report: every pair's residuals, epipolar error and pose against the calibrated one, each "
+                     "camera's residuals, coverage, distortion and projection uncertainty");
   stereo->callback([args, &status] { guarded("stereo", status, *args, [&] { return run_stereo(*args); }); });
 
   CLI::App* hand_eye = camera->add_subcommand("hand-eye", "Hand-eye calibration of a camera on the gripper");
@@ -217,6 +234,9 @@ void add_camera_command(CLI::App& app, int& status) {
   hand_eye->add_option("--convention", args->convention, "what the poses are: base_T_gripper or gripper_T_base")
       ->check(CLI::IsMember({"gripper2base", "base2gripper"}))
       ->capture_default_str();
+  hand_eye->add_option("--report", args->report,
+                       "HTML report: every pose's AX = XB and AX = ZB residuals and reprojection RMS, the views left "
+                       "out, the corners' residuals at the refined result");
   hand_eye->callback([args, &status] { guarded("hand-eye", status, *args, [&] { return run_hand_eye(*args); }); });
 }
 

@@ -147,19 +147,43 @@ std::string uncertainty_section(const CameraReport& r) {
       svg_plot(p));
 }
 
+std::string summary_section(const std::vector<std::string>& facts) {
+  if (facts.empty()) return {};
+  std::string html = "<section class=\"summary\"><h3>Summary</h3><ul>";
+  for (const std::string& f : facts) html += "<li>" + escape_html(f) + "</li>";
+  return html + "</ul></section>";
+}
+
+// The camera's sections whose data are given (see the header).
+std::string camera_sections(const CameraReport& r) {
+  require_that(r.width_px > 0 && r.height_px > 0, "the image size is 0");
+  std::string html = summary_section(r.facts);
+  if (!r.views.empty()) html += residual_section(r) + coverage_section(r);
+  if (!r.field_x_px.empty()) html += distortion_section(r);
+  if (!r.sigma_px.empty()) html += uncertainty_section(r);
+  return html;
+}
+
 }  // namespace
 
-std::string render_camera_html(const CameraReport& r) {
-  require_that(r.width_px > 0 && r.height_px > 0, "the image size is 0");
-  std::string body = "<section class=\"summary\"><h3>Summary</h3><ul>";
-  for (const std::string& f : r.facts) body += "<li>" + escape_html(f) + "</li>";
-  body += "</ul></section>";
-  body += residual_section(r) + coverage_section(r) + distortion_section(r) + uncertainty_section(r);
-  return html_page(r.title, r.date, body);
-}
+std::string render_camera_html(const CameraReport& r) { return html_page(r.title, r.date, camera_sections(r)); }
 
 void write_camera_report(const CameraReport& report, const std::string& path) {
   write_page(render_camera_html(report), path);
+}
+
+std::string render_camera_page_html(const CameraPage& page) {
+  std::string body = summary_section(page.facts);
+  for (const CameraPageTable& t : page.tables) body += table_section(t.table, t.id);
+  for (const CameraReport& camera : page.cameras) {
+    body +=
+        "<section class=\"camera\"><h2>" + escape_html(camera.title) + "</h2>" + camera_sections(camera) + "</section>";
+  }
+  return html_page(page.title, page.date, body);
+}
+
+void write_camera_page(const CameraPage& page, const std::string& path) {
+  write_page(render_camera_page_html(page), path);
 }
 
 }  // namespace kincal::report

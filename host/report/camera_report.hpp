@@ -12,8 +12,13 @@
 //                to a stated scale;
 //   uncertainty  the worst-axis projection sigma (px) on a grid over the image, dots coloured
 //                by range (legend), the largest named.
+// A section whose data are not given is left out (no views: no residuals or coverage; no field:
+// no distortion; no sigma grid: no uncertainty).
 // Image coordinates are drawn with rows growing downward as in the image (the y axis shows
 // the row counted from the top, negated).
+//
+// A camera page (stereo, hand-eye: CameraPage) holds its own summary and tables (report.hpp's
+// TextTable), then each camera's sections under the camera's title.
 //
 // Errors: ReportError for a non-finite coordinate or residual, vectors of unequal lengths, a
 // grid whose sigma count is not cols x rows, an image size of 0; write_camera_report also for an
@@ -22,6 +27,8 @@
 
 #include <string>
 #include <vector>
+
+#include "host/report/report.hpp"
 
 namespace kincal::report {
 
@@ -48,5 +55,21 @@ struct CameraReport {
 
 std::string render_camera_html(const CameraReport& report);
 void write_camera_report(const CameraReport& report, const std::string& path);
+
+struct CameraPageTable {
+  std::string id;  // the section's id
+  TextTable table;
+};
+
+struct CameraPage {
+  std::string title;
+  std::string date;
+  std::vector<std::string> facts;
+  std::vector<CameraPageTable> tables;
+  std::vector<CameraReport> cameras;  // each under its title (its date unused)
+};
+
+std::string render_camera_page_html(const CameraPage& page);
+void write_camera_page(const CameraPage& page, const std::string& path);
 
 }  // namespace kincal::report

@@ -641,18 +641,7 @@ std::string comparison(const RunContext& c, const Comparison& t, std::size_t ind
 }
 
 std::string text_table(const RunContext& c, const TextTable& t, std::size_t index) {
-  std::string html = "<section class=\"table\" id=\"" + c.id("table" + std::to_string(index + 1)) + "\"><h3>" +
-                     escape_html(t.title) + "</h3><table class=\"text\"><tr>";
-  for (const std::string& column : t.columns) html += heading(column);
-  html += "</tr>";
-  for (const std::vector<std::string>& row : t.rows) {
-    html += "<tr>";
-    for (const std::string& value : row) html += "<td>" + escape_html(value) + "</td>";
-    html += "</tr>";
-  }
-  html += "</table>";
-  if (!t.note.empty()) html += "<p class=\"note\">" + escape_html(t.note) + "</p>";
-  return html + "</section>";
+  return table_section(t, c.id("table" + std::to_string(index + 1)));
 }
 
 std::string run_section(const RunContext& c) {
@@ -703,6 +692,26 @@ std::string render_html(const Report& report) {
     }
   }
   return html_page(report.title, report.date, html);
+}
+
+std::string table_section(const TextTable& t, const std::string& id) {
+  std::string html = "<section class=\"table\" id=\"" + escape_html(id) + "\"><h3>" + escape_html(t.title) +
+                     "</h3><table class=\"text\"><tr>";
+  for (const std::string& column : t.columns) html += heading(column);
+  html += "</tr>";
+  for (std::size_t i = 0; i < t.rows.size(); ++i) {
+    const std::vector<std::string>& row = t.rows[i];
+    if (row.size() != t.columns.size()) {
+      throw ReportError("table '" + t.title + "', row " + std::to_string(i + 1) + ": " + std::to_string(row.size()) +
+                        " cells for " + std::to_string(t.columns.size()) + " columns");
+    }
+    html += "<tr>";
+    for (const std::string& value : row) html += "<td>" + escape_html(value) + "</td>";
+    html += "</tr>";
+  }
+  html += "</table>";
+  if (!t.note.empty()) html += "<p class=\"note\">" + escape_html(t.note) + "</p>";
+  return html + "</section>";
 }
 
 std::string html_page(const std::string& title, const std::string& date, const std::string& body_html) {

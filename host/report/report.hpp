@@ -203,6 +203,9 @@ std::string render_html(const Report& report);
 // A page in the report's style around `body_html` (already escaped): title, date and the CSS;
 // the camera report (camera_report.hpp) shares it.
 std::string html_page(const std::string& title, const std::string& date, const std::string& body_html);
+// A TextTable as a <section class="table" id="`id`">; ReportError for a row with more or fewer
+// cells than columns (render_html refuses it first, naming the run).
+std::string table_section(const TextTable& table, const std::string& id);
 // `html` written whole to `path` (host/files/output_file.hpp); ReportError naming the path.
 void write_page(const std::string& html, const std::string& path);
 // render_html() written whole to `path`, replacing it (host/files/output_file.hpp).
