@@ -493,8 +493,11 @@ RobotModel reparameterize_for_identification(const RobotModel& m, double toleran
 
 namespace {
 
-// identify() without the rejection gate.
-IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options) {
+// identify() without the rejection gate. When the test rejected rows and `unrejected` is given, it
+// receives the fit before the first rejection round finished as the result: what options.robust =
+// false gives (the same solves, so the gate need not solve it again).
+IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options,
+                                IdentifyResult* unrejected = nullptr) {
   check_data(nominal, data);
   IdentifyResult result;
   const int n = nominal.joint_count();
@@ -658,6 +661,9 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
   };
   fit();
   result.model_error_before_rejection_m = std::sqrt(components.position2);
+  const IdentifyResult before_rejection = result;
+  const std::vector<double> delta_before_rejection = delta;
+  const Components components_before_rejection = components;
 
   // Outliers: studentized residuals against a robust scale, capped (see identify.hpp).
   const int total = static_cast<int>(data.rows.size());
@@ -727,38 +733,49 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
     rows = kept;
     fit();
   }
-  for (const Rejection& r : result.rejections) result.outlier_lines.push_back(r.line);
-  result.model_error_position_m = std::sqrt(components.position2);
-  result.model_error_orientation_rad = std::sqrt(components.orientation2);
+  // The statistics, the standard deviations and the calibration record of the fit at `at` with
+  // the noise components `c` over the rows `used`.
+  const auto finish = [&](IdentifyResult& out, const std::vector<double>& at, const Components& c,
+                          const std::vector<int>& used) {
+    for (const Rejection& x : out.rejections) out.outlier_lines.push_back(x.line);
+    out.model_error_position_m = std::sqrt(c.position2);
+    out.model_error_orientation_rad = std::sqrt(c.orientation2);
+    param.set(at);
 
-  // Standard deviations and the chi-square of the fit.
-  Eigen::VectorXd r;
-  Eigen::MatrixXd j;
-  stacked(param, data, weights, rows, r, &j);
-  {
-    const Eigen::MatrixXd info = j.transpose() * j + Eigen::MatrixXd(prior_weight.cwiseAbs2().asDiagonal());
-    result.covariance = info.ldlt().solve(Eigen::MatrixXd::Identity(info.rows(), info.cols()));
-    result.stddev = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-    result.prior_share = result.covariance.diagonal().cwiseProduct(prior_weight.cwiseAbs2()).cwiseMin(1.0);
+    // Standard deviations and the chi-square of the fit.
+    Eigen::VectorXd r;
+    Eigen::MatrixXd j;
+    stacked(param, data, noise_weights(instrument, c, out.orientation_used), used, r, &j);
+    {
+      const Eigen::MatrixXd info = j.transpose() * j + Eigen::MatrixXd(prior_weight.cwiseAbs2().asDiagonal());
+      out.covariance = info.ldlt().solve(Eigen::MatrixXd::Identity(info.rows(), info.cols()));
+      out.stddev = out.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+      out.prior_share = out.covariance.diagonal().cwiseProduct(prior_weight.cwiseAbs2()).cwiseMin(1.0);
+    }
+    out.change = Eigen::Map<const Eigen::VectorXd>(at.data(), p);
+    const double dof = static_cast<double>(r.size()) - p;
+    out.chi_square_per_dof = dof > 0 ? r.squaredNorm() / dof : 0.0;
+    out.model = param.model();
+    out.model.name = nominal.name;
+    out.residuals = accuracy(out.model, data, used);
+
+    model::CalibrationRecord record;
+    record.method = options.method == Method::first_order ? "first-order" : "full";
+    if (options.start == Start::cpa && options.method == Method::full) record.method = "full (from cpa)";
+    record.data = data.source;
+    record.measurements = static_cast<int>(used.size());
+    record.rms_residual_m = out.residuals.rms_m;
+    for (int k = 0; k < p; ++k)
+      record.parameters.push_back(
+          {model::parameter_name(ids[static_cast<std::size_t>(k)]), out.change(k), out.stddev(k)});
+    for (const HeldFixed& h : out.identifiability.held_fixed) record.held_fixed.push_back(model::parameter_name(h.id));
+    out.model.calibration = record;
+  };
+  finish(result, delta, components, rows);
+  if (unrejected != nullptr && !result.rejections.empty()) {
+    *unrejected = before_rejection;
+    finish(*unrejected, delta_before_rejection, components_before_rejection, all_rows(data));
   }
-  result.change = Eigen::Map<Eigen::VectorXd>(delta.data(), p);
-  const double dof = static_cast<double>(r.size()) - p;
-  result.chi_square_per_dof = dof > 0 ? r.squaredNorm() / dof : 0.0;
-  result.model = param.model();
-  result.model.name = nominal.name;
-  result.residuals = accuracy(result.model, data, rows);
-
-  model::CalibrationRecord record;
-  record.method = options.method == Method::first_order ? "first-order" : "full";
-  if (options.start == Start::cpa && options.method == Method::full) record.method = "full (from cpa)";
-  record.data = data.source;
-  record.measurements = static_cast<int>(rows.size());
-  record.rms_residual_m = result.residuals.rms_m;
-  for (int k = 0; k < p; ++k)
-    record.parameters.push_back(
-        {model::parameter_name(ids[static_cast<std::size_t>(k)]), result.change(k), result.stddev(k)});
-  for (const HeldFixed& h : result.identifiability.held_fixed) record.held_fixed.push_back(model::parameter_name(h.id));
-  result.model.calibration = record;
   (void)n;
   return result;
 }
@@ -783,7 +800,8 @@ double paired_t(const std::vector<double>& a2, const std::vector<double>& b2) {
 }  // namespace
 
 IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options) {
-  IdentifyResult result = identify_ungated(nominal, data, options);
+  IdentifyResult unrejected;
+  IdentifyResult result = identify_ungated(nominal, data, options, options.rejection_gate ? &unrejected : nullptr);
   if (!options.rejection_gate || result.rejections.empty()) return result;
   IdentifyOptions without = options;
   without.robust = false;
@@ -806,7 +824,7 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
   gate.kept = gate.kfold_t <= -kGateT && gate.out_of_range_with_m <= gate.out_of_range_without_m;
   if (!gate.kept) {
     gate.undone = std::move(result.rejections);
-    result = identify_ungated(nominal, data, without);
+    result = std::move(unrejected);
   }
   result.rejection_gate = std::move(gate);
   return result;

@@ -325,6 +325,16 @@ TEST_CASE("rejection gate: the model's error at sweep ends is not rejected") {
             "); held out: default ", a * 1e3, " mm, test only ", t * 1e3, " mm, none ", b * 1e3, " mm");
     CHECK(r.rejection_gate.judged == !test_only.rejections.empty());
     judged += r.rejection_gate.judged ? 1 : 0;
+    if (r.rejection_gate.judged && !r.rejection_gate.kept) {  // the test's fit before its first rejection
+      CHECK((r.change.array() == none.change.array()).all());
+      CHECK((r.covariance.array() == none.covariance.array()).all());
+      CHECK(r.model_error_position_m == none.model_error_position_m);
+      CHECK(r.residuals.rms_m == none.residuals.rms_m);
+      CHECK(r.iterations == none.iterations);
+      CHECK(r.notes == none.notes);
+      CHECK(r.outlier_lines.empty());
+      CHECK(r.rejection_gate.undone.size() == test_only.rejections.size());
+    }
   }
   CHECK(judged > 0);
 }
