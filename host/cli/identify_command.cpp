@@ -220,7 +220,10 @@ int run_identify(const IdentifyArgs& a) {
     std::string model_choice;
     std::optional<identify::Selection> selection;
     const model::RobotModel start = choose_model(a, nominal, data, options, model_choice, selection);
-    identify::IdentifyResult result = identify::identify(start, data, options);
+    // The rejection gate reuses model selection's cross-validation of the chosen model.
+    identify::IdentifyResult result = selection
+                                          ? identify::identify(start, data, options, selection->chosen_cross_validation)
+                                          : identify::identify(start, data, options);
     std::cout << "kincal identify: " << nominal.name << " from " << a.data << '\n' << identify::format_report(result);
     // The baseline: the nominal geometry registered to the device, its tool fitted.
     std::optional<identify::IdentifyResult> registered;

@@ -797,15 +797,16 @@ double paired_t(const std::vector<double>& a2, const std::vector<double>& b2) {
   return variance > 0.0 ? mean / std::sqrt(variance / n) : 0.0;
 }
 
-}  // namespace
-
-IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options) {
+// identify() with the rejection gate; `with_rule`: its cross-validation with the rule when the
+// caller has it (model selection's), else computed here.
+IdentifyResult gated(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options,
+                     const CrossValidation* with_rule) {
   IdentifyResult unrejected;
   IdentifyResult result = identify_ungated(nominal, data, options, options.rejection_gate ? &unrejected : nullptr);
   if (!options.rejection_gate || result.rejections.empty()) return result;
   IdentifyOptions without = options;
   without.robust = false;
-  const CrossValidation with_cv = cross_validate(nominal, data, options);
+  const CrossValidation with_cv = with_rule != nullptr ? *with_rule : cross_validate(nominal, data, options);
   const CrossValidation without_cv = cross_validate(nominal, data, without);
   if (with_cv.kfold_rms_m < 0.0 || without_cv.kfold_rms_m < 0.0) {
     result.notes.push_back("rejection gate: cross-validation cannot judge the rejections (" +
@@ -828,6 +829,17 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
   }
   result.rejection_gate = std::move(gate);
   return result;
+}
+
+}  // namespace
+
+IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options) {
+  return gated(nominal, data, options, nullptr);
+}
+
+IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options,
+                        const CrossValidation& with_rule) {
+  return gated(nominal, data, options, &with_rule);
 }
 
 std::string format_noise(const IdentifyResult& r) {

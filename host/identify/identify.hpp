@@ -51,8 +51,12 @@
 // without rejection, and the undone rejections are reported. A blunder in a held-out fold costs
 // both variants alike, so the difference is what rejecting does to the other rows: three 1 mm
 // blunders in 80 rows give t = -7.2, the real UR10 rows' model error -0.8 (100 and 300 rows), a
-// sagging arm's sweep ends -0.4 to +0.3 (tests, realdata_ur10_bench). Cost: 12 more
-// solves, only when the test rejected rows (300 UR10 rows: 3.1 s against 0.29 s, Release).
+// sagging arm's sweep ends -0.4 to +0.3 (tests, realdata_ur10_bench). Cost, only when the
+// test rejected rows: the K + 1 solves of the folds without the rule, and the K + 1 with it unless
+// the caller has them (model selection's, which `kincal identify` passes on); the fit without
+// rejection is the one the test had before its first round (300 UR10 rows with model selection's
+// folds: 0.92 s against 0.27 s without the gate, Release, loaded machine; 2.9 s when each solve
+// was made here).
 // When the folds cannot be identified (too few rows) the gate cannot judge: the rejections stand,
 // with a note.
 //
@@ -196,6 +200,15 @@ struct IdentifyResult {
 
 // Throws model::InputError for bad input (see above).
 IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options);
+
+struct CrossValidation;  // model_selection.hpp
+
+// identify() with the rejection gate's cross-validation with the rejection rule given, saving its
+// K + 1 solves: `with_rule` must be cross_validate(nominal, data, options) with the default
+// SelectionOptions -- as model selection scored the candidate it chose
+// (Selection::chosen_cross_validation, with the chosen candidate's model and options).
+IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options,
+                        const CrossValidation& with_rule);
 
 // The baseline a calibration is judged against: the nominal geometry with only the registration
 // to the measuring device and the tool fitted (those of `calibrated`'s identified parameters that

@@ -163,8 +163,10 @@ Selection select_model(const RobotModel& nominal, const model::Dataset& data, co
   s.out_of_range_test_rows = static_cast<int>(range.outside.size());
   const std::vector<Candidate> candidates = candidate_models(nominal, base);
   int best = -1;
+  std::vector<CrossValidation> validations;
   for (const Candidate& candidate : candidates) {
-    const CrossValidation cv = cross_validate(candidate.model, data, candidate.options, options);
+    validations.push_back(cross_validate(candidate.model, data, candidate.options, options));
+    const CrossValidation& cv = validations.back();
     s.scores.push_back({candidate.name, cv.parameters, cv.kfold_rms_m, cv.out_of_range_rms_m, -1.0, cv.why});
   }
   // The out-of-range fold counts when every candidate the K folds could judge was identified on
@@ -185,6 +187,7 @@ Selection select_model(const RobotModel& nominal, const model::Dataset& data, co
                             std::to_string(options.folds) + "-fold training rows:" + why);
   }
   s.chosen = candidates[static_cast<std::size_t>(best)];
+  s.chosen_cross_validation = std::move(validations[static_cast<std::size_t>(best)]);
   std::ostringstream reason;
   reason.setf(std::ios::fixed);
   reason.precision(4);

@@ -104,6 +104,10 @@ struct CandidateScore {
 struct Selection {
   std::vector<CandidateScore> scores;  // in candidate_models' order
   Candidate chosen;
+  // The chosen candidate's scores in full: with the default SelectionOptions, what identify's
+  // rejection gate computes with the rule for it (identify(chosen.model, data, chosen.options,
+  // chosen_cross_validation) saves those K + 1 solves).
+  CrossValidation chosen_cross_validation;
   int out_of_range_train_rows = 0, out_of_range_test_rows = 0;
   std::string reason;  // the rule and the figures that decided
 };

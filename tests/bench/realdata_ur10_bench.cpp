@@ -11,7 +11,9 @@
 //                                          error + the row's instrument covariance (plain: N = 300)
 //   realdata_ur10_model_error_mm_nN, realdata_ur10_rejected_nN
 //   realdata_ur10_identify_seconds_nN      wall time of the default identify (the rejection gate
-//                                          included; model selection not), and its noise lines;
+//                                          included, reusing model selection's cross-validation
+//                                          of the chosen model as kincal identify does; model
+//                                          selection not), and its noise lines;
 //                                          realdata_ur10_identify_seconds_nogate_nN without the gate
 //   realdata_ur10_nominal_registered_rms_mm   nominal geometry, only base and probe identified
 //                                             (300 rows), for orientation
@@ -74,10 +76,13 @@ struct Outcome {
   identify::IdentifyResult result;
 };
 
+// `with_rule`: model selection's cross-validation of this model on `train`, which the rejection
+// gate reuses as kincal identify has it do (identify.hpp), or null.
 Outcome run(const model::RobotModel& nominal, const model::Dataset& train, const model::Dataset& held_out,
-            const identify::IdentifyOptions& o) {
+            const identify::IdentifyOptions& o, const identify::CrossValidation* with_rule = nullptr) {
   Outcome out;
-  out.result = identify::identify(nominal, train, o);
+  out.result =
+      with_rule != nullptr ? identify::identify(nominal, train, o, *with_rule) : identify::identify(nominal, train, o);
   out.rms_m = identify::accuracy(out.result.model, held_out).rms_m;
   const double limit = identify::chi_square_quantile(0.95, 3);
   int inside = 0;
@@ -102,15 +107,24 @@ void figure(const std::string& name, double value, const char* unit) {
 }
 
 // identify's default (kincal identify): the model chosen by cross-validation with enough rows,
-// every parameter with the default priors below that.
-identify::Candidate chosen(const model::RobotModel& nominal, const model::Dataset& train, const char* label) {
-  if (static_cast<int>(train.rows.size()) < identify::kMinRowsForSelection) return {"", "", nominal, {}};
+// every parameter with the default priors below that (Selection::chosen alone filled then).
+identify::Selection chosen(const model::RobotModel& nominal, const model::Dataset& train, const char* label) {
+  if (static_cast<int>(train.rows.size()) < identify::kMinRowsForSelection) {
+    identify::Selection none;
+    none.chosen = {"", "", nominal, {}};
+    return none;
+  }
   const auto start = std::chrono::steady_clock::now();
   const identify::Selection s = identify::select_model(nominal, train, {});
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf("%s (%zu rows): %s", label, train.rows.size(), identify::format_selection(s).c_str());
   figure(std::string("realdata_ur10_selection_seconds_") + label, seconds, "s");
-  return s.chosen;
+  return s;
+}
+
+// The selection's cross-validation of its chosen model, when it ran.
+const identify::CrossValidation* selection_scores(const identify::Selection& s) {
+  return s.chosen_cross_validation.kfold_rms_m >= 0.0 ? &s.chosen_cross_validation : nullptr;
 }
 
 // The flange's orientation in the device frame: the tool pose less the flange-to-tool turn.
@@ -171,10 +185,11 @@ int main() {
     const std::vector<int> rows(split.train_order.begin(), split.train_order.begin() + n);
     const model::Dataset train = realdata::subset(all, rows);
     const std::string suffix = "_n" + std::to_string(n);
-    identify::Candidate c = chosen(nominal, train, ("n" + std::to_string(n)).c_str());
-    identify::IdentifyOptions& o = c.options;
+    identify::Selection selection = chosen(nominal, train, ("n" + std::to_string(n)).c_str());
+    const identify::Candidate& c = selection.chosen;
+    identify::IdentifyOptions& o = selection.chosen.options;
     const auto start = std::chrono::steady_clock::now();
-    const Outcome cov = run(c.model, train, held_out, o);
+    const Outcome cov = run(c.model, train, held_out, o, selection_scores(selection));
     figure("realdata_ur10_identify_seconds" + suffix,
            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), "s");
     std::printf("n%d rejection: %s", n, identify::format_noise(cov.result).c_str());
@@ -209,9 +224,9 @@ int main() {
       model::Dataset points = train;
       points.has_orientation = false;
       for (model::Measurement& m : points.rows) m.orientation.reset();
-      const identify::Candidate p = chosen(nominal, points, "positions_only_n300");
-      figure("realdata_ur10_positions_only_heldout_rms_mm_n300", run(p.model, points, held_out, p.options).rms_m * 1e3,
-             "mm");
+      const identify::Selection p = chosen(nominal, points, "positions_only_n300");
+      figure("realdata_ur10_positions_only_heldout_rms_mm_n300",
+             run(p.chosen.model, points, held_out, p.chosen.options, selection_scores(p)).rms_m * 1e3, "mm");
       identify::IdentifyOptions r;
       r.requested = {"base", "tool"};
       figure("realdata_ur10_nominal_registered_rms_mm", run(nominal, train, held_out, r).rms_m * 1e3, "mm");
@@ -226,8 +241,8 @@ int main() {
     const identify::RowSplit central = identify::out_of_range_split(all, 0.7);
     const model::Dataset inside = realdata::subset(all, central.inside);
     const model::Dataset outside = realdata::subset(all, central.outside);
-    const identify::Candidate c = chosen(nominal, inside, "extrapolation");
-    const Outcome now = run(c.model, inside, outside, c.options);
+    const identify::Selection c = chosen(nominal, inside, "extrapolation");
+    const Outcome now = run(c.chosen.model, inside, outside, c.chosen.options, selection_scores(c));
     const Outcome before = run(nominal, inside, outside, {});  // the default before model selection
     const Outcome old = run(nominal, inside, outside, old_default);
     figure("realdata_ur10_extrapolation_train_rows", static_cast<double>(inside.rows.size()), "rows");

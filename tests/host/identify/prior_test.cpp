@@ -215,6 +215,13 @@ TEST_CASE("model selection: the out-of-range split, the candidates, and the choi
       CHECK(x.score_m >= chosen.score_m);
     }
   }
+  // The chosen candidate's scores in full are what identify's rejection gate computes with the
+  // rule for it (kincal identify passes them on instead).
+  const identify::CrossValidation again =
+      identify::cross_validate(selection.chosen.model, train, selection.chosen.options);
+  CHECK(again.kfold_error2 == selection.chosen_cross_validation.kfold_error2);
+  CHECK(again.out_of_range_error2 == selection.chosen_cross_validation.out_of_range_error2);
+  CHECK(again.kfold_error2.size() == train.rows.size());
   const std::string table = identify::format_selection(selection);
   CHECK(has(table, selection.chosen.name + ": the lowest mean of the K-fold and out-of-range RMS"));
   CHECK(has(table, "<- chosen"));
