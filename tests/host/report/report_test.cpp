@@ -8,6 +8,7 @@
 #include <numbers>
 #include <string>
 
+#include "host/report/camera_report.hpp"
 #include "host/report/report.hpp"
 #include "host/report/svg_plot.hpp"
 #include "sample_report.hpp"
@@ -421,4 +422,35 @@ TEST_CASE("report: priors in the model table, a change beyond 3 prior sigmas mar
   CHECK(has(body, "the rows rejected as outliers (left out of the fit) marked"));
   run.fit_residuals[1].q.pop_back();
   CHECK_THROWS_WITH_AS(render_html(report), doctest::Contains("fit residual 2: "), ReportError);
+}
+
+TEST_CASE("camera page: its tables, each camera's sections exactly when their data are given, rows checked") {
+  CameraReport lens;
+  lens.title = "Left camera";
+  lens.width_px = 640;
+  lens.height_px = 480;
+  lens.field_x_px = {100, 500};
+  lens.field_y_px = {100, 400};
+  lens.field_dx_px = {-2, 3};
+  lens.field_dy_px = {-1.5, 2};
+  CameraReport corners = lens;
+  corners.title = "Right camera";
+  corners.field_x_px = corners.field_y_px = corners.field_dx_px = corners.field_dy_px = {};
+  corners.views.push_back({"right01.jpg", {10, 20}, {30, 40}, {0.1, -0.2}, {0.05, 0.0}, 0.16});
+  CameraPage page{"Stereo calibration", "2026-11-26", {"baseline: 0.083 m"}, {}, {lens, corners}};
+  page.tables.push_back({"pairs", {"Pairs", {"left / right", "status"}, {{"l01 / r01", "used"}}, "a note"}});
+  const std::string html = render_camera_page_html(page);
+  CHECK(has(html, "<section class=\"table\" id=\"pairs\"><h3>Pairs</h3>"));
+  CHECK(has(html, "<td>l01 / r01</td><td>used</td>"));
+  CHECK(has(html, "<p class=\"note\">a note</p>"));
+  CHECK(count(html, "<section class=\"camera\">") == 2);
+  // The lens-only camera: distortion only; the other: residuals and coverage only.
+  CHECK(count(html, "<section class=\"distortion\">") == 1);
+  CHECK(count(html, "<section class=\"residuals\">") == 1);
+  CHECK(count(html, "<section class=\"coverage\">") == 1);
+  CHECK(count(html, "<section class=\"uncertainty\">") == 0);
+  CHECK(count(html, "<section class=\"summary\">") == 1);  // the cameras have no facts
+  CHECK(html.find("Left camera") < html.find("Right camera"));
+  page.tables.front().table.rows.push_back({"l02 / r02"});
+  CHECK_THROWS_WITH_AS(render_camera_page_html(page), "table 'Pairs', row 2: 1 cells for 2 columns", ReportError);
 }
