@@ -342,7 +342,8 @@ void add_identify_command(CLI::App& app, int& status) {
                   "auto (default, with at least 100 rows): the candidate model with the lowest mean of its 5-fold and "
                   "out-of-range cross-validated RMS (registration, joint-offsets, geometry-x2, geometry, "
                   "geometry-x0.5, geometry-noprior, geometry+nongeometric when the model has scales or "
-                  "compliances, geometry+scales when a joint has no scale); off: every parameter, default priors; or a "
+                  "compliances, geometry+gravity when its links have masses and it declares no compliance, "
+                  "geometry+scales when a joint has no scale); off: every parameter, default priors; or a "
                   "candidate's name");
   cmd->add_flag("--no-prior", a->no_prior,
                 "no priors: plain least squares (the parameters the data see poorly may run off)");

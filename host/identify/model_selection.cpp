@@ -80,6 +80,17 @@ std::vector<Candidate> candidate_models(const RobotModel& nominal, const Identif
   if (!joint_map.empty())
     out.push_back(make("geometry+nongeometric", "every parameter with the model file's scales and compliances", nominal,
                        base, 1.0, {}));
+  // Links with masses but no compliance declared: a candidate with a gravity compliance on every
+  // joint (identifiability holds fixed those gravity does not load, e.g. a vertical first axis).
+  const bool masses =
+      nominal.payload.mass_kg > 0.0 ||
+      std::any_of(nominal.joints.begin(), nominal.joints.end(), [](const model::Joint& j) { return j.mass_kg > 0.0; });
+  if (masses && !model::has_compliance(nominal)) {
+    RobotModel with_gravity = nominal;
+    for (model::Joint& j : with_gravity.joints) j.compliance = 0.0;
+    out.push_back(make("geometry+gravity", "every parameter and each joint's gravity compliance (the model's masses)",
+                       with_gravity, base, 1.0, {}));
+  }
   RobotModel with_scales = nominal;
   bool added = false;
   for (model::Joint& j : with_scales.joints)

@@ -184,7 +184,17 @@ TEST_CASE("model selection: the out-of-range split, the candidates, and the choi
   const RobotModel ur10 = robot("ur10.yaml");
   std::string names;
   for (const identify::Candidate& c : identify::candidate_models(ur10, {})) names += c.name + " ";
-  CHECK(names == "registration joint-offsets geometry-x2 geometry geometry-x0.5 geometry-noprior geometry+scales ");
+  CHECK(names ==
+        "registration joint-offsets geometry-x2 geometry geometry-x0.5 geometry-noprior geometry+gravity "
+        "geometry+scales ");
+  {  // the gravity candidate needs masses and no declared compliance
+    RobotModel massless = ur10;
+    for (model::Joint& j : massless.joints) j.mass_kg = 0.0;
+    RobotModel compliant = ur10;
+    compliant.joints[1].compliance = 0.0;
+    for (const RobotModel& m : {massless, compliant})
+      for (const identify::Candidate& c : identify::candidate_models(m, {})) CHECK(c.name != "geometry+gravity");
+  }
   CHECK(identify::find_candidate(ur10, {}, "geometry-x2").options.prior.strength == 2.0);
   std::string error;
   try {
@@ -200,13 +210,17 @@ TEST_CASE("model selection: the out-of-range split, the candidates, and the choi
   const model::Dataset train =
       realdata::subset(all, std::vector<int>(split.train_order.begin(), split.train_order.begin() + 100));
   const identify::Selection selection = identify::select_model(ur10, train, {});
-  REQUIRE(selection.scores.size() == 7);
+  REQUIRE(selection.scores.size() == 8);
   CHECK(selection.scores[0].parameters == 12);  // base and tool
   CHECK(selection.scores[1].parameters == 16);  // and four joint offsets (theta1, theta6 go to base, tool)
-  CHECK(selection.scores[6].parameters == selection.scores[3].parameters + 6);  // and six scales
+  // and four compliances: gravity does not turn the vertical first axis nor the last (its link's
+  // centre of mass is on its axis), so identifiability holds compliance1 and compliance6 fixed
+  CHECK(selection.scores[6].parameters == selection.scores[3].parameters + 4);
+  CHECK(selection.scores[7].parameters == selection.scores[3].parameters + 6);  // and six scales
   // The nominal geometry leaves about 1.1 mm; every geometric candidate about half that.
   CHECK(selection.scores[0].kfold_rms_m > 1.5 * selection.scores[3].kfold_rms_m);
-  CHECK(selection.chosen.name.starts_with("geometry"));
+  // UR's published masses explain part of what geometry leaves: the gravity candidate wins.
+  CHECK(selection.chosen.name == "geometry+gravity");
   for (const identify::CandidateScore& x : selection.scores) {
     CHECK(x.out_of_range_rms_m > 0.0);
     if (x.name != selection.chosen.name) {
