@@ -119,12 +119,12 @@ report::CameraReport lens_report(const camera::CameraModel& camera,
 report::CameraPage stereo_report(const camera::StereoCalibration& s, const camera::StereoOptions& options,
                                  report::CameraReport left, report::CameraReport right) {
   report::CameraPage page{"Stereo calibration", report::utc_date_now(), facts_of(camera::describe(s), "pair "), {}, {}};
-  report::TextTable pairs{
-      "Pairs",
-      {"left / right", "status", "corners", "RMS left (px)", "RMS right (px)", "epipolar RMS (px)",
-       "own right_T_left vs calibrated (deg)", "(mm)", "distance from the consensus (gate: at most 1)"},
-      {},
-      {}};
+  report::TextTable pairs{"Pairs",
+                          {"left / right", "status", "corners", "RMS left (px)", "RMS right (px)", "epipolar RMS (px)",
+                           "own right_T_left vs calibrated: rotation (deg)", "translation (mm)",
+                           "distance from the consensus (gate: at most 1)"},
+                          {},
+                          {}};
   for (const camera::StereoPairReport& p : s.pairs) {
     const std::string name = file_name(p.left_view) + " / " + file_name(p.right_view);
     if (!p.used) {
