@@ -145,8 +145,15 @@ UrdfJoint parse_joint(const tinyxml2::XMLElement& e, const ElementIndex& index, 
   return j;
 }
 
+// A link's <inertial>: its mass and centre of mass in the link's frame (none: mass 0).
+struct Inertial {
+  double mass_kg = 0.0;
+  Vector3 centre_m = Vector3::Zero();
+};
+
 struct Tree {
   std::map<std::string, int> link_lines;
+  std::map<std::string, Inertial> inertials;        // by link, those with a mass
   std::map<std::string, UrdfJoint> joint_to_child;  // by child link
   std::map<std::string, int> mimic_lines;           // by joint name
   std::map<std::string, std::string> type_names;    // joint name -> type text (for refusals)
@@ -174,6 +181,21 @@ Tree parse_tree(const std::string& text, const std::string& source) {
     const std::string name = required_attribute(*l, "name", source);
     if (!tree.link_lines.emplace(name, l->GetLineNum()).second)
       fail_at(source, l->GetLineNum(), "link '" + name + "' defined twice");
+    if (const tinyxml2::XMLElement* inertial = l->FirstChildElement("inertial")) {
+      const tinyxml2::XMLElement* mass = inertial->FirstChildElement("mass");
+      if (mass == nullptr) continue;
+      const std::string what = "link '" + name + "' <mass> value";
+      const char* value = mass->Attribute("value");
+      if (value == nullptr) fail_at(source, mass->GetLineNum(), what + ": missing");
+      Inertial in;
+      in.mass_kg = parse_number(value, source, mass->GetLineNum(), what);
+      if (in.mass_kg < 0.0 || in.mass_kg > kMaxMassKg)
+        fail_at(source, mass->GetLineNum(),
+                what + " " + shortest_number_text(in.mass_kg) + " is not a link's mass (0 to " +
+                    shortest_number_text(kMaxMassKg) + " kg)");
+      in.centre_m = parse_origin(inertial->FirstChildElement("origin"), source).translation;
+      tree.inertials.emplace(name, in);
+    }
   }
   const ElementIndex index = index_elements(doc);
   std::set<std::string> joint_names;
@@ -210,6 +232,29 @@ bool path_between(const Tree& tree, const std::string& base, const std::string& 
   }
   std::reverse(out.begin(), out.end());
   return true;
+}
+
+// The mass of `link` and of the links fixed to it off the chain (recursively), with their centre
+// of mass in `link`'s frame.
+UrdfMass rigid_mass(const Tree& tree, const std::map<std::string, std::vector<const UrdfJoint*>>& children,
+                    const std::set<std::string>& on_chain, const std::string& link) {
+  UrdfMass m;
+  Vector3 moment = Vector3::Zero();
+  std::vector<std::pair<std::string, Transform>> todo{{link, Transform{}}};
+  while (!todo.empty()) {
+    const auto [name, pose] = todo.back();
+    todo.pop_back();
+    if (const auto in = tree.inertials.find(name); in != tree.inertials.end()) {
+      m.mass_kg += in->second.mass_kg;
+      moment += in->second.mass_kg * (pose * in->second.centre_m);
+    }
+    if (const auto below = children.find(name); below != children.end())
+      for (const UrdfJoint* j : below->second)
+        if (j->type == UrdfJointType::fixed && !on_chain.contains(j->child_link))
+          todo.emplace_back(j->child_link, pose * j->parent_T_joint);
+  }
+  if (m.mass_kg > 0.0) m.centre_m = moment / m.mass_kg;
+  return m;
 }
 
 int movable(const std::vector<UrdfJoint>& joints) {
@@ -306,6 +351,11 @@ UrdfChain parse_urdf_chain(const std::string& text, const std::string& source, c
                   "(calibrate the chain without it, or make it fixed)");
   }
   chain.joints = std::move(path);
+  std::map<std::string, std::vector<const UrdfJoint*>> children;  // by parent link
+  for (const auto& [child, j] : tree.joint_to_child) children[j.parent_link].push_back(&j);
+  std::set<std::string> on_chain{chain.base_link};
+  for (const UrdfJoint& j : chain.joints) on_chain.insert(j.child_link);
+  for (const UrdfJoint& j : chain.joints) chain.masses.push_back(rigid_mass(tree, children, on_chain, j.child_link));
   return chain;
 }
 
@@ -381,6 +431,23 @@ RobotModel model_from_urdf(const UrdfChain& chain) {
   Transform slide;
   slide.translation = Vector3(0, 0, -s);
   model.flange_T_tool = slide * model.flange_T_tool;
+  // Masses: movable joint i moves its child link and the links fixed after it up to the next
+  // movable joint; their centre of mass in frame i at the readings' zero, where the URDF's link
+  // poses are known. Gravity: the base link's -z (REP 103), in frame 0.
+  const core::ChainFrames<double> frames = chain_at_joints(model, zero).frames;
+  std::vector<Vector3> moment(static_cast<std::size_t>(n), Vector3::Zero());
+  int i = -1;
+  for (std::size_t k = 0; k < chain.joints.size(); ++k) {
+    if (chain.joints[k].type != UrdfJointType::fixed) ++i;
+    if (i < 0 || chain.masses[k].mass_kg == 0.0) continue;
+    const auto at = static_cast<std::size_t>(i);
+    model.joints[at].mass_kg += chain.masses[k].mass_kg;
+    moment[at] +=
+        chain.masses[k].mass_kg * (frames.base_T_frame[at + 1].inverse() * (poses[k] * chain.masses[k].centre_m));
+  }
+  for (std::size_t j = 0; j < model.joints.size(); ++j)
+    if (model.joints[j].mass_kg > 0.0) model.joints[j].centre_of_mass_m = moment[j] / model.joints[j].mass_kg;
+  model.gravity_mps2 = model.base_T_frame0.rotation.transpose() * Vector3(0.0, 0.0, -kStandardGravity_mps2);
   return model;
 }
 

@@ -18,6 +18,7 @@
 //
 // Refused, with InputError "FILE:LINE: reason" (LINE: the offending element's line, or 1 for
 // whole-document problems and unknown --base-link/--tip-link names): XML errors and NUL bytes,
+// a link's <mass> without a value or with one that is not a finite number from 0 to kMaxMassKg,
 // an end tag that closes no element (tinyxml2 would ignore the rest of the file silently), a
 // tag written "</a .../>" (tinyxml2 would read an element a);
 // no <robot>, no links, a link or joint defined twice, a joint naming an undefined link, a link
@@ -40,7 +41,11 @@
 // link, moved onto that joint's axis (for a UR description: base_link_inertia, the controller's
 // base); links by chain_from_axes (axes.hpp: standard DH, Doty's convention where consecutive
 // axes are within 0.1 rad of parallel), joint offsets folded into theta/d so that a reading of 0
-// is the URDF's 0; the tool is a frame: the tip link. Forward kinematics of the model equal the
+// is the URDF's 0; the tool is a frame: the tip link. Masses (for model selection's gravity
+// candidate, model_selection.hpp): joint i carries the <inertial> masses of the chain's links it
+// moves up to the next movable joint and of the links fixed to them off the chain (links behind
+// another movable joint off the chain, e.g. a mobile robot's head, are left out), their centre of
+// mass in frame i; gravity is the base link's -z (REP 103). Forward kinematics of the model equal the
 // URDF's to rounding (tests/host/model/urdf_test.cpp: 1e-9 m and 1e-9 rad against urdfdom over
 // random readings, for the robots of host/model/robots and every chain of the real URDFs in
 // ../shared/realdata/urdf-corpus).
@@ -82,6 +87,12 @@ struct UrdfJoint {
   int origin_line = 0;
 };
 
+// A link's mass with the links fixed to it off the chain, and their centre of mass in its frame.
+struct UrdfMass {
+  double mass_kg = 0.0;
+  Vector3 centre_m = Vector3::Zero();
+};
+
 // The joints from the base link to the tip link, in order (fixed ones included).
 struct UrdfChain {
   std::string source;
@@ -89,6 +100,7 @@ struct UrdfChain {
   std::string base_link, tip_link;
   int tip_line = 0;  // of the tip's <link> element
   std::vector<UrdfJoint> joints;
+  std::vector<UrdfMass> masses;  // of each joint's child link (see the top)
 
   int movable_count() const;
 };
@@ -97,6 +109,9 @@ struct UrdfChain {
 // robot, and near enough that the model's round trip stays exact to 1e-11 m (fuzz.urdf found a
 // 1e101 m link).
 inline constexpr double kMaxOriginM = 1e4;
+
+// The largest link mass read (kg): beyond any robot's link.
+inline constexpr double kMaxMassKg = 1e6;
 
 // How many chains the "which chain?" refusal lists.
 inline constexpr std::size_t kMaxListedChains = 20;

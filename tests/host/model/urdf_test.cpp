@@ -369,6 +369,46 @@ TEST_CASE("urdf: UR10 from its description, calibrated and written back with mes
   CHECK(changed == 7);
 }
 
+TEST_CASE("urdf: <inertial> masses deflect the UR10 under gravity as UR's DH-frame table (ur10.yaml) does") {
+  RobotModel from_urdf = load_model(std::string(KINCAL_ROBOTS_DIR) + "/ur10.urdf", {"", "tool0"});
+  RobotModel from_table = load_model(std::string(KINCAL_ROBOTS_DIR) + "/ur10.yaml");
+  REQUIRE(from_urdf.joint_count() == 6);
+  for (int j = 0; j < 6; ++j)  // base_link_inertia's 4 kg is before the first joint: it never moves
+    CHECK(from_urdf.joints[static_cast<std::size_t>(j)].mass_kg ==
+          doctest::Approx(from_table.joints[static_cast<std::size_t>(j)].mass_kg));
+  // The flange's deflection by a compliance on every joint, the same in either description (the
+  // two base frames differ by a turn about z: compare lengths).
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> angle(-std::numbers::pi, std::numbers::pi);
+  const auto deflection = [](RobotModel m, const std::vector<double>& q) {
+    m.flange_T_tool = {};
+    const Vector3 rigid = forward_kinematics(m, q).translation;
+    for (Joint& j : m.joints) j.compliance = 1e-4;  // rad/(N m): about a centimetre at full reach
+    return (forward_kinematics(m, q).translation - rigid).norm();
+  };
+  double largest = 0.0, worst = 0.0;
+  for (int k = 0; k < 50; ++k) {
+    std::vector<double> q(6);
+    for (double& v : q) v = angle(rng);
+    const double a = deflection(from_urdf, q), b = deflection(from_table, q);
+    largest = std::max(largest, b);
+    worst = std::max(worst, std::abs(a - b));
+  }
+  CHECK(largest > 5e-3);
+  CHECK(worst < 1e-9);
+  // A link's mass that is not one is refused naming the line.
+  const std::string bad =
+      "<robot name=\"r\">\n<link name=\"a\"/>\n<link name=\"b\"><inertial>\n<mass value=\"-2\"/></inertial></link>\n"
+      "<joint name=\"j\" type=\"continuous\"><parent link=\"a\"/><child link=\"b\"/></joint></robot>";
+  std::string error;
+  try {
+    (void)parse_urdf_chain(bad, "bad.urdf");
+  } catch (const InputError& e) {
+    error = e.what();
+  }
+  CHECK(error == "bad.urdf:4: link 'b' <mass> value -2 is not a link's mass (0 to 1e+06 kg)");
+}
+
 TEST_CASE("urdf: the tip link on the last joint: the tool's calibration is reported, not lost silently") {
   const std::string text = read_text(std::string(KINCAL_ROBOTS_DIR) + "/ur10.urdf");
   const UrdfChainEnds ends{"base_link", "wrist_3_link"};
