@@ -37,21 +37,54 @@ TextTable selection_table(const identify::Selection& s) {
   return t;
 }
 
-TextTable rejection_table(const identify::IdentifyResult& r, const std::map<int, const model::Measurement*>& by_line) {
+// The rejection gate's figures and verdict, as identify prints them (identify.hpp).
+std::string gate_text(const identify::RejectionGate& g) {
+  std::string text = "The rejection gate: 5-fold cross-validated position RMS " + mm_text(g.kfold_with_m) +
+                     " with the rejection rule, " + mm_text(g.kfold_without_m) + " without (paired t " +
+                     fixed_text(g.kfold_t, 2) + ")";
+  if (g.out_of_range_with_m >= 0.0)
+    text += "; out-of-range fold " + mm_text(g.out_of_range_with_m) + " with, " + mm_text(g.out_of_range_without_m) +
+            " without";
+  return text + ". The rejections stand only when they lower the 5-fold errors by 2 standard errors (t <= -2) and " +
+         "do not raise the out-of-range fold's RMS: " +
+         (g.kept ? "they stand."
+                 : "they did not, so the rows stay in the fit (it does not clearly lower the held-out "
+                   "error).");
+}
+
+// The rows of `rejections` with the dataset's line and the row's id or time stamp.
+TextTable rejection_rows(std::string title, const std::vector<identify::Rejection>& rejections,
+                         const std::map<int, const model::Measurement*>& by_line) {
   TextTable t;
-  t.title = "Rejected rows";
+  t.title = std::move(title);
   t.columns = {"line", "id / time stamp", "residual", "statistic / threshold", "removing it moves the tool by up to"};
-  for (const identify::Rejection& x : r.rejections) {
+  for (const identify::Rejection& x : rejections) {
     const auto row = by_line.find(x.line);
     t.rows.push_back({std::to_string(x.line), row != by_line.end() ? row->second->id : std::string(),
                       mm_text(x.residual_m), fixed_text(x.statistic_ratio, 2), mm_text(x.tool_shift_max_m)});
   }
-  t.note =
-      "Rows left out of the fit as outliers: line in the dataset, the row's id or time stamp from the export "
-      "(kincal import --id), the position residual of the fit with the row, its studentized statistic over the "
-      "rejection threshold, and the largest change of the predicted tool position over the data when it is "
-      "removed (first order). Model error before rejection " +
-      mm_text(r.model_error_before_rejection_m) + ", after " + mm_text(r.model_error_position_m) + " per axis.";
+  return t;
+}
+
+const char* const kRejectionColumns =
+    "line in the dataset, the row's id or time stamp from the export (kincal import --id), the position residual "
+    "of the fit with the row, its studentized statistic over the rejection threshold, and the largest change of "
+    "the predicted tool position over the data when it is removed (first order).";
+
+TextTable rejection_table(const identify::IdentifyResult& r, const std::map<int, const model::Measurement*>& by_line) {
+  TextTable t = rejection_rows("Rejected rows", r.rejections, by_line);
+  t.note = std::string("Rows left out of the fit as outliers: ") + kRejectionColumns +
+           " Model error before rejection " + mm_text(r.model_error_before_rejection_m) + ", after " +
+           mm_text(r.model_error_position_m) + " per axis." +
+           (r.rejection_gate.judged ? " " + gate_text(r.rejection_gate) : std::string());
+  return t;
+}
+
+// The rows the outlier test rejected and the rejection gate let back in (they are in the fit).
+TextTable undone_table(const identify::RejectionGate& g, const std::map<int, const model::Measurement*>& by_line) {
+  TextTable t = rejection_rows("Rejections undone by the rejection gate", g.undone, by_line);
+  t.note = std::string("Rows the outlier test rejected and the rejection gate let back into the fit: ") +
+           kRejectionColumns + " " + gate_text(g);
   return t;
 }
 
@@ -73,24 +106,10 @@ Report identify_report(const IdentifyRun& in, const std::string& date) {
   run.measurements = static_cast<int>(in.data.rows.size());
   for (const model::Joint& j : in.nominal.joints) run.joints.push_back({j.name, j.type == core::JointType::prismatic});
 
-  const identify::ParameterIds& ids = r.identifiability.identified;
-  const bool priors = r.prior_sigma.size() == r.change.size() && r.prior_centre.size() == r.change.size();
-  for (std::size_t k = 0; k < ids.size(); ++k) {
-    const auto i = static_cast<Eigen::Index>(k);
-    ParameterRow row;
-    row.group = parameter_group(ids[k]);
-    row.name = model::parameter_name(ids[k]);
-    row.quantity = parameter_quantity(r.start, ids[k]);
-    // The nominal in the start's parameters: the prior's centre (0 but from a cpa start).
-    row.nominal = parameter_value(r.start, r.start, ids[k]) + (priors ? r.prior_centre(i) : 0.0);
-    row.identified = parameter_value(r.model, r.start, ids[k]);
-    if (i < r.stddev.size()) row.stddev = r.stddev(i);
-    if (priors && std::isfinite(r.prior_sigma(i))) row.prior_sigma = r.prior_sigma(i);
-    if (priors && i < r.prior_share.size()) row.data_share = 1.0 - r.prior_share(i);
-    run.parameters.push_back(row);
-  }
+  for (std::size_t k = 0; k < r.identifiability.identified.size(); ++k) run.parameters.push_back(parameter_row(r, k));
   for (const identify::HeldFixed& h : r.identifiability.held_fixed)
     run.held_fixed.push_back({model::parameter_name(h.id), h.reason});
+  const identify::ParameterIds& ids = r.identifiability.identified;
   if (!ids.empty()) {
     char condition[48];
     std::snprintf(condition, sizeof condition, "%.3g", r.identifiability.condition);
@@ -130,8 +149,26 @@ Report identify_report(const IdentifyRun& in, const std::string& date) {
   }
   if (in.selection) run.tables.push_back(selection_table(*in.selection));
   if (!r.rejections.empty()) run.tables.push_back(rejection_table(r, by_line));
+  if (!r.rejection_gate.undone.empty()) run.tables.push_back(undone_table(r.rejection_gate, by_line));
   report.runs.push_back(std::move(run));
   return report;
+}
+
+ParameterRow parameter_row(const identify::IdentifyResult& r, std::size_t k) {
+  const identify::ParameterIds& ids = r.identifiability.identified;
+  const bool priors = r.prior_sigma.size() == r.change.size() && r.prior_centre.size() == r.change.size();
+  const auto i = static_cast<Eigen::Index>(k);
+  ParameterRow row;
+  row.group = parameter_group(ids[k]);
+  row.name = model::parameter_name(ids[k]);
+  row.quantity = parameter_quantity(r.start, ids[k]);
+  // The nominal in the start's parameters: the prior's centre (0 but from a cpa start).
+  row.nominal = parameter_value(r.start, r.start, ids[k]) + (priors ? r.prior_centre(i) : 0.0);
+  row.identified = parameter_value(r.model, r.start, ids[k]);
+  if (i < r.stddev.size()) row.stddev = r.stddev(i);
+  if (priors && std::isfinite(r.prior_sigma(i))) row.prior_sigma = r.prior_sigma(i);
+  if (priors && i < r.prior_share.size()) row.data_share = 1.0 - r.prior_share(i);
+  return row;
 }
 
 double parameter_value(const model::RobotModel& model, const model::RobotModel& start, core::ParameterId id) {

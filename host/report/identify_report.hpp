@@ -23,7 +23,10 @@
 //   tables           the model selection table with its reason (when cross-validation ran), and
 //                    the rejected rows: the dataset's line, the row's id or time stamp (`kincal
 //                    import --id`), the residual, the statistic over its threshold and how far
-//                    removing the row moves the predicted tool.
+//                    removing the row moves the predicted tool; and the rows the rejection gate
+//                    let back into the fit (IdentifyResult::rejection_gate.undone) in a table of
+//                    their own, each table's note with the gate's figures, its t and its verdict,
+//                    as identify prints them.
 //
 // Cost: one forward kinematics per row (the residuals, the held-out accuracy). Thread safety:
 // pure functions. Errors: ReportError (report.hpp) for rows whose readings do not match the
@@ -59,6 +62,10 @@ Report identify_report(const IdentifyRun& run, const std::string& date);
 // motion from `start`), its table group ("joint 2", "base", "tool", the joints' scales and
 // compliances together) and what it measures.
 double parameter_value(const model::RobotModel& model, const model::RobotModel& start, core::ParameterId id);
+// The model table's row of `result`'s k-th identified parameter (see "model" above): group, name,
+// quantity, nominal, identified, posterior sigma, prior sigma and the data's share; the session's
+// report adds the truth.
+ParameterRow parameter_row(const identify::IdentifyResult& result, std::size_t k);
 std::string parameter_group(core::ParameterId id);
 Quantity parameter_quantity(const model::RobotModel& model, core::ParameterId id);
 

@@ -133,13 +133,7 @@ report::Run report_run(const RunDescription& description, const model::RobotMode
       truth && !data.calibration.rows.empty() ? std::optional(identifiable_truth(r, data.calibration, *truth))
                                               : std::nullopt;
   for (std::size_t k = 0; k < ids.size(); ++k) {
-    report::ParameterRow row;
-    row.group = report::parameter_group(ids[k]);
-    row.name = model::parameter_name(ids[k]);
-    row.quantity = report::parameter_quantity(r.start, ids[k]);
-    row.nominal = parameter_value(r.start, r.start, ids[k]);
-    row.identified = parameter_value(r.model, r.start, ids[k]);
-    if (static_cast<Eigen::Index>(k) < r.stddev.size()) row.stddev = r.stddev(static_cast<Eigen::Index>(k));
+    report::ParameterRow row = report::parameter_row(r, k);
     if (truth) row.truth = parameter_value(*truth, r.start, ids[k]);
     if (identifiable) {
       row.identifiable_truth = parameter_value(identifiable->model, r.start, ids[k]);

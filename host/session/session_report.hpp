@@ -2,15 +2,17 @@
 // session's data and its identification, so that `kincal session` and `kincal demo` write the
 // same report.
 //
-//   parameters  every identified parameter: the starting (nominal) value, the identified one,
-//               its 1-sigma and, when the data are simulated, the true value and the true value
-//               as the data can identify it: the true model's tool poses at the calibration
-//               readings fitted in the identified parameters (Gauss-Newton, weighted as the
-//               identification weighs a measurement), the held-fixed ones at their starting
-//               values; a held-fixed parameter whose true error moves an identified one by more
-//               than half its sigma (to first order) is named as absorbed by it. Link parameters
-//               are the chain's values (joint offsets folded in); base and tool rows are the
-//               small motions of those frames from the starting model (so the nominal value is 0).
+//   parameters  every identified parameter as identify's report shows it (report::parameter_row:
+//               the nominal -- in the parameters identify solved in, from a cpa start the
+//               prior's centre --, the identified value, its 1-sigma, its prior sigma and the
+//               share of its information the data give; link parameters are the chain's values,
+//               joint offsets folded in; base and tool rows are small motions of those frames
+//               from the starting model) and, when the data are simulated, the true value and
+//               the true value as the data can identify it: the true model's tool poses at the
+//               calibration readings fitted in the identified parameters (Gauss-Newton, weighted
+//               as the identification weighs a measurement), the held-fixed ones at their
+//               starting values; a held-fixed parameter whose true error moves an identified one
+//               by more than half its sigma (to first order) is named as absorbed by it.
 //   validation  per validation pose, the position error of the nominal and the identified model.
 //   sweeps      each single-joint sweep of the calibration data with its circle or line fit,
 //               when circle-point analysis ran (cpa).

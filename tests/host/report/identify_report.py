@@ -133,6 +133,9 @@ def main(kincal, export, urdf, work):
             check(f"<tr><td>{lines[ident]}</td><td>{ident}</td>" in table,
                   f"the moved row {ident} is listed with its line {lines[ident]} and its id")
             check(f"rejected line {lines[ident]} (id {ident})" in out, f"identify printed {ident} rejected too")
+        gate = re.search(r"\(paired t (-?[0-9.]+)\)", out)
+        check(gate is not None and f"(paired t {float(gate.group(1)):.2f})" in table and "RMS: they stand." in table,
+              "the rejected rows' note has the rejection gate's t and verdict, as identify printed them")
 
     # Refusals: before any solve (no table printed), naming --report.
     for path, what in ((train, "the data file"), (work / "no_such_dir" / "r.html", "a missing directory")):
