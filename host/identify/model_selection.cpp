@@ -123,6 +123,7 @@ RowSplit out_of_range_split(const model::Dataset& d, double fraction) {
       hi[j] = std::max(hi[j], m.q[j]);
     }
   RowSplit s;
+  s.fraction = fraction;
   const double margin = (1.0 - fraction) / 2.0;
   for (std::size_t i = 0; i < d.rows.size(); ++i) {
     bool inside = true;
@@ -133,6 +134,16 @@ RowSplit out_of_range_split(const model::Dataset& d, double fraction) {
     (inside ? s.inside : s.outside).push_back(static_cast<int>(i));
   }
   return s;
+}
+
+RowSplit out_of_range_fold(const model::Dataset& data, const SelectionOptions& options) {
+  for (double fraction = options.central_fraction;;
+       fraction = std::min(0.95, std::round(fraction * 10.0 + 1.0) / 10.0)) {
+    RowSplit s = out_of_range_split(data, fraction);
+    if (static_cast<double>(s.inside.size()) >= options.min_inside_share * static_cast<double>(data.rows.size()) ||
+        fraction >= 0.95)
+      return s;
+  }
 }
 
 CrossValidation cross_validate(const RobotModel& model, const model::Dataset& data, const IdentifyOptions& options,
@@ -156,7 +167,7 @@ CrossValidation cross_validate(const RobotModel& model, const model::Dataset& da
     return cv;
   }
   cv.kfold_rms_m = root_mean(cv.kfold_error2);
-  const RowSplit range = out_of_range_split(data, selection.central_fraction);
+  const RowSplit range = out_of_range_fold(data, selection);
   if (range.inside.empty() || range.outside.empty()) return cv;
   std::string why;
   if (predict(data, model, o, range.inside, range.outside, cv.out_of_range_error2, nullptr, why))
@@ -168,8 +179,9 @@ CrossValidation cross_validate(const RobotModel& model, const model::Dataset& da
 
 Selection select_model(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& base,
                        const SelectionOptions& options) {
-  const RowSplit range = out_of_range_split(data, options.central_fraction);
+  const RowSplit range = out_of_range_fold(data, options);
   Selection s;
+  s.out_of_range_fraction = range.fraction;
   s.out_of_range_train_rows = static_cast<int>(range.inside.size());
   s.out_of_range_test_rows = static_cast<int>(range.outside.size());
   const std::vector<Candidate> candidates = candidate_models(nominal, base);
@@ -214,7 +226,7 @@ Selection select_model(const RobotModel& nominal, const model::Dataset& data, co
 std::string format_selection(const Selection& s, const SelectionOptions& options) {
   std::ostringstream out;
   out << "model selection: " << options.folds << "-fold cross-validation and an out-of-range fold (train on the "
-      << s.out_of_range_train_rows << " rows inside the central " << options.central_fraction * 100.0
+      << s.out_of_range_train_rows << " rows inside the central " << s.out_of_range_fraction * 100.0
       << " % of every joint's range, predict the other " << s.out_of_range_test_rows << "); position RMS:\n";
   char line[200];
   std::snprintf(line, sizeof line, "  %-22s %10s %12s %8s %10s\n", "candidate", "K-fold", "out-of-range", "params",

@@ -32,7 +32,7 @@ TextTable selection_table(const identify::Selection& s) {
   t.note = "Position RMS of rows each candidate was not identified from: " + std::to_string(options.folds) +
            "-fold cross-validation, and an out-of-range fold (train on the " +
            std::to_string(s.out_of_range_train_rows) + " rows inside the central " +
-           fixed_text(options.central_fraction * 100.0, 0) + " % of every joint's range, predict the other " +
+           fixed_text(s.out_of_range_fraction * 100.0, 0) + " % of every joint's range, predict the other " +
            std::to_string(s.out_of_range_test_rows) + "). Chosen: " + s.reason;
   return t;
 }

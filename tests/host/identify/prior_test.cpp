@@ -206,6 +206,20 @@ TEST_CASE("model selection: the out-of-range split, the candidates, and the choi
   CHECK(has(error, "joint-offsets"));
 
   const model::Dataset all = realdata::import_ur10(KINCAL_REALDATA_DIR).data;
+  {  // the export's first 300 rows (the worked example's) spread so that none lies inside 70 % of
+     // all six ranges: the fold widens until a quarter of the rows train it
+    const model::Dataset first = realdata::subset(all, std::vector<int>(300, 0));
+    std::vector<int> rows(300);
+    for (int i = 0; i < 300; ++i) rows[static_cast<std::size_t>(i)] = i;
+    const model::Dataset head = realdata::subset(all, rows);
+    CHECK(identify::out_of_range_split(head, 0.7).inside.empty());
+    const identify::RowSplit fold = identify::out_of_range_fold(head, {});
+    CHECK(fold.fraction == doctest::Approx(0.9));
+    CHECK(fold.inside.size() == 123);
+    CHECK(fold.inside.size() + fold.outside.size() == 300);
+    // one row repeated: every row is inside at once
+    CHECK(identify::out_of_range_fold(first, {}).fraction == doctest::Approx(0.7));
+  }
   const realdata::Split split = realdata::split_rows(static_cast<int>(all.rows.size()), 500);
   const model::Dataset train =
       realdata::subset(all, std::vector<int>(split.train_order.begin(), split.train_order.begin() + 100));
