@@ -2,7 +2,8 @@
 //
 //   kincal session --model FILE [--rig platform|stereo|camera] [--plan FILE | --sweeps N [--home Q] | --poses N]
 //                  [--validation N | --validation-plan FILE]
-//                  [--robot sim|manual | --robot-cmd 'CMD {q}'] [--can IF [--fd]] [--squares N]
+//                  [--robot sim|manual | --robot-cmd 'CMD {q}'] [--can IF [--fd] [--squares N]
+//                   [--platform-camera FILE]]
 //                  [--left SRC... --right SRC... --stereo FILE [--colour-table FILE] [--pixel-sigma PX]]
 //                  [--board B --mount hand|world [--camera FILE --source SRC...] [--hand-eye FILE]]
 //                  [--discover --joints N --home Q [--prismatic J,...] [--sweep-deg D] [--sweep-m M]
@@ -13,7 +14,9 @@
 // errors, the platform's firmware in-process on a loopback bus or the stereo pair. A real robot
 // (--robot manual or --robot-cmd) visits only the poses of plan files (--plan, --validation-plan),
 // never random ones, and is measured by the sensor platform on a SocketCAN interface (--can,
-// required) looking at a strip of --squares calibration squares, or, with --rig stereo, by a
+// required) looking at a strip of --squares calibration squares (--platform-camera: its camera's
+// calibration with the intrinsics' covariance, whose share each pose's covariance then includes,
+// host/session/sensor.hpp), or, with --rig stereo, by a
 // calibrated stereo pair watching the beacon (host/session/stereo_sensor.hpp): frames from
 // host/capture (--left, --right: cameras, videos or recorded images, one pair per pose), the
 // pair from `kincal camera stereo` (--stereo; the device frame is the left camera's), the beacon
@@ -81,6 +84,7 @@ struct SessionArgs {
   std::string stereo, colour_table;
   std::vector<std::string> source;  // real camera rig: frame source
   std::string camera, board = "chessboard:9x6:0.03", mount = "hand", hand_eye;
+  std::string platform_camera;  // real platform: its camera's calibration with the intrinsics' covariance
   double pixel_sigma_px = 0.1, pair_tolerance_s = 0.5;
   // Discovery of an unknown arm: its joint count, the joints read in metres, the sweeps' spans.
   bool discover = false;
@@ -322,10 +326,15 @@ int run(const SessionArgs& a) {
                              {"--validation-plan", a.validation_plan},
                              {"--stereo", a.stereo},
                              {"--colour-table", a.colour_table},
-                             {"--camera", a.camera}});
+                             {"--camera", a.camera},
+                             {"--platform-camera", a.platform_camera}});
   const bool simulated = a.robot == "sim" && a.robot_cmd.empty();
   const bool platform = a.rig == "platform", stereo = a.rig == "stereo", camera_rig = a.rig == "camera";
   if (!a.hand_eye.empty() && !camera_rig) throw model::InputError("--hand-eye: the camera rig's (--rig camera)");
+  if (!a.platform_camera.empty() && (!platform || simulated))
+    throw model::InputError(
+        "--platform-camera: the camera of a real sensor platform (--rig platform with --can IF); the simulated "
+        "platform's camera is exact");
   if (a.discover) {
     if (!stereo)
       throw model::InputError(
@@ -400,9 +409,12 @@ int run(const SessionArgs& a) {
       throw model::InputError("a real robot is measured by the platform: --can IF is required");
     if (a.plan.empty()) throw model::InputError("a real robot visits only planned poses: --plan FILE is required");
     if (platform) {
+      std::optional<session::PlatformCamera> platform_camera;
+      if (!a.platform_camera.empty()) platform_camera = session::load_platform_camera(a.platform_camera);
       transport = std::make_unique<can::SocketCanTransport>(a.can, can::SocketCanOptions{a.fd, true, {}});
       client = std::make_unique<can::PlatformClient>(*transport);
-      sensor = std::make_unique<session::PlatformPoseSensor>(*client, session::strip_square_poses(a.squares));
+      sensor = std::make_unique<session::PlatformPoseSensor>(*client, session::strip_square_poses(a.squares),
+                                                             std::move(platform_camera));
     }
     if (!a.robot_cmd.empty())
       driver = std::make_unique<session::CommandRobotDriver>(a.robot_cmd);
@@ -466,6 +478,7 @@ int run(const SessionArgs& a) {
            << " home=" << a.home
            << " validation=" << (a.validation_plan.empty() ? std::to_string(a.validation) : a.validation_plan);
   if (real_stereo) identity << " stereo=" << a.stereo << " colour-table=" << a.colour_table;
+  if (!a.platform_camera.empty()) identity << " platform-camera=" << a.platform_camera;
   if (camera_rig) identity << " board=" << a.board << " mount=" << a.mount << " camera=" << a.camera;
   if (unknown) {
     identity << " discover joints=" << a.joints << " sweep-deg=" << a.sweep_deg << " sweep-m=" << a.sweep_m
@@ -622,6 +635,9 @@ void add_session_command(CLI::App& app, int& status) {
       ->check(finite_in(1e-3, 10))
       ->capture_default_str();
   cmd->add_option("--discovered", a->discovered, "discovery: write the discovered model here (YAML)");
+  cmd->add_option("--platform-camera", a->platform_camera,
+                  "real platform: its camera's calibration with intrinsics_covariance (`kincal camera calibrate`); "
+                  "each pose's covariance then includes the camera's share");
   cmd->add_option("--can", a->can, "SocketCAN interface of a real platform (e.g. can0, vcan0)");
   cmd->add_flag("--fd", a->fd, "CAN FD");
   cmd->add_option("--squares", a->squares, "calibration squares on the strip (real platform)")

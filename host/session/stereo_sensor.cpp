@@ -8,7 +8,6 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include "host/vision/image_labeling.hpp"
@@ -141,29 +140,13 @@ model::Vector3 triangulate(const core::StereoPair& pair, const core::Vector2<flo
 }  // namespace
 
 CalibrationDirections calibration_directions(const CalibrationCovariance& covariance) {
-  if (!covariance.allFinite() || !covariance.isApprox(covariance.transpose(), 1e-9))
-    throw SessionError("stereo sensor: the calibration covariance is not a finite symmetric matrix");
-  const Eigen::SelfAdjointEigenSolver<CalibrationCovariance> eigen(covariance);
-  const double largest = eigen.eigenvalues().cwiseAbs().maxCoeff();
-  CalibrationDirections directions;
-  for (int k = 0; k < 24; ++k) {
-    const double lambda = eigen.eigenvalues()(k);
-    if (lambda < -1e-9 * largest)
-      throw SessionError("stereo sensor: the calibration covariance has a negative eigenvalue");
-    if (lambda > 1e-12 * largest) directions.push_back(std::sqrt(lambda) * eigen.eigenvectors().col(k));
-  }
-  return directions;
+  return covariance_directions(covariance, "stereo sensor: the calibration covariance");
 }
 
 core::StereoPair perturbed(const core::StereoPair& pair, const Eigen::Matrix<double, 24, 1>& delta) {
   core::StereoPair out = pair;
-  const auto move = [&](core::CameraIntrinsics& c, int at) {
-    float* values[9] = {&c.fx_px,         &c.fy_px,         &c.cx_px,         &c.cy_px,        &c.distortion.k1,
-                        &c.distortion.k2, &c.distortion.p1, &c.distortion.p2, &c.distortion.k3};
-    for (int i = 0; i < 9; ++i) *values[i] = static_cast<float>(static_cast<double>(*values[i]) + delta(at + i));
-  };
-  move(out.left, 0);
-  move(out.right, 9);
+  out.left = moved_intrinsics(pair.left, delta.segment<9>(0));
+  out.right = moved_intrinsics(pair.right, delta.segment<9>(9));
   core::RigidTransform<double> left_T_right;
   left_T_right.rotation = pair.left_T_right.rotation.cast<double>();
   left_T_right.translation = pair.left_T_right.translation.cast<double>();

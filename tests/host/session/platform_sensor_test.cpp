@@ -1,16 +1,19 @@
 // The platform pose sensor (host/session/sensor.hpp) against a scripted platform: the report's
 // pose covariance (protocol 2.0) reaches the Observation, turned into the strip frame of the
 // square the pose was placed on; the note names that square and how many squares the pose used
-// (protocol 3.0); the full 6x6 (issue #26) reaches a session's dataset row.
+// (protocol 3.0); the full 6x6 (issue #26) reaches a session's dataset row; the platform camera's
+// share (issue #22) joins it where its intrinsics move the pose.
 #include <doctest.h>
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <deque>
 #include <filesystem>
+#include <fstream>
 #include <numbers>
 #include <sstream>
 
+#include "host/camera/calibration_file.hpp"
 #include "host/session/sensor.hpp"
 #include "host/session/session.hpp"
 #include "shared/measurement_report.hpp"
@@ -100,6 +103,29 @@ void check_pose_covariance(const model::Matrix6& c) {
   CHECK(Eigen::SelfAdjointEigenSolver<model::Matrix6>(c).eigenvalues().minCoeff() > 0);
 }
 
+// A pinhole camera (640x480, f = 800 px, no distortion) with the intrinsics' covariance given.
+session::PlatformCamera pinhole(const Eigen::Matrix<double, 9, 9>& covariance) {
+  session::PlatformCamera c{core::CameraIntrinsics{}, covariance, 0.0254 / 4};
+  c.camera.fx_px = c.camera.fy_px = 800;
+  c.camera.cx_px = 320;
+  c.camera.cy_px = 240;
+  return c;
+}
+
+// The pose covariance the sensor gives for pose_report's pose over the second square, with the
+// camera or without.
+model::Matrix6 measured_covariance(const std::optional<session::PlatformCamera>& camera) {
+  ScriptedPlatform platform;
+  can::PlatformClient client(platform);
+  session::PlatformPoseSensor sensor(client, two_squares(), camera);
+  platform.reports.push_back(pose_report(1));
+  const session::Observation o = sensor.measure(0, over_second_square());
+  REQUIRE(o.pose_covariance.has_value());
+  CHECK(*o.pose_covariance == o.pose_covariance->transpose());
+  CHECK(o.pose_covariance->topLeftCorner<3, 3>() == *o.covariance);
+  return *o.pose_covariance;
+}
+
 // Goes where it is told (one joint that moves nothing).
 class StillDriver : public session::RobotDriver {
  public:
@@ -173,4 +199,79 @@ TEST_CASE("platform pose sensor: a session's dataset row holds the report's 6x6 
   REQUIRE(back.rows[0].pose_covariance.has_value());
   CHECK(*back.rows[0].pose_covariance == *data.calibration.rows[0].pose_covariance);
   std::filesystem::remove(options.journal_path);
+}
+
+// The camera looks straight down at the square from 0.25 m (pose_report), so what the intrinsics
+// do is known in closed form: fx and fy scaled together by (1 + e) leave every pixel where it is
+// for the square at (1 + e) times the depth -- the camera's height moves by 0.25 m * e; cx moved
+// by d shifts every normalized x by -d / fx, as the square moved 0.25 m * d / fx along the
+// camera's x -- the square's x, the strip's y for the second square (a quarter turn about z).
+TEST_CASE("platform pose sensor: the camera's intrinsics covariance adds its share where it moves the pose") {
+  const model::Matrix6 without = measured_covariance(std::nullopt);
+  constexpr double kSigmaPx = 2;
+  const double moved_m = 0.25 * kSigmaPx / 800;  // 0.625 mm
+  // The share with the intrinsics' covariance c: moved_m^2 at (k, k) within 1 %, nothing elsewhere.
+  const auto check_share = [&](const Eigen::Matrix<double, 9, 9>& c, int k) {
+    const model::Matrix6 share = measured_covariance(pinhole(c)) - without;
+    CHECK(share(k, k) / (moved_m * moved_m) == doctest::Approx(1).epsilon(0.01));
+    for (int i = 0; i < 6; ++i)
+      for (int j = 0; j < 6; ++j)
+        if (i != k || j != k) CHECK(std::abs(share(i, j)) < 1e-3 * moved_m * moved_m);
+  };
+  Eigen::Matrix<double, 9, 9> c = Eigen::Matrix<double, 9, 9>::Zero();
+
+  SUBCASE("fx and fy fully correlated: the depth") {
+    c.topLeftCorner<2, 2>().setConstant(kSigmaPx * kSigmaPx);
+    check_share(c, 2);
+  }
+  SUBCASE("cx: the position across the strip") {
+    c(2, 2) = kSigmaPx * kSigmaPx;
+    check_share(c, 1);
+  }
+  SUBCASE("a zero covariance changes nothing, bit for bit") { CHECK(measured_covariance(pinhole(c)) == without); }
+  SUBCASE("an indefinite covariance is refused") {
+    c(0, 0) = 1;
+    c(1, 1) = -1;
+    ScriptedPlatform platform;
+    can::PlatformClient client(platform);
+    CHECK_THROWS_WITH_AS(session::PlatformPoseSensor(client, two_squares(), pinhole(c)),
+                         "the platform camera's intrinsics covariance has a negative eigenvalue",
+                         session::SessionError);
+  }
+}
+
+TEST_CASE("platform pose sensor: a platform camera file without a usable intrinsics covariance is refused") {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "kincal-platform-camera";
+  std::filesystem::create_directories(dir);
+  camera::CameraModel model;
+  model.image_size = cv::Size(640, 480);
+  model.camera_matrix = cv::Matx33d(800, 0, 320, 0, 800, 240, 0, 0, 1);
+  camera::IntrinsicsCovariance uncertainty;
+  for (int i = 0; i < 9; ++i) uncertainty.covariance(i, i) = 0.01;
+  uncertainty.corner_sigma_px = 0.1;
+
+  const std::string with = (dir / "with.yaml").string();
+  camera::save_camera_ros(with, model, "platform", {}, uncertainty);
+  const session::PlatformCamera loaded = session::load_platform_camera(with);
+  CHECK(loaded.camera.fx_px == 800);
+  CHECK(loaded.covariance(8, 8) == 0.01);
+
+  const std::string none = (dir / "none.yaml").string();
+  camera::save_camera_ros(none, model, "platform");
+  const std::string missing = none + ": key 'intrinsics_covariance' missing";
+  CHECK_THROWS_WITH_AS(session::load_platform_camera(none), doctest::Contains(missing.c_str()),
+                       camera::CalibrationError);
+
+  std::stringstream text;
+  text << std::ifstream(with).rdbuf();
+  std::string eight = text.str();
+  const std::string header = "intrinsics_covariance:\n  rows: 9\n  cols: 9";
+  REQUIRE(eight.find(header) != std::string::npos);
+  eight.replace(eight.find(header), header.size(), "intrinsics_covariance:\n  rows: 8\n  cols: 8");
+  const std::string wrong = (dir / "eight.yaml").string();
+  std::ofstream(wrong) << eight;
+  const std::string not_9x9 = wrong + ": key 'intrinsics_covariance' missing or not a 9x9 matrix";
+  CHECK_THROWS_WITH_AS(session::load_platform_camera(wrong), doctest::Contains(not_9x9.c_str()),
+                       camera::CalibrationError);
+  std::filesystem::remove_all(dir);
 }
