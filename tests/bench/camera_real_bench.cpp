@@ -16,12 +16,20 @@
 //   camera_real_lens_model_difference_px, camera_real_lens_model_difference_max_px
 //       the two left cameras: every 8th pixel of the image unprojected by the recipe's model
 //       and projected by kincal's; RMS and largest distance
+//   camera_real_lens_model_difference_aligned_px, ..._aligned_max_px   the same as mrcal compares
+//       two calibrations (mrcal.projection_diff with its defaults): each solve fixes its own camera
+//       frame only up to a rotation the views' poses absorb, so the rotation that best carries the
+//       recipe's rays onto kincal's pixels within min(W,H)/6 of the image centre (points at
+//       infinity: a rotation only) is fitted first, then the difference is taken over the image
 //   camera_real_lens_model_difference_in_hull_px, ..._outside_hull_px   the same RMS over the
 //       pixels inside the convex hull of all the views' corners (where the board was) and outside
 //   camera_real_lens_model_difference_over_sigma   the mean of (distance / sigma)^2 over the image,
 //       sigma kincal's own predicted projection sigma per axis (host/camera/uncertainty.hpp) at
 //       that pixel: about 2 if the models differed by one model's own error, less when both
 //       estimates share the images
+//   camera_real_projection_error_expected_px   kincal's own predicted RMS distance (px) of its
+//       projection from the true camera's over the image (sqrt of the mean trace of the projection
+//       covariance): the scale below which no two calibrations from these 13 views can be told apart
 //   camera_real_k3_effect_px, camera_real_k3_effect_in_hull_px   kincal's camera against kincal's
 //       with k3 held at 0 (CALIB_FIX_K3) on the same corners: RMS over the image and inside the hull
 //   camera_real_intrinsics_std_over_opencv   kincal's standard deviations of the 9 intrinsics over
@@ -147,6 +155,45 @@ double held_out_rms_px(const Views& all, Calibrate calibrate) {
   return std::sqrt(sum / static_cast<double>(n));
 }
 
+// Unit-depth rays (x, y, 1) of `camera` at `pixels_px`.
+std::vector<cv::Point3d> rays_of(const CameraModel& camera, const std::vector<cv::Point2d>& pixels_px) {
+  std::vector<cv::Point2d> normalized;
+  cv::undistortPoints(pixels_px, normalized, cv::Mat(camera.camera_matrix), camera.distortion_mat(), cv::noArray(),
+                      cv::noArray(), cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12));
+  std::vector<cv::Point3d> rays;
+  for (const cv::Point2d& n : normalized) rays.emplace_back(n.x, n.y, 1.0);
+  return rays;
+}
+
+// mrcal's implied rotation (implied_Rt10__from_unprojections at infinity): the rotation vector r
+// minimising sum |project_to(R(r) ray_from(p)) - p|^2 over `focus_px`, by Gauss-Newton on
+// cv::projectPoints' Jacobian.
+cv::Vec3d implied_rotation(const CameraModel& from, const CameraModel& to, const std::vector<cv::Point2d>& focus_px) {
+  const std::vector<cv::Point3d> rays = rays_of(from, focus_px);
+  cv::Vec3d r(0, 0, 0);
+  for (int iteration = 0; iteration < 20; ++iteration) {
+    std::vector<cv::Point2d> projected;
+    cv::Mat jacobian;
+    cv::projectPoints(rays, r, cv::Vec3d(0, 0, 0), cv::Mat(to.camera_matrix), to.distortion_mat(), projected,
+                      jacobian);
+    cv::Matx33d normal = cv::Matx33d::zeros();
+    cv::Vec3d gradient(0, 0, 0);
+    for (std::size_t i = 0; i < projected.size(); ++i) {
+      const cv::Point2d e = projected[i] - focus_px[i];
+      for (int axis = 0; axis < 2; ++axis) {
+        const int row = static_cast<int>(2 * i) + axis;
+        const cv::Vec3d j(jacobian.at<double>(row, 0), jacobian.at<double>(row, 1), jacobian.at<double>(row, 2));
+        normal += j * j.t();
+        gradient += j * (axis == 0 ? e.x : e.y);
+      }
+    }
+    const cv::Vec3d step = -(normal.inv(cv::DECOMP_CHOLESKY) * gradient);
+    r += step;
+    if (cv::norm(step) < 1e-12) break;
+  }
+  return r;
+}
+
 }  // namespace
 
 int main() {
@@ -210,6 +257,27 @@ int main() {
   }
   figure("camera_real_lens_model_difference_px", std::sqrt(sum / static_cast<double>(pixels.size())), "px");
   figure("camera_real_lens_model_difference_max_px", largest, "px");
+  {
+    const double radius = std::min(640, 480) / 6.0;
+    std::vector<cv::Point2d> focus;
+    for (const cv::Point2d& p : pixels)
+      if (cv::norm(p - cv::Point2d(319.5, 239.5)) <= radius) focus.push_back(p);
+    const cv::Vec3d r = implied_rotation(recipe_left_camera, kincal_left.camera, focus);
+    std::vector<cv::Point2d> aligned;
+    cv::projectPoints(rays_of(recipe_left_camera, pixels), r, cv::Vec3d(0, 0, 0), cv::Mat(kincal_left.camera.camera_matrix),
+                      kincal_left.camera.distortion_mat(), aligned);
+    double aligned_sum = 0, aligned_largest = 0;
+    for (std::size_t i = 0; i < pixels.size(); ++i) {
+      const double e = cv::norm(aligned[i] - pixels[i]);
+      aligned_sum += e * e;
+      aligned_largest = std::max(aligned_largest, e);
+    }
+    std::printf("implied rotation between the two cameras: %.4f deg (%zu focus pixels)\n", cv::norm(r) * 180 / CV_PI,
+                focus.size());
+    figure("camera_real_lens_model_difference_aligned_px", std::sqrt(aligned_sum / static_cast<double>(pixels.size())),
+           "px");
+    figure("camera_real_lens_model_difference_aligned_max_px", aligned_largest, "px");
+  }
 
   // Where the board was: the convex hull of every used corner. How far apart the models are
   // inside and outside it, against kincal's own projection uncertainty, and what k3 does.
@@ -224,7 +292,7 @@ int main() {
     no_k3.flags = cv::CALIB_FIX_K3;
     const std::vector<cv::Point2d> without_k3 =
         reproject(kincal_left.camera, calibrate_intrinsics(left, no_k3).camera, pixels);
-    double in_sum = 0, out_sum = 0, z_sum = 0, k3_sum = 0, k3_in_sum = 0;
+    double in_sum = 0, out_sum = 0, z_sum = 0, trace_sum = 0, k3_sum = 0, k3_in_sum = 0;
     int in_count = 0, z_count = 0;
     for (std::size_t i = 0; i < pixels.size(); ++i) {
       const double e2 = std::pow(cv::norm(reprojected[i] - pixels[i]), 2),
@@ -237,6 +305,7 @@ int main() {
       const cv::Matx22d c = projection_covariance(kincal_left.camera, kincal_left.uncertainty, pixels[i]);
       if (const double sigma2 = 0.5 * (c(0, 0) + c(1, 1)); std::isfinite(sigma2)) {
         z_sum += e2 / sigma2;
+        trace_sum += 2 * sigma2;
         ++z_count;
       }
     }
@@ -245,6 +314,7 @@ int main() {
     figure("camera_real_lens_model_difference_in_hull_px", std::sqrt(in_sum / in_count), "px");
     figure("camera_real_lens_model_difference_outside_hull_px", std::sqrt(out_sum / (n - in_count)), "px");
     figure("camera_real_lens_model_difference_over_sigma", z_sum / z_count, "ratio");
+    figure("camera_real_projection_error_expected_px", std::sqrt(trace_sum / z_count), "px");
     figure("camera_real_k3_effect_px", std::sqrt(k3_sum / n), "px");
     figure("camera_real_k3_effect_in_hull_px", std::sqrt(k3_in_sum / in_count), "px");
   }

@@ -44,22 +44,33 @@
 //                                          whose rejections the gate kept
 //   realdata_ur10_dh_urdf_flange_deg       the URDF route (ur10.urdf, tip tracker_probe) and the
 //                                          DH route (ur10.yaml) fitted to the same 300 rows'
-//                                          positions (as the worked example imports them): the
-//                                          largest angle between their flange orientations on the
-//                                          500 held-out rows, less the constant turn between the
-//                                          two descriptions' flange frames (their mean)
+//                                          positions (as the worked example imports them) as kincal
+//                                          identify fits them (each route's model chosen by
+//                                          cross-validation): the largest angle between their
+//                                          flange orientations on the 500 held-out rows, less the
+//                                          constant turn between the two descriptions' flange
+//                                          frames (their mean); _rms the RMS angle; _geometry the
+//                                          same with every parameter and the default priors
+//                                          (what this figure measured before)
+//   realdata_ur10_flange_sigma_deg_urdf, _dh   each route's own predicted standard deviation of
+//                                          the flange orientation (the largest axis of the
+//                                          parameter covariance propagated to it, RMS over the
+//                                          held-out rows): how well positions alone determine it
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <span>
 #include <string>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 
 #include "host/identify/identify.hpp"
 #include "host/identify/model_selection.hpp"
+#include "host/identify/problem.hpp"
 #include "host/identify/statistics.hpp"
 #include "host/model/model_file.hpp"
 #include "host/model/urdf_chain.hpp"
@@ -132,8 +143,13 @@ Eigen::Matrix3d flange_rotation(const model::RobotModel& m, const std::vector<do
   return model::forward_kinematics(m, q).rotation * m.flange_T_tool.rotation.transpose();
 }
 
-// Largest angle (rad) between the two models' flange orientations over the rows, less their mean turn.
-double flange_difference_rad(const model::RobotModel& a, const model::RobotModel& b, const model::Dataset& rows) {
+struct FlangeDifference {
+  double largest_rad = 0.0, rms_rad = 0.0;
+};
+
+// The angles (rad) between the two models' flange orientations over the rows, less their mean turn.
+FlangeDifference flange_difference(const model::RobotModel& a, const model::RobotModel& b,
+                                   const model::Dataset& rows) {
   std::vector<Eigen::Matrix3d> turn;
   Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
   for (const model::Measurement& m : rows.rows) {
@@ -143,9 +159,30 @@ double flange_difference_rad(const model::RobotModel& a, const model::RobotModel
   const Eigen::JacobiSVD<Eigen::Matrix3d> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Matrix3d mean = svd.matrixU() * svd.matrixV().transpose();  // the rotation nearest the mean
   if (mean.determinant() < 0) mean = -mean;
-  double worst = 0.0;
-  for (const Eigen::Matrix3d& t : turn) worst = std::max(worst, identify::so3_log(mean.transpose() * t).norm());
-  return worst;
+  FlangeDifference out;
+  for (const Eigen::Matrix3d& t : turn) {
+    const double angle = identify::so3_log(mean.transpose() * t).norm();
+    out.largest_rad = std::max(out.largest_rad, angle);
+    out.rms_rad += angle * angle;
+  }
+  out.rms_rad = std::sqrt(out.rms_rad / static_cast<double>(turn.size()));
+  return out;
+}
+
+// The predicted standard deviation (rad) of the flange orientation along its worst axis, RMS over
+// the rows: the identified parameters' covariance through the tool's orientation Jacobian (the
+// tool's own turn is not identified from positions, so the tool's and the flange's agree).
+double flange_sigma_rad(const identify::IdentifyResult& r, const model::Dataset& rows) {
+  identify::Parameterization p(r.start, r.identifiability.identified);
+  p.set(std::span<const double>(r.change.data(), static_cast<std::size_t>(r.change.size())));
+  double sum = 0.0;
+  for (const model::Measurement& m : rows.rows) {
+    Eigen::MatrixXd j;
+    (void)p.pose(m.q, &j);
+    const Eigen::Matrix3d c = j.bottomRows(3) * r.covariance * j.bottomRows(3).transpose();
+    sum += Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c).eigenvalues().maxCoeff();
+  }
+  return std::sqrt(sum / static_cast<double>(rows.rows.size()));
 }
 
 // The simulated sagging sweep sets above.
@@ -262,13 +299,29 @@ int main() {
     model::Dataset points = train;  // positions only, as the worked example imports them
     points.has_orientation = false;
     for (model::Measurement& m : points.rows) m.orientation.reset();
-    for (const bool priors : {true, false}) {
+    constexpr double kDeg = 180.0 / std::numbers::pi;
+    {  // as kincal identify runs each route
+      const identify::Selection su = identify::select_model(urdf, points, {});
+      const identify::Selection sd = identify::select_model(nominal, points, {});
+      const identify::IdentifyResult from_urdf =
+          identify::identify(su.chosen.model, points, su.chosen.options, su.chosen_cross_validation);
+      const identify::IdentifyResult from_dh =
+          identify::identify(sd.chosen.model, points, sd.chosen.options, sd.chosen_cross_validation);
+      std::printf("the worked example's routes choose %s (URDF) and %s (DH)\n", su.chosen.name.c_str(),
+                  sd.chosen.name.c_str());
+      const FlangeDifference d = flange_difference(from_urdf.model, from_dh.model, held_out);
+      figure("realdata_ur10_dh_urdf_flange_deg", d.largest_rad * kDeg, "deg");
+      figure("realdata_ur10_dh_urdf_flange_deg_rms", d.rms_rad * kDeg, "deg");
+      figure("realdata_ur10_flange_sigma_deg_urdf", flange_sigma_rad(from_urdf, held_out) * kDeg, "deg");
+      figure("realdata_ur10_flange_sigma_deg_dh", flange_sigma_rad(from_dh, held_out) * kDeg, "deg");
+    }
+    for (const bool priors : {true, false}) {  // every parameter; the old default without priors
       identify::IdentifyOptions o;
       if (!priors) o.prior.strength = 0.0;
       const identify::IdentifyResult from_urdf = identify::identify(urdf, points, o);
       const identify::IdentifyResult from_dh = identify::identify(nominal, points, o);
-      figure(std::string("realdata_ur10_dh_urdf_flange_deg") + (priors ? "" : "_old_default"),
-             flange_difference_rad(from_urdf.model, from_dh.model, held_out) * 180.0 / std::numbers::pi, "deg");
+      figure(std::string("realdata_ur10_dh_urdf_flange_deg") + (priors ? "_geometry" : "_old_default"),
+             flange_difference(from_urdf.model, from_dh.model, held_out).largest_rad * kDeg, "deg");
     }
   }
   figure("realdata_ur10_cov_over_nocov", worst_ratio, "ratio");
