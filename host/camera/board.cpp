@@ -159,12 +159,12 @@ std::optional<double> contrast(const cv::Mat& grey, const std::vector<SquareSamp
   return sum[0] / count[0] - sum[1] / count[1];
 }
 
-// How many more rings of squares of the chessboard's pattern lie beyond one side of the
-// detected grid (see the header): 0 when the squares next to the outermost ones (ring 2) do not
-// alternate like the board's own, or when that cannot be told (out of the image). The rings
-// are placed by a homography fitted to the three lines of corners nearest that side, which
-// follows the lens's distortion locally.
-int rings_beyond(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, int cols, int rows, int side,
+// Whether the chessboard's pattern continues beyond one side of the detected grid (see the
+// header): the squares next to the outermost ones (ring 2) alternate like the board's own; false
+// when they do not or when that cannot be told (out of the image). The ring is placed by a
+// homography fitted to the three lines of corners nearest that side, which follows the lens's
+// distortion locally.
+bool ring_beyond(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, int cols, int rows, int side,
                  double interior_contrast) {
   // side: 0 left (u < 0), 1 right (u > cols - 1), 2 top (v < 0), 3 bottom (v > rows - 1).
   const bool along_u = side < 2;
@@ -180,37 +180,31 @@ int rings_beyond(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, i
     }
   }
   const cv::Mat h = cv::findHomography(grid, image);
-  if (h.empty()) return 0;
+  if (h.empty()) return false;
   const auto project = [&h](float u, float v) {
     std::vector<cv::Point2f> out;
     cv::perspectiveTransform(std::vector<cv::Point2f>{{u, v}}, out, h);
     return out[0];
   };
-  constexpr int kMaxRings = 20;
-  int extra = 0;
-  for (int ring = 2; ring < kMaxRings; ++ring) {
-    // Squares of ring `ring`: square index a (along the side's normal) and b = -1 .. across - 1.
-    const int a = low ? -ring : lines - 2 + ring;
-    std::vector<SquareSample> squares;
-    for (int b = -1; b < across; ++b) {
-      // The quarter of the square nearest the board: outer squares are often cut narrower.
-      const float cu = static_cast<float>(a) + (low ? 0.75f : 0.25f), cv_ = static_cast<float>(b) + 0.5f;
-      const float u = along_u ? cu : cv_, v = along_u ? cv_ : cu;
-      const cv::Point2f centre = project(u, v);
-      const float side_px = static_cast<float>(std::min(cv::norm(project(u + 0.5f, v) - project(u - 0.5f, v)),
-                                                        cv::norm(project(u, v + 0.5f) - project(u, v - 0.5f))));
-      squares.push_back({centre, 0.125f * side_px, parity(along_u ? a : b, along_u ? b : a)});
-    }
-    const std::optional<double> c = contrast(grey, squares);
-    if (!c || *c / interior_contrast < kExtensionContrastRatio) break;
-    ++extra;
+  // Ring 2's squares: square index a (along the side's normal) and b = -1 .. across - 1.
+  const int a = low ? -2 : lines;
+  std::vector<SquareSample> squares;
+  for (int b = -1; b < across; ++b) {
+    // The quarter of the square nearest the board: outer squares are often cut narrower.
+    const float cu = static_cast<float>(a) + (low ? 0.75f : 0.25f), cv_ = static_cast<float>(b) + 0.5f;
+    const float u = along_u ? cu : cv_, v = along_u ? cv_ : cu;
+    const cv::Point2f centre = project(u, v);
+    const float side_px = static_cast<float>(std::min(cv::norm(project(u + 0.5f, v) - project(u - 0.5f, v)),
+                                                      cv::norm(project(u, v + 0.5f) - project(u, v - 0.5f))));
+    squares.push_back({centre, 0.125f * side_px, parity(along_u ? a : b, along_u ? b : a)});
   }
-  return extra;
+  const std::optional<double> c = contrast(grey, squares);
+  return c && *c / interior_contrast >= kExtensionContrastRatio;
 }
 
-// The board size that fits the image when the detected grid continues beyond the board given,
-// or the board's own size.
-cv::Size fitting_chessboard(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, int cols, int rows) {
+// Whether the detected grid's squares continue beyond any side of it (the board given is part of
+// a larger one).
+bool board_continues(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, int cols, int rows) {
   std::vector<SquareSample> interior;
   for (int b = 0; b + 1 < rows; ++b) {
     for (int a = 0; a + 1 < cols; ++a) {
@@ -222,11 +216,22 @@ cv::Size fitting_chessboard(const cv::Mat& grey, const std::vector<cv::Point2f>&
     }
   }
   const std::optional<double> c = contrast(grey, interior);
-  if (!c || std::abs(*c) < 1.0) return {cols, rows};
-  std::array<int, 4> extra{};
+  if (!c || std::abs(*c) < 1.0) return false;
   for (int side = 0; side < 4; ++side)
-    extra[static_cast<std::size_t>(side)] = rings_beyond(grey, corners, cols, rows, side, *c);
-  return {cols + extra[0] + extra[1], rows + extra[2] + extra[3]};
+    if (ring_beyond(grey, corners, cols, rows, side, *c)) return true;
+  return false;
+}
+
+// The size of the grid cv::findChessboardCornersSB found with CALIB_CB_LARGER (its meta array's
+// columns and rows), in an orientation that holds `pattern`: the detector numbers the grid its
+// own way round, so the orientation like the given size's (both wider than tall, or not) when it
+// holds the given grid, else the other; `pattern` itself when neither holds it.
+cv::Size whole_chessboard(cv::Size found, cv::Size pattern) {
+  const auto holds = [&pattern](cv::Size s) { return s.width >= pattern.width && s.height >= pattern.height; };
+  const cv::Size turned(found.height, found.width);
+  const bool like_given = (found.width >= found.height) == (pattern.width >= pattern.height);
+  const cv::Size first = like_given ? found : turned, second = like_given ? turned : found;
+  return holds(first) ? first : holds(second) ? second : pattern;
 }
 
 // libapriltag's objects, each freed by its own function on every path.
@@ -610,8 +615,22 @@ BoardDetection detect_board(const Board& board, const cv::Mat& image, const std:
   }
   if (board.kind == BoardKind::kChessboard) {
     const cv::Size pattern(board.cols, board.rows);
-    if (cv::findChessboardCornersSB(grey, pattern, corners, cv::CALIB_CB_NORMALIZE_IMAGE)) {
+    const std::string given = std::to_string(board.cols) + "x" + std::to_string(board.rows);
+    cv::Mat meta;
+    if (cv::findChessboardCornersSB(grey, pattern, corners, cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_LARGER,
+                                    meta)) {
       d.detector = "findChessboardCornersSB";
+      if (const cv::Size whole = whole_chessboard(cv::Size(meta.cols, meta.rows), pattern); whole != pattern) {
+        d.larger_board = true;
+        Board larger = board;
+        larger.cols = whole.width;
+        larger.rows = whole.height;
+        d.fitting_board = larger.text();
+        d.reason = "the board has " + std::to_string(whole.width) + "x" + std::to_string(whole.height) +
+                   " inner corners, not " + given + " (its squares continue beyond the corners found): give --board " +
+                   d.fitting_board;
+        return d;
+      }
     } else if (cv::findChessboardCorners(grey, pattern, corners,
                                          cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE)) {
       d.detector = "findChessboardCorners";
@@ -625,15 +644,10 @@ BoardDetection detect_board(const Board& board, const cv::Mat& image, const std:
         cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, kRefineIterations, kRefineEpsilon_px));
     const std::string window = std::to_string(2 * d.refine_half_window_px + 1);
     d.detector += " + cornerSubPix " + window + "x" + window;
-    const cv::Size fits = fitting_chessboard(grey, corners, board.cols, board.rows);
-    if (fits != pattern) {
-      Board larger = board;
-      larger.cols = fits.width;
-      larger.rows = fits.height;
-      d.fitting_board = larger.text();
-      d.reason = "the board has " + std::to_string(fits.width) + "x" + std::to_string(fits.height) +
-                 " inner corners, not " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
-                 " (its squares continue beyond the corners found): give --board " + d.fitting_board;
+    if (board_continues(grey, corners, board.cols, board.rows)) {
+      d.larger_board = true;
+      d.reason = "the board is larger than " + given +
+                 " (its squares continue beyond the corners found; its size could not be measured in this view)";
       return d;
     }
     orient_chessboard(board, grey, corners);

@@ -28,7 +28,8 @@
 // the tags' grid.
 //
 // Chessboard detection, one pipeline from VGA to 4K:
-//  1. find the grid: cv::findChessboardCornersSB (CALIB_CB_NORMALIZE_IMAGE); if it fails,
+//  1. find the grid: cv::findChessboardCornersSB (CALIB_CB_NORMALIZE_IMAGE | CALIB_CB_LARGER,
+//     so that it grows the grid to the whole board it lies in, step 3); if it fails,
 //     cv::findChessboardCorners (ADAPTIVE_THRESH | NORMALIZE_IMAGE), which finds boards the first
 //     misses in large or blurred images. BoardDetection::detector names the one that served.
 //  2. refine every corner with cv::cornerSubPix, the same step whichever detector served: half
@@ -42,17 +43,26 @@
 //     On OpenCV's 13 sample views (left01..14.jpg) this gives 0.177 px RMS where OpenCV's own
 //     recipe (findChessboardCorners + cornerSubPix 5x5) gives 0.196 px.
 //  3. the whole board or nothing: a grid of the given size found inside a larger board (8x6
-//     corners of a 9x6 board, a different part in different views) is refused. Beyond each
-//     side of the grid, rings of would-be squares are placed by a homography fitted to the
-//     three nearest lines of corners; ring 1 is the board's outer squares, ring 2 is white
-//     margin on the board given. Each would-be square is sampled in the quarter nearest the
-//     board (outer squares are often printed narrower), a window of 1/8 of its side. If ring
-//     2's squares alternate like the board's own (their parity contrast reaches
-//     kExtensionContrastRatio of the interior's; on OpenCV's 26 sample views: at most 0.17 for
-//     the true 9x6 board, at least 0.77 for 8x6 inside it), the board continues
-//     there; rings are counted outwards while they do. Such a view is not found, with
-//     fitting_board the size that fits ("chessboard:9x6:0.025") and the reason naming it. A
-//     side whose ring 2 leaves the image cannot be judged and counts as the board's edge.
+//     corners of a 9x6 board, a different part in different views) is refused (larger_board),
+//     with fitting_board the size that fits ("chessboard:9x6:0.025") and the reason naming it
+//     when it is measured. Two checks:
+//     - step 1's detector grew the grid beyond the given size: its size is the board's, turned
+//       to the orientation that holds the given size (both wider than tall, or both not, when
+//       either holds it);
+//     - beyond each side of the grid found (by either detector, not grown), a ring of would-be
+//       squares is placed by a homography fitted to the three nearest lines of corners; ring 1
+//       is the board's outer squares, ring 2 is white margin on the board given. Each would-be
+//       square is sampled in the quarter nearest the board (outer squares are often printed
+//       narrower), a window of 1/8 of its side. If ring 2's squares alternate like the board's
+//       own (their parity contrast reaches kExtensionContrastRatio of the interior's; on
+//       OpenCV's 26 sample views: at most 0.17 for the true 9x6 board, at least 0.77 for 8x6
+//       inside it), the board continues there, and its size is not measured (counting rings
+//       further out by the same homography named wrong sizes -- 10x4 for 9x4, 7x9 for 7x4 of
+//       the 9x6 board -- as the extrapolation leaves the squares). A side whose ring 2 leaves
+//       the image cannot be judged and counts as the board's edge.
+//     On the 13 left sample views, every grid of 9x4, 7x4, 4x3 and 3x5 corners is refused and
+//     every size named is the board's (tests/host/camera/camera_real_test.cpp); the ring check
+//     alone let 4x3 pass in 9 of the 13 views.
 //  4. orientation: a chessboard looks the same turned by 180 degrees unless COLS + ROWS is odd
 //     (then its two far corner squares differ in colour); for such boards the corners are
 //     ordered so that the square diagonally outside corner 0 is the dark one, which keeps the
@@ -156,7 +166,8 @@ struct BoardDetection {
   std::string reason;             // empty when found
   std::string detector;           // the detector that found the corners ("findChessboardCornersSB + cornerSubPix")
   int refine_half_window_px = 0;  // chessboard: step 2's half window
-  std::string fitting_board;      // chessboard of the wrong size: the board text that fits; else empty
+  bool larger_board = false;      // chessboard: the grid found is part of a larger board (step 3)
+  std::string fitting_board;      // a board of the wrong size: the board text that fits, if measured; else empty
   std::vector<int> ids;
   std::vector<cv::Point2f> image_px;
   std::vector<cv::Point3f> board_m;

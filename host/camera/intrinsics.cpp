@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <sstream>
 
 #include <opencv2/calib3d.hpp>
@@ -37,12 +38,21 @@ cv::Mat CameraModel::distortion_mat() const {
 }
 
 void refuse_wrong_board(const std::vector<BoardDetection>& detections) {
-  const auto wrong = [](const BoardDetection& d) { return !d.fitting_board.empty(); };
-  const auto first = std::find_if(detections.begin(), detections.end(), wrong);
-  if (first == detections.end()) return;
-  throw CalibrationError(first->view + ": " + first->reason + " (" +
-                         std::to_string(std::count_if(detections.begin(), detections.end(), wrong)) + " of " +
-                         std::to_string(detections.size()) + " views show a larger board)");
+  const auto wrong = [](const BoardDetection& d) { return d.larger_board || !d.fitting_board.empty(); };
+  const auto count = std::count_if(detections.begin(), detections.end(), wrong);
+  if (count == 0) return;
+  // The view to name: the first measuring the size most views measured, else the first wrong one.
+  std::map<std::string, int> votes;
+  for (const BoardDetection& d : detections)
+    if (!d.fitting_board.empty()) ++votes[d.fitting_board];
+  const auto most = std::max_element(votes.begin(), votes.end(),
+                                     [](const auto& a, const auto& b) { return a.second < b.second; });
+  const auto named = std::find_if(detections.begin(), detections.end(), [&](const BoardDetection& d) {
+    return most == votes.end() ? wrong(d) : d.fitting_board == most->first;
+  });
+  throw CalibrationError(named->view + ": " + named->reason + " (" + std::to_string(count) + " of " +
+                         std::to_string(detections.size()) + " views show a larger board" +
+                         (votes.size() > 1 ? ", " + std::to_string(most->second) + " of them this size" : "") + ")");
 }
 
 void refuse_other_image_sizes(const std::vector<BoardDetection>& detections, cv::Size expected,

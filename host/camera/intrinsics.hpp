@@ -95,8 +95,10 @@ struct IntrinsicCalibration {
   std::vector<std::string> warnings;
 };
 
-// Throws CalibrationError naming the first view that found a larger board than the one given
-// and the board text that fits; returns otherwise. Stereo and hand-eye calibration use it too.
+// Throws CalibrationError when any view found a larger board than the one given, naming the
+// first view that measured the size most views measured (BoardDetection::fitting_board) and that
+// board text, or the first such view when none could measure it; returns otherwise. Stereo and
+// hand-eye calibration use it too.
 void refuse_wrong_board(const std::vector<BoardDetection>& detections);
 // Throws CalibrationError naming the images (up to five) whose size is not `expected`, the size
 // of `whose`; images without a size (unread) are not judged.

@@ -19,6 +19,7 @@ namespace {
 struct PairPose {
   cv::Matx33d right_R_left;
   cv::Vec3d right_t_left_m;
+  double board_distance_m = 0;  // the board's origin from the left camera
 };
 
 std::optional<PairPose> pair_pose(const std::vector<cv::Point3f>& board_m, const std::vector<cv::Point2f>& left_px,
@@ -32,7 +33,7 @@ std::optional<PairPose> pair_pose(const std::vector<cv::Point3f>& board_m, const
   cv::Rodrigues(rl, left_R_board);
   cv::Rodrigues(rr, right_R_board);
   const cv::Matx33d r = right_R_board * left_R_board.t();
-  return PairPose{r, tr - r * tl};
+  return PairPose{r, tr - r * tl, cv::norm(tl)};
 }
 
 double angle_between_rad(const cv::Matx33d& a, const cv::Matx33d& b) {
@@ -103,6 +104,10 @@ std::vector<std::optional<PairPose>> refuse_disagreeing_pairs(StereoCalibration&
       medoid = i;
     }
   }
+  // No baseline to measure the pairs' translations against (the same images left and right, or
+  // one camera twice): the baseline check after the solve refuses it, saying so.
+  if (cv::norm(poses[medoid].right_t_left_m) < kMinBaselineOverBoardDistance * poses[medoid].board_distance_m)
+    return own;
   std::vector<std::size_t> bad;
   for (std::size_t i = 0; i < poses.size(); ++i) {
     const double d = distance(poses[i], poses[medoid]);

@@ -605,8 +605,8 @@ void add_session_command(CLI::App& app, int& status) {
       ->check(finite_non_negative())
       ->capture_default_str();
   cmd->add_option("--board", a->board,
-                  "camera rig: the printed board, chessboard:COLSxROWS:SQUARE_M or charuco:COLSxROWS:SQUARE_M:MARKER_M"
-                  "[:DICT] (the simulated rig renders chessboards)")
+                  std::string("camera rig: the printed board, ") + camera::kBoardForms +
+                      " (the simulated rig renders chessboards)")
       ->capture_default_str();
   cmd->add_option("--mount", a->mount,
                   "camera rig: hand, the camera on the flange and the board fixed (positions in the board's frame); "

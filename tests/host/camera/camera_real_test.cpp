@@ -3,6 +3,7 @@
 // wrong-board and shifted-pair gates. Registered only where opencv-doc is installed.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -108,6 +109,26 @@ TEST_CASE("a chessboard of the wrong size is refused, naming the size that fits"
   const Board right_size = parse_board("chessboard:9x6:0.025");
   for (const char* side : {"left", "right"}) {
     for (const BoardDetection& v : detect_samples(right_size, side)) CHECK_MESSAGE(v.found, v.view << ": " << v.reason);
+  }
+}
+
+// The class, not the example: every smaller grid of the 9x6 board that a view finds is refused,
+// and no view names a size other than the board's own (the rings counted by the local homography
+// named 10x4 for 9x4 and 7x9 for 7x4: the size now comes from OpenCV's grown grid, or is not named).
+TEST_CASE("every smaller grid of the board is refused, naming only the board's own size") {
+  for (const std::string given : {"9x4", "7x4", "4x3", "3x5"}) {
+    const Board board = parse_board("chessboard:" + given + ":0.025");
+    const std::vector<BoardDetection> d = detect_samples(board, "left");
+    for (const BoardDetection& v : d) {
+      CHECK_MESSAGE(!v.found, v.view << " accepted " << given);
+      if (v.fitting_board.empty()) continue;
+      const std::string whole = board.cols >= board.rows ? "chessboard:9x6:0.025" : "chessboard:6x9:0.025";
+      CHECK_MESSAGE(v.fitting_board == whole, v.view << ": " << given << " named " << v.fitting_board);
+    }
+    CHECK(std::any_of(d.begin(), d.end(), [](const BoardDetection& v) { return v.larger_board; }));
+    const std::string message = error_of([&] { refuse_wrong_board(d); });
+    CHECK_MESSAGE((contains(message, "inner corners, not " + given) || contains(message, "larger than " + given)),
+                  message);
   }
 }
 
