@@ -234,6 +234,85 @@ cv::Size whole_chessboard(cv::Size found, cv::Size pattern) {
   return holds(first) ? first : holds(second) ? second : pattern;
 }
 
+// A ChArUco sheet of cols x rows squares as cv::aruco::CharucoBoard lays it out (OpenCV 4.6):
+// markers on the squares whose x + y is odd, numbered along the rows from the top; each
+// marker's four corners (in squares; clockwise from its top left) at its square's centre
+// +- marker_over_square / 2. Index: the marker's id.
+std::vector<std::array<cv::Point2f, 4>> charuco_layout(int cols, int rows, double marker_over_square) {
+  const float m = static_cast<float>(marker_over_square), margin = 0.5f * (1.0f - m);
+  std::vector<std::array<cv::Point2f, 4>> markers;
+  for (int y = 0; y < rows; ++y)
+    for (int x = 0; x < cols; ++x) {
+      if ((x + y) % 2 == 0) continue;
+      const cv::Point2f tl(static_cast<float>(x) + margin, static_cast<float>(y) + margin);
+      markers.push_back({tl, tl + cv::Point2f(m, 0), tl + cv::Point2f(m, m), tl + cv::Point2f(0, m)});
+    }
+  return markers;
+}
+
+// How many detected markers a layout explains: markers whose id it holds and whose four image
+// corners lie within tolerance_px of where the homography from the layout's corners to the
+// image corners (RANSAC over every marker it holds) puts them. 0 when it holds fewer than 4.
+int markers_explained(const std::vector<std::array<cv::Point2f, 4>>& layout,
+                      const std::vector<std::vector<cv::Point2f>>& marker_corners, const std::vector<int>& ids,
+                      double tolerance_px) {
+  std::vector<cv::Point2f> from, to;
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    if (ids[k] < 0 || ids[k] >= static_cast<int>(layout.size())) continue;
+    for (int c = 0; c < 4; ++c) {
+      from.push_back(layout[static_cast<std::size_t>(ids[k])][static_cast<std::size_t>(c)]);
+      to.push_back(marker_corners[k][static_cast<std::size_t>(c)]);
+    }
+  }
+  if (from.size() < 16) return 0;
+  const cv::Mat h = cv::findHomography(from, to, cv::RANSAC, tolerance_px);
+  if (h.empty()) return 0;
+  std::vector<cv::Point2f> placed;
+  cv::perspectiveTransform(from, placed, h);
+  int explained = 0;
+  for (std::size_t i = 0; i < placed.size(); i += 4) {
+    bool all = true;
+    for (std::size_t c = 0; c < 4; ++c) all = all && cv::norm(placed[i + c] - to[i + c]) <= tolerance_px;
+    explained += all ? 1 : 0;
+  }
+  return explained;
+}
+
+// The ChArUco sheet (squares) the detected markers lie on, when it is not the board given (see
+// the header); nullopt when the given board explains the markers as well as any other, or too
+// few markers were seen to judge.
+std::optional<cv::Size> fitting_charuco(const Board& board, const std::vector<std::vector<cv::Point2f>>& marker_corners,
+                            const std::vector<int>& ids) {
+  if (ids.size() < kMinMarkersToJudgeLayout) return std::nullopt;
+  std::vector<double> sides;
+  for (const std::vector<cv::Point2f>& m : marker_corners)
+    sides.push_back(0.25 * (cv::norm(m[1] - m[0]) + cv::norm(m[2] - m[1]) + cv::norm(m[3] - m[2]) + cv::norm(m[0] - m[3])));
+  std::nth_element(sides.begin(), sides.begin() + static_cast<std::ptrdiff_t>(sides.size() / 2), sides.end());
+  const double tolerance_px = kLayoutTolerance * sides[sides.size() / 2];
+  const double marker_over_square = board.marker_m / board.square_m;
+  const int given = markers_explained(charuco_layout(board.cols, board.rows, marker_over_square), marker_corners,
+                                      ids, tolerance_px);
+  if (given == static_cast<int>(ids.size())) return std::nullopt;
+  const int largest_id = *std::max_element(ids.begin(), ids.end());
+  const int dictionary_size = board.charuco->dictionary->bytesList.rows;
+  int best = given, best_cols = board.cols, best_rows = board.rows;
+  for (int area = 4; area <= kMaxCharucoSide * kMaxCharucoSide; ++area)  // smaller sheets first
+    for (int cols = 2; cols <= kMaxCharucoSide; ++cols) {
+      const int rows = area / cols;
+      if (rows < 2 || rows > kMaxCharucoSide || cols * rows != area || cols * rows / 2 <= largest_id ||
+          cols * rows / 2 > dictionary_size)
+        continue;
+      const int n = markers_explained(charuco_layout(cols, rows, marker_over_square), marker_corners, ids, tolerance_px);
+      if (n > best) {
+        best = n;
+        best_cols = cols;
+        best_rows = rows;
+      }
+    }
+  if (best < given + kMoreMarkersExplained) return std::nullopt;
+  return cv::Size(best_cols, best_rows);
+}
+
 // libapriltag's objects, each freed by its own function on every path.
 struct FamilyFree {
   void operator()(apriltag_family_t* f) const { tag36h11_destroy(f); }
@@ -661,6 +740,16 @@ BoardDetection detect_board(const Board& board, const cv::Mat& image, const std:
     cv::aruco::detectMarkers(grey, board.charuco->dictionary, marker_corners, marker_ids, parameters, rejected);
     if (marker_ids.empty()) {
       d.reason = "pattern not found (no markers of " + board.dictionary + ")";
+      return d;
+    }
+    if (const std::optional<cv::Size> sheet = fitting_charuco(board, marker_corners, marker_ids)) {
+      Board fits = board;
+      fits.cols = sheet->width;
+      fits.rows = sheet->height;
+      d.fitting_board = fits.text();
+      d.reason = "the markers lie as on a sheet of " + std::to_string(fits.cols) + "x" + std::to_string(fits.rows) +
+                 " squares, not " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
+                 ": give --board " + d.fitting_board;
       return d;
     }
     const cv::Ptr<cv::aruco::Board> plain = board.charuco;

@@ -70,6 +70,17 @@
 //     COLS + ROWS even stay ambiguous: use COLS + ROWS odd, or ChArUco.
 // ChArUco detection: cv::aruco::detectMarkers, refineDetectedMarkers, interpolateCornersCharuco
 // (with its own cornerSubPix: a window sized to the square would reach the markers' edges).
+// The whole board or nothing: interpolateCornersCharuco places corners by the given board's
+// layout whatever sheet the markers come from (a 7x5 sheet given as 5x7, 6x5, 8x5 or 4x3 was
+// "found" with wrong board coordinates). So first the markers' layout is checked: with
+// kMinMarkersToJudgeLayout markers or more, a layout explains a marker when its id is on it and
+// its four corners lie within kLayoutTolerance of the median marker side of where the
+// homography from the layout to the image (RANSAC over its markers) puts them. When the given
+// board does not explain every marker and another sheet of the same square and marker sizes
+// (2 to kMaxCharucoSide squares a side, holding every id seen, smallest first) explains
+// kMoreMarkersExplained more, the view is not found, with fitting_board that sheet and the
+// reason naming it. (OpenCV 4.6 lays a sheet out with markers on the squares whose x + y is odd,
+// numbered along the rows from the top, as checked against CharucoBoard::create's objPoints.)
 // AprilGrid detection:
 //  1. libapriltag's detector (apriltag_detector_detect: edge-based quad fit, quad_decimate 1,
 //     refine_edges on, one thread, up to 2 bits corrected) with its tag36h11 family given
@@ -102,6 +113,7 @@
 // about 200 ms (the decode table and two passes of about 60 ms each).
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -155,6 +167,10 @@ inline constexpr int kRefineIterations = 30;
 inline constexpr double kRefineEpsilon_px = 0.001;
 inline constexpr double kExtensionContrastRatio = 0.5;
 inline constexpr int kMinAprilTags = 4;
+inline constexpr std::size_t kMinMarkersToJudgeLayout = 4;
+inline constexpr double kLayoutTolerance = 1.0 / 3.0;
+inline constexpr int kMaxCharucoSide = 30;
+inline constexpr int kMoreMarkersExplained = 2;
 
 // Step 2's half window (px) for a view whose closest corners are smallest_spacing_px apart.
 int refine_half_window_px(double smallest_spacing_px);

@@ -51,7 +51,7 @@ void refuse_wrong_board(const std::vector<BoardDetection>& detections) {
     return most == votes.end() ? wrong(d) : d.fitting_board == most->first;
   });
   throw CalibrationError(named->view + ": " + named->reason + " (" + std::to_string(count) + " of " +
-                         std::to_string(detections.size()) + " views show a larger board" +
+                         std::to_string(detections.size()) + " views show another board" +
                          (votes.size() > 1 ? ", " + std::to_string(most->second) + " of them this size" : "") + ")");
 }
 

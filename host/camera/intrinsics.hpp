@@ -6,10 +6,10 @@
 // Model: OpenCV's pinhole with k1 k2 p1 p2 k3 (the firmware's model, firmware/core/
 // camera_model.hpp), zero skew, pixel (0, 0) at the centre of the top-left pixel.
 //
-// Refused before any solve (CalibrationError): a detection that found a larger board than the
-// one given (BoardDetection::fitting_board; refuse_wrong_board's message names the view and the
-// board text that fits), and images whose size differs from the first view's with a board
-// (refuse_other_image_sizes names them: another camera or another resolution).
+// Refused before any solve (CalibrationError): a detection that found another board than the
+// one given (BoardDetection::larger_board, fitting_board; refuse_wrong_board's message names the
+// view and the board text that fits), and images whose size differs from the first view's with
+// a board (refuse_other_image_sizes names them: another camera or another resolution).
 // Views left out (ViewReport::rejection): the detection's own reason ("pattern not found",
 // "too few corners (N, at least M)"), "a near-duplicate of VIEW (the same corners within X px
 // RMS)": a view whose corners lie within kDuplicateViewRms_px of an earlier used view's adds no
@@ -95,10 +95,10 @@ struct IntrinsicCalibration {
   std::vector<std::string> warnings;
 };
 
-// Throws CalibrationError when any view found a larger board than the one given, naming the
-// first view that measured the size most views measured (BoardDetection::fitting_board) and that
-// board text, or the first such view when none could measure it; returns otherwise. Stereo and
-// hand-eye calibration use it too.
+// Throws CalibrationError when any view found another board than the one given (a larger
+// chessboard, another ChArUco sheet or AprilGrid), naming the first view that measured the size
+// most views measured (BoardDetection::fitting_board) and that board text, or the first such
+// view when none could measure it; returns otherwise. Stereo and hand-eye calibration use it too.
 void refuse_wrong_board(const std::vector<BoardDetection>& detections);
 // Throws CalibrationError naming the images (up to five) whose size is not `expected`, the size
 // of `whose`; images without a size (unread) are not judged.

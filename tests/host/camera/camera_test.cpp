@@ -200,6 +200,28 @@ TEST_CASE("ChArUco boards drawn by OpenCV are detected with ids and calibrate th
   CHECK(c.rms_px < 0.5);
 }
 
+// The class the chessboard's wrong size stands for: interpolateCornersCharuco would place the
+// corners by whatever layout it is given. Every other layout of the sheet's markers is refused,
+// naming the sheet; a view of part of the sheet is still found.
+TEST_CASE("ChArUco views of another sheet are refused, naming the sheet the markers lie on") {
+  const Board board = parse_board(scenes::charuco_text());
+  const sim::CameraSpec truth = scenes::test_camera();
+  const std::vector<Eigen::Isometry3d> poses = scenes::board_views(board, 8);
+  const cv::Mat image = scenes::render(truth, poses[0], scenes::target_of(board), 7);
+  REQUIRE(detect_board(board, image, "whole.png").found);
+  const std::string sheet = board.text();
+  for (const std::string wrong : {"5x7", "6x5", "8x5", "7x4", "5x5", "4x3"}) {
+    CAPTURE(wrong);
+    const Board given = parse_board("charuco:" + wrong + sheet.substr(sheet.find(':', 8)));
+    const BoardDetection d = detect_board(given, image, "whole.png");
+    CHECK_FALSE(d.found);
+    CHECK(d.fitting_board == sheet);
+    CHECK(contains(d.reason, "give --board " + sheet));
+  }
+  for (const BoardDetection& d : detect_rendered(board, truth, poses, "charuco"))
+    CHECK_MESSAGE(d.fitting_board.empty(), d.view << ": " << d.reason);
+}
+
 TEST_CASE("AprilGrid texts parse, number the corners as Kalibr does and name what is wrong") {
   const Board april = parse_board("aprilgrid:6x5:0.04:0.3");
   CHECK(april.kind == BoardKind::kAprilGrid);
