@@ -49,7 +49,8 @@ cv::Mat project_with_jacobian(const CameraModel& camera, cv::InputArray points, 
   return jacobian;
 }
 
-// The camera-frame points (x, y, 1) of the rays `camera` sees at `pixels_px`.
+}  // namespace
+
 std::vector<cv::Point3d> rays_of(const CameraModel& camera, const std::vector<cv::Point2d>& pixels_px) {
   std::vector<cv::Point2d> normalised;
   cv::undistortPoints(pixels_px, normalised, cv::Mat(camera.camera_matrix), camera.distortion_mat(), cv::noArray(),
@@ -58,8 +59,6 @@ std::vector<cv::Point3d> rays_of(const CameraModel& camera, const std::vector<cv
   for (const cv::Point2d& n : normalised) rays.emplace_back(n.x, n.y, 1.0);
   return rays;
 }
-
-}  // namespace
 
 std::vector<cv::Point2d> reproject(const CameraModel& from, const CameraModel& to,
                                    const std::vector<cv::Point2d>& pixels_px) {

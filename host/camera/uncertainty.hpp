@@ -103,6 +103,10 @@ StereoPoseCovariance stereo_pose_covariance(const CameraModel& left, const Camer
 cv::Matx22d projection_covariance(const CameraModel& camera, const IntrinsicsCovariance& covariance,
                                   cv::Point2d pixel_px);
 
+// The camera-frame points (x, y, 1) of the rays `camera` sees at `pixels_px` (cv::undistortPoints
+// iterated to 1e-12).
+std::vector<cv::Point3d> rays_of(const CameraModel& camera, const std::vector<cv::Point2d>& pixels_px);
+
 // Where `to` projects the rays that `from` sees at `pixels_px` (cv::undistortPoints iterated to
 // 1e-12, then cv::projectPoints): two lens models compared pixel by pixel, e.g. an estimate
 // against the truth, whose difference projection_covariance predicts.

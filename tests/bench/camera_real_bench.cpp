@@ -155,16 +155,6 @@ double held_out_rms_px(const Views& all, Calibrate calibrate) {
   return std::sqrt(sum / static_cast<double>(n));
 }
 
-// Unit-depth rays (x, y, 1) of `camera` at `pixels_px`.
-std::vector<cv::Point3d> rays_of(const CameraModel& camera, const std::vector<cv::Point2d>& pixels_px) {
-  std::vector<cv::Point2d> normalized;
-  cv::undistortPoints(pixels_px, normalized, cv::Mat(camera.camera_matrix), camera.distortion_mat(), cv::noArray(),
-                      cv::noArray(), cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12));
-  std::vector<cv::Point3d> rays;
-  for (const cv::Point2d& n : normalized) rays.emplace_back(n.x, n.y, 1.0);
-  return rays;
-}
-
 // mrcal's implied rotation (implied_Rt10__from_unprojections at infinity): the rotation vector r
 // minimising sum |project_to(R(r) ray_from(p)) - p|^2 over `focus_px`, by Gauss-Newton on
 // cv::projectPoints' Jacobian.
