@@ -282,16 +282,17 @@ int markers_explained(const std::vector<std::array<cv::Point2f, 4>>& layout,
 // the header); nullopt when the given board explains the markers as well as any other, or too
 // few markers were seen to judge.
 std::optional<cv::Size> fitting_charuco(const Board& board, const std::vector<std::vector<cv::Point2f>>& marker_corners,
-                            const std::vector<int>& ids) {
+                                        const std::vector<int>& ids) {
   if (ids.size() < kMinMarkersToJudgeLayout) return std::nullopt;
   std::vector<double> sides;
   for (const std::vector<cv::Point2f>& m : marker_corners)
-    sides.push_back(0.25 * (cv::norm(m[1] - m[0]) + cv::norm(m[2] - m[1]) + cv::norm(m[3] - m[2]) + cv::norm(m[0] - m[3])));
+    sides.push_back(0.25 *
+                    (cv::norm(m[1] - m[0]) + cv::norm(m[2] - m[1]) + cv::norm(m[3] - m[2]) + cv::norm(m[0] - m[3])));
   std::nth_element(sides.begin(), sides.begin() + static_cast<std::ptrdiff_t>(sides.size() / 2), sides.end());
   const double tolerance_px = kLayoutTolerance * sides[sides.size() / 2];
   const double marker_over_square = board.marker_m / board.square_m;
-  const int given = markers_explained(charuco_layout(board.cols, board.rows, marker_over_square), marker_corners,
-                                      ids, tolerance_px);
+  const int given =
+      markers_explained(charuco_layout(board.cols, board.rows, marker_over_square), marker_corners, ids, tolerance_px);
   if (given == static_cast<int>(ids.size())) return std::nullopt;
   const int largest_id = *std::max_element(ids.begin(), ids.end());
   const int dictionary_size = board.charuco->dictionary->bytesList.rows;
@@ -302,7 +303,8 @@ std::optional<cv::Size> fitting_charuco(const Board& board, const std::vector<st
       if (rows < 2 || rows > kMaxCharucoSide || cols * rows != area || cols * rows / 2 <= largest_id ||
           cols * rows / 2 > dictionary_size)
         continue;
-      const int n = markers_explained(charuco_layout(cols, rows, marker_over_square), marker_corners, ids, tolerance_px);
+      const int n =
+          markers_explained(charuco_layout(cols, rows, marker_over_square), marker_corners, ids, tolerance_px);
       if (n > best) {
         best = n;
         best_cols = cols;
@@ -696,8 +698,7 @@ BoardDetection detect_board(const Board& board, const cv::Mat& image, const std:
     const cv::Size pattern(board.cols, board.rows);
     const std::string given = std::to_string(board.cols) + "x" + std::to_string(board.rows);
     cv::Mat meta;
-    if (cv::findChessboardCornersSB(grey, pattern, corners, cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_LARGER,
-                                    meta)) {
+    if (cv::findChessboardCornersSB(grey, pattern, corners, cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_LARGER, meta)) {
       d.detector = "findChessboardCornersSB";
       if (const cv::Size whole = whole_chessboard(cv::Size(meta.cols, meta.rows), pattern); whole != pattern) {
         d.larger_board = true;
@@ -748,8 +749,8 @@ BoardDetection detect_board(const Board& board, const cv::Mat& image, const std:
       fits.rows = sheet->height;
       d.fitting_board = fits.text();
       d.reason = "the markers lie as on a sheet of " + std::to_string(fits.cols) + "x" + std::to_string(fits.rows) +
-                 " squares, not " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
-                 ": give --board " + d.fitting_board;
+                 " squares, not " + std::to_string(board.cols) + "x" + std::to_string(board.rows) + ": give --board " +
+                 d.fitting_board;
       return d;
     }
     const cv::Ptr<cv::aruco::Board> plain = board.charuco;

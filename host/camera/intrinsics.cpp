@@ -45,8 +45,8 @@ void refuse_wrong_board(const std::vector<BoardDetection>& detections) {
   std::map<std::string, int> votes;
   for (const BoardDetection& d : detections)
     if (!d.fitting_board.empty()) ++votes[d.fitting_board];
-  const auto most = std::max_element(votes.begin(), votes.end(),
-                                     [](const auto& a, const auto& b) { return a.second < b.second; });
+  const auto most =
+      std::max_element(votes.begin(), votes.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
   const auto named = std::find_if(detections.begin(), detections.end(), [&](const BoardDetection& d) {
     return most == votes.end() ? wrong(d) : d.fitting_board == most->first;
   });

@@ -164,8 +164,7 @@ cv::Vec3d implied_rotation(const CameraModel& from, const CameraModel& to, const
   for (int iteration = 0; iteration < 20; ++iteration) {
     std::vector<cv::Point2d> projected;
     cv::Mat jacobian;
-    cv::projectPoints(rays, r, cv::Vec3d(0, 0, 0), cv::Mat(to.camera_matrix), to.distortion_mat(), projected,
-                      jacobian);
+    cv::projectPoints(rays, r, cv::Vec3d(0, 0, 0), cv::Mat(to.camera_matrix), to.distortion_mat(), projected, jacobian);
     cv::Matx33d normal = cv::Matx33d::zeros();
     cv::Vec3d gradient(0, 0, 0);
     for (std::size_t i = 0; i < projected.size(); ++i) {
@@ -254,8 +253,8 @@ int main() {
       if (cv::norm(p - cv::Point2d(319.5, 239.5)) <= radius) focus.push_back(p);
     const cv::Vec3d r = implied_rotation(recipe_left_camera, kincal_left.camera, focus);
     std::vector<cv::Point2d> aligned;
-    cv::projectPoints(rays_of(recipe_left_camera, pixels), r, cv::Vec3d(0, 0, 0), cv::Mat(kincal_left.camera.camera_matrix),
-                      kincal_left.camera.distortion_mat(), aligned);
+    cv::projectPoints(rays_of(recipe_left_camera, pixels), r, cv::Vec3d(0, 0, 0),
+                      cv::Mat(kincal_left.camera.camera_matrix), kincal_left.camera.distortion_mat(), aligned);
     double aligned_sum = 0, aligned_largest = 0;
     for (std::size_t i = 0; i < pixels.size(); ++i) {
       const double e = cv::norm(aligned[i] - pixels[i]);

@@ -148,8 +148,7 @@ struct FlangeDifference {
 };
 
 // The angles (rad) between the two models' flange orientations over the rows, less their mean turn.
-FlangeDifference flange_difference(const model::RobotModel& a, const model::RobotModel& b,
-                                   const model::Dataset& rows) {
+FlangeDifference flange_difference(const model::RobotModel& a, const model::RobotModel& b, const model::Dataset& rows) {
   std::vector<Eigen::Matrix3d> turn;
   Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
   for (const model::Measurement& m : rows.rows) {
