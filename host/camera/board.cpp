@@ -222,6 +222,9 @@ bool board_continues(const cv::Mat& grey, const std::vector<cv::Point2f>& corner
   return false;
 }
 
+constexpr int kGrowFlags = cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_LARGER;
+const cv::Size kGrowSeed(3, 3);  // the smallest grid a larger board is grown from (step 3)
+
 // The size of the grid cv::findChessboardCornersSB found with CALIB_CB_LARGER (its meta array's
 // columns and rows), in an orientation that holds `pattern`: the detector numbers the grid its
 // own way round, so the orientation like the given size's (both wider than tall, or not) when it
@@ -697,20 +700,28 @@ BoardDetection detect_board(const Board& board, const cv::Mat& image, const std:
   if (board.kind == BoardKind::kChessboard) {
     const cv::Size pattern(board.cols, board.rows);
     const std::string given = std::to_string(board.cols) + "x" + std::to_string(board.rows);
-    cv::Mat meta;
-    if (cv::findChessboardCornersSB(grey, pattern, corners, cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_LARGER, meta)) {
-      d.detector = "findChessboardCornersSB";
-      if (const cv::Size whole = whole_chessboard(cv::Size(meta.cols, meta.rows), pattern); whole != pattern) {
-        d.larger_board = true;
-        Board larger = board;
-        larger.cols = whole.width;
-        larger.rows = whole.height;
-        d.fitting_board = larger.text();
-        d.reason = "the board has " + std::to_string(whole.width) + "x" + std::to_string(whole.height) +
-                   " inner corners, not " + given + " (its squares continue beyond the corners found): give --board " +
-                   d.fitting_board;
+    // A larger board found (step 3): refused, naming the whole board when it was measured.
+    const auto refuse_larger = [&](cv::Size whole) {
+      d.larger_board = true;
+      if (whole == pattern) {
+        d.reason = "the board is larger than " + given +
+                   " (its squares continue beyond the corners found; its size could not be measured in this view)";
         return d;
       }
+      Board larger = board;
+      larger.cols = whole.width;
+      larger.rows = whole.height;
+      d.fitting_board = larger.text();
+      d.reason = "the board has " + std::to_string(whole.width) + "x" + std::to_string(whole.height) +
+                 " inner corners, not " + given + " (its squares continue beyond the corners found): give --board " +
+                 d.fitting_board;
+      return d;
+    };
+    cv::Mat meta;
+    if (cv::findChessboardCornersSB(grey, pattern, corners, kGrowFlags, meta)) {
+      d.detector = "findChessboardCornersSB";
+      if (const cv::Size whole = whole_chessboard(cv::Size(meta.cols, meta.rows), pattern); whole != pattern)
+        return refuse_larger(whole);
     } else if (cv::findChessboardCorners(grey, pattern, corners,
                                          cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE)) {
       d.detector = "findChessboardCorners";
@@ -725,10 +736,11 @@ BoardDetection detect_board(const Board& board, const cv::Mat& image, const std:
     const std::string window = std::to_string(2 * d.refine_half_window_px + 1);
     d.detector += " + cornerSubPix " + window + "x" + window;
     if (board_continues(grey, corners, board.cols, board.rows)) {
-      d.larger_board = true;
-      d.reason = "the board is larger than " + given +
-                 " (its squares continue beyond the corners found; its size could not be measured in this view)";
-      return d;
+      // Not grown from the given size: grown from the smallest grid instead, if it can be.
+      std::vector<cv::Point2f> seed;
+      if (cv::findChessboardCornersSB(grey, kGrowSeed, seed, kGrowFlags, meta))
+        return refuse_larger(whole_chessboard(cv::Size(meta.cols, meta.rows), pattern));
+      return refuse_larger(pattern);
     }
     orient_chessboard(board, grey, corners);
     for (int id = 0; id < board.corner_count(); ++id) d.ids.push_back(id);

@@ -56,10 +56,12 @@
 //       narrower), a window of 1/8 of its side. If ring 2's squares alternate like the board's
 //       own (their parity contrast reaches kExtensionContrastRatio of the interior's; on
 //       OpenCV's 26 sample views: at most 0.17 for the true 9x6 board, at least 0.77 for 8x6
-//       inside it), the board continues there, and its size is not measured (counting rings
-//       further out by the same homography named wrong sizes -- 10x4 for 9x4, 7x9 for 7x4 of
-//       the 9x6 board -- as the extrapolation leaves the squares). A side whose ring 2 leaves
-//       the image cannot be judged and counts as the board's edge.
+//       inside it), the board continues there. Its size is then measured by growing the
+//       smallest grid (3x3, the same detector and flag) to the whole board, when that holds the
+//       given size; else it is not named (counting rings further out by the same homography
+//       named wrong sizes -- 10x4 for 9x4, 7x9 for 7x4 of the 9x6 board -- as the extrapolation
+//       leaves the squares). A side whose ring 2 leaves the image cannot be judged and counts
+//       as the board's edge.
 //     On the 13 left sample views, every grid of 9x4, 7x4, 4x3 and 3x5 corners is refused and
 //     every size named is the board's (tests/host/camera/camera_real_test.cpp); the ring check
 //     alone let 4x3 pass in 9 of the 13 views.
