@@ -51,7 +51,11 @@
 //                                          constant turn between the two descriptions' flange
 //                                          frames (their mean); _rms the RMS angle; _geometry the
 //                                          same with every parameter and the default priors
-//                                          (what this figure measured before)
+//                                          (what this figure measured before); _old_default
+//                                          without priors. Both descriptions place the probe as
+//                                          Trafo_TM_F_init.txt plans it: with it on the last axis
+//                                          in ur10.urdf only, a5 and alpha5 were held fixed there
+//                                          and estimated from the DH table (0.046 deg apart)
 //   realdata_ur10_flange_sigma_deg_urdf, _dh   each route's own predicted standard deviation of
 //                                          the flange orientation (the largest axis of the
 //                                          parameter covariance propagated to it, RMS over the
