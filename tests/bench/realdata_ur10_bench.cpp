@@ -70,7 +70,6 @@
 #include <vector>
 
 #include <Eigen/Eigenvalues>
-#include <Eigen/SVD>
 
 #include "host/identify/identify.hpp"
 #include "host/identify/model_selection.hpp"
@@ -140,36 +139,6 @@ identify::Selection chosen(const model::RobotModel& nominal, const model::Datase
 // The selection's cross-validation of its chosen model, when it ran.
 const identify::CrossValidation* selection_scores(const identify::Selection& s) {
   return s.chosen_cross_validation.kfold_rms_m >= 0.0 ? &s.chosen_cross_validation : nullptr;
-}
-
-// The flange's orientation in the device frame: the tool pose less the flange-to-tool turn.
-Eigen::Matrix3d flange_rotation(const model::RobotModel& m, const std::vector<double>& q) {
-  return model::forward_kinematics(m, q).rotation * m.flange_T_tool.rotation.transpose();
-}
-
-struct FlangeDifference {
-  double largest_rad = 0.0, rms_rad = 0.0;
-};
-
-// The angles (rad) between the two models' flange orientations over the rows, less their mean turn.
-FlangeDifference flange_difference(const model::RobotModel& a, const model::RobotModel& b, const model::Dataset& rows) {
-  std::vector<Eigen::Matrix3d> turn;
-  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
-  for (const model::Measurement& m : rows.rows) {
-    turn.push_back(flange_rotation(a, m.q).transpose() * flange_rotation(b, m.q));
-    sum += turn.back();
-  }
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d mean = svd.matrixU() * svd.matrixV().transpose();  // the rotation nearest the mean
-  if (mean.determinant() < 0) mean = -mean;
-  FlangeDifference out;
-  for (const Eigen::Matrix3d& t : turn) {
-    const double angle = identify::so3_log(mean.transpose() * t).norm();
-    out.largest_rad = std::max(out.largest_rad, angle);
-    out.rms_rad += angle * angle;
-  }
-  out.rms_rad = std::sqrt(out.rms_rad / static_cast<double>(turn.size()));
-  return out;
 }
 
 // The predicted standard deviation (rad) of the flange orientation along its worst axis, RMS over
@@ -312,7 +281,7 @@ int main() {
           identify::identify(sd.chosen.model, points, sd.chosen.options, sd.chosen_cross_validation);
       std::printf("the worked example's routes choose %s (URDF) and %s (DH)\n", su.chosen.name.c_str(),
                   sd.chosen.name.c_str());
-      const FlangeDifference d = flange_difference(from_urdf.model, from_dh.model, held_out);
+      const simulation::FlangeDifference d = simulation::flange_difference(from_urdf.model, from_dh.model, held_out);
       figure("realdata_ur10_dh_urdf_flange_deg", d.largest_rad * kDeg, "deg");
       figure("realdata_ur10_dh_urdf_flange_deg_rms", d.rms_rad * kDeg, "deg");
       figure("realdata_ur10_flange_sigma_deg_urdf", flange_sigma_rad(from_urdf, held_out) * kDeg, "deg");
@@ -324,7 +293,7 @@ int main() {
       const identify::IdentifyResult from_urdf = identify::identify(urdf, points, o);
       const identify::IdentifyResult from_dh = identify::identify(nominal, points, o);
       figure(std::string("realdata_ur10_dh_urdf_flange_deg") + (priors ? "_geometry" : "_old_default"),
-             flange_difference(from_urdf.model, from_dh.model, held_out).largest_rad * kDeg, "deg");
+             simulation::flange_difference(from_urdf.model, from_dh.model, held_out).largest_rad * kDeg, "deg");
     }
   }
   figure("realdata_ur10_cov_over_nocov", worst_ratio, "ratio");

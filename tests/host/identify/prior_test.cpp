@@ -12,8 +12,6 @@
 #include <random>
 #include <string>
 
-#include <Eigen/SVD>
-
 #include "host/identify/identify.hpp"
 #include "host/identify/model_selection.hpp"
 #include "host/identify/prior.hpp"
@@ -106,25 +104,6 @@ TEST_CASE("real UR10 DH table, positions only: the prior holds a5 and d5 near no
   CHECK(identify::accuracy(map.model, realdata::subset(all, split.held_out)).rms_m < 0.6e-3);
 }
 
-// The largest angle (deg) between two models' flange orientations over the rows, less their mean
-// turn (two descriptions of one robot name its flange frame differently).
-double flange_difference_deg(const RobotModel& a, const RobotModel& b, const model::Dataset& rows) {
-  std::vector<Eigen::Matrix3d> turn;
-  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
-  for (const model::Measurement& m : rows.rows) {
-    const auto flange = [&](const RobotModel& r) -> Eigen::Matrix3d {
-      return model::forward_kinematics(r, m.q).rotation * r.flange_T_tool.rotation.transpose();
-    };
-    turn.push_back(flange(a).transpose() * flange(b));
-    sum += turn.back();
-  }
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const Eigen::Matrix3d mean = svd.matrixU() * svd.matrixV().transpose();
-  double largest = 0.0;
-  for (const Eigen::Matrix3d& t : turn) largest = std::max(largest, identify::so3_log(mean.transpose() * t).norm());
-  return largest * 180.0 / std::numbers::pi;
-}
-
 TEST_CASE("the worked example's two routes, URDF and DH table, reach the same flange on the real UR10") {
   const model::Dataset all = realdata::import_ur10(KINCAL_REALDATA_DIR).data;
   const realdata::Split split = realdata::split_rows(static_cast<int>(all.rows.size()), 500);
@@ -137,6 +116,7 @@ TEST_CASE("the worked example's two routes, URDF and DH table, reach the same fl
   const RobotModel from_dh = robot("ur10.yaml");
   const RobotModel from_urdf =
       model::load_model(std::string(KINCAL_ROBOTS_DIR) + "/ur10.urdf", model::UrdfChainEnds{"", "tracker_probe"});
+  constexpr double kHundredthDeg = 0.01 * std::numbers::pi / 180.0;
   identify::IdentifyOptions o;
   o.rejection_gate = false;  // minutes under the sanitizers; the routes' agreement is what is tested
   const identify::IdentifyResult dh = identify::identify(from_dh, train, o);
@@ -145,11 +125,12 @@ TEST_CASE("the worked example's two routes, URDF and DH table, reach the same fl
   // with it on the axis in one of them (ur10.urdf until this test), a5, alpha5 were exactly
   // dependent there and barely separable in the other, which let them take what the first held
   // fixed -- 0.05 deg apart, 25 deg without priors (realdata_ur10_bench).
-  CHECK(flange_difference_deg(urdf.model, dh.model, held_out) < 0.01);
+  CHECK(simulation::flange_difference(urdf.model, dh.model, held_out).largest_rad < kHundredthDeg);
   identify::IdentifyOptions plain = o;
   plain.prior.strength = 0.0;
-  CHECK(flange_difference_deg(identify::identify(from_urdf, train, plain).model,
-                              identify::identify(from_dh, train, plain).model, held_out) < 0.01);
+  CHECK(simulation::flange_difference(identify::identify(from_urdf, train, plain).model,
+                                      identify::identify(from_dh, train, plain).model, held_out)
+            .largest_rad < kHundredthDeg);
 }
 
 TEST_CASE("a prior far tighter than the data: change about zero with the prior's sigma, and the 3-sigma warning") {

@@ -1,14 +1,17 @@
 // Simulated measurements for the identification tests and benchmarks: noisy point or pose
-// measurements of a true robot, and the prediction error between two models. The true robot and
-// the configurations come from the simulator (host/sim/robot.hpp).
+// measurements of a true robot, and the prediction error between two models (tool points, and
+// flange orientations). The true robot and the configurations come from the simulator
+// (host/sim/robot.hpp).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
 #include <vector>
 
 #include <Eigen/Geometry>
+#include <Eigen/SVD>
 
 #include "host/identify/problem.hpp"
 #include "host/model/dataset.hpp"
@@ -135,6 +138,37 @@ inline double prediction_rms(const model::RobotModel& a, const model::RobotModel
   for (const auto& q : configurations)
     sum += (model::forward_kinematics(a, q).translation - model::forward_kinematics(b, q).translation).squaredNorm();
   return std::sqrt(sum / static_cast<double>(configurations.size()));
+}
+
+// The flange's orientation in the device frame: the tool pose less the flange-to-tool turn.
+inline Eigen::Matrix3d flange_rotation(const model::RobotModel& m, const std::vector<double>& q) {
+  return model::forward_kinematics(m, q).rotation * m.flange_T_tool.rotation.transpose();
+}
+
+struct FlangeDifference {
+  double largest_rad = 0.0, rms_rad = 0.0;
+};
+
+// The angles (rad) between the two models' flange orientations over the rows, less their mean turn.
+inline FlangeDifference flange_difference(const model::RobotModel& a, const model::RobotModel& b,
+                                          const model::Dataset& rows) {
+  std::vector<Eigen::Matrix3d> turn;
+  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+  for (const model::Measurement& m : rows.rows) {
+    turn.push_back(flange_rotation(a, m.q).transpose() * flange_rotation(b, m.q));
+    sum += turn.back();
+  }
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d mean = svd.matrixU() * svd.matrixV().transpose();  // the rotation nearest the mean
+  if (mean.determinant() < 0) mean = -mean;
+  FlangeDifference out;
+  for (const Eigen::Matrix3d& t : turn) {
+    const double angle = identify::so3_log(mean.transpose() * t).norm();
+    out.largest_rad = std::max(out.largest_rad, angle);
+    out.rms_rad += angle * angle;
+  }
+  out.rms_rad = std::sqrt(out.rms_rad / static_cast<double>(turn.size()));
+  return out;
 }
 
 }  // namespace kincal::simulation
