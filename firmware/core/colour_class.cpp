@@ -46,6 +46,7 @@ ColourTableStatus parse_colour_table(std::span<const std::uint8_t> block, Colour
   if (crc32(block.first(kCrcOffset)) != stored) return ColourTableStatus::kBadCrc;
   if (block[4] != kColourTableVersion) return ColourTableStatus::kUnsupportedVersion;
   if (block[5] > static_cast<std::uint8_t>(ColourSpace::kYuv422)) return ColourTableStatus::kUnknownColourSpace;
+  if (block[7] != 0) return ColourTableStatus::kReservedNotZero;
   table.space = static_cast<ColourSpace>(block[5]);
   table.threshold = block[6];
   for (std::size_t i = 0; i < kColourCells; ++i) table.score[i] = block[8 + i];

@@ -20,7 +20,8 @@
 //   4  version (1), colour space (0 RGB565, 1 YUV422), threshold, 0
 //   8  4096 scores, cell index (c0 << 8) | (c1 << 4) | c2
 //   4104  CRC-32 (zlib) of bytes 0..4103
-// parse_colour_table checks all of it; a bad block is refused with the reason.
+// parse_colour_table checks all of it, the reserved byte 7 included (a block it takes is the one
+// serialize_colour_table writes back); a bad block is refused with the reason.
 //
 // Cost: classify one table load per pixel (plus the index arithmetic). Memory: the table,
 // 4 KiB, caller-owned (flash or RAM). No heap.
@@ -38,7 +39,7 @@ namespace kincal::core {
 enum class ColourSpace : std::uint8_t { kRgb565 = 0, kYuv422 = 1 };
 
 enum class [[nodiscard]] ColourTableStatus : std::uint8_t{
-    kOk, kWrongSize, kBadMagic, kUnsupportedVersion, kUnknownColourSpace, kBadCrc,
+    kOk, kWrongSize, kBadMagic, kUnsupportedVersion, kUnknownColourSpace, kBadCrc, kReservedNotZero,
 };
 
 inline constexpr std::size_t kColourCells = 4096;

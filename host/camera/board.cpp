@@ -18,6 +18,8 @@
 #include <apriltag/apriltag.h>
 #include <apriltag/tag36h11.h>
 
+#include "host/model/number_text.hpp"
+
 namespace kincal::camera {
 
 namespace {
@@ -72,7 +74,10 @@ double positive_length(const std::string& text, const std::string& field, const 
   } catch (const std::exception&) {
     bad_board(text, field + " '" + value + "' is not a number");
   }
-  if (used != value.size() || !(v > 0) || !std::isfinite(v)) bad_board(text, field + " '" + value + "' must be > 0 m");
+  if (used != value.size() || !std::isfinite(v)) bad_board(text, field + " '" + value + "' is not a number");
+  if (!(v >= kMinBoardLength_m && v <= kMaxBoardLength_m))
+    bad_board(text, field + " '" + value + "' must be " + model::shortest_number_text(kMinBoardLength_m) + " to " +
+                        model::shortest_number_text(kMaxBoardLength_m) + " m");
   return v;
 }
 

@@ -126,6 +126,12 @@ namespace kincal::camera {
 
 enum class BoardKind { kChessboard, kCharuco, kAprilGrid };
 
+// The lengths a board text may give (square, marker, tag; metres): a micrometre to ten metres.
+// Beyond them OpenCV's pose solves fail on its own assertions (1e300 m and 1e-300 m did), and no
+// printed board is that size.
+inline constexpr double kMinBoardLength_m = 1e-6;
+inline constexpr double kMaxBoardLength_m = 10;
+
 // The text forms parse_board reads, for help texts and messages.
 inline constexpr const char* kBoardForms =
     "chessboard:COLSxROWS:SQUARE_M, charuco:COLSxROWS:SQUARE_M:MARKER_M[:DICT] or aprilgrid:COLSxROWS:TAG_M:SPACING";

@@ -8,6 +8,7 @@
 
 #include "host/files/input_file.hpp"
 #include "host/files/output_file.hpp"
+#include "host/files/yaml_limits.hpp"
 #include "host/model/number_text.hpp"
 
 namespace kincal::camera {
@@ -231,6 +232,7 @@ void save_camera_ros(const std::string& path, const CameraModel& camera, const s
 YAML::Node parse_ros(const std::string& path, const std::string& text) {
   YAML::Node root;
   try {
+    files::check_yaml_text<CalibrationError>(text, path);
     root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
     throw CalibrationError(path + ": not a YAML file (" + e.what() + ")");

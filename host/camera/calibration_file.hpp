@@ -33,7 +33,9 @@
 // matrices; camera_calibration_parsers reads the keys it knows by name and skips the rest). The
 // views, when given, follow as YAML comments ("# view IMAGE: N corners, RMS X px, DETECTOR"),
 // which ROS's parser skips. load_camera reads both (a file not starting with OpenCV's
-// "%YAML:1.0" is read as ROS's, with yaml-cpp); a ROS file's distortion_model must be plumb_bob.
+// "%YAML:1.0" is read as ROS's, with yaml-cpp, after files::check_yaml_text: at most
+// kMaxYamlNodes nodes, no key given twice, one document); a ROS file's distortion_model must be
+// plumb_bob.
 //
 // to_platform converts a camera to the firmware's camera block (shared::CameraIntrinsics, float
 // and u16, as the platform stores it), so a host calibration loads into the platform as it is.

@@ -86,6 +86,15 @@ void split(const Isometry3d& m, cv::Mat& r, cv::Mat& t) {
   cv::eigen2cv(translation, t);
 }
 
+// OpenCV's solvers throw cv::Exception on motions they cannot use (a rotation matrix that does not
+// normalize, a singular system): its text names OpenCV's source line, not the input.
+CalibrationError solve_failed(const char* function, const cv::Exception& e) {
+  return CalibrationError(std::string("hand-eye calibration: OpenCV's ") + function + " failed on the robot poses (" +
+                          e.err +
+                          "): their motions do not fit one rigid mount -- poses of another run, or "
+                          "rotations in another unit or convention?");
+}
+
 Isometry3d solve_hand_eye(const std::vector<Isometry3d>& base_T_gripper, const std::vector<Isometry3d>& camera_T_target,
                           cv::HandEyeCalibrationMethod method) {
   std::vector<cv::Mat> r_g2b(base_T_gripper.size()), t_g2b(base_T_gripper.size());
@@ -95,7 +104,11 @@ Isometry3d solve_hand_eye(const std::vector<Isometry3d>& base_T_gripper, const s
     split(camera_T_target[i], r_t2c[i], t_t2c[i]);
   }
   cv::Mat r, t;
-  cv::calibrateHandEye(r_g2b, t_g2b, r_t2c, t_t2c, r, t, method);
+  try {
+    cv::calibrateHandEye(r_g2b, t_g2b, r_t2c, t_t2c, r, t, method);
+  } catch (const cv::Exception& e) {
+    throw solve_failed("calibrateHandEye", e);
+  }
   return isometry(r, t);
 }
 
@@ -111,7 +124,11 @@ Isometry3d solve_robot_world(const std::vector<Isometry3d>& base_T_gripper,
     split(base_T_gripper[i].inverse(), r_b2g[i], t_b2g[i]);
   }
   cv::Mat r_b2w, t_b2w, r_g2c, t_g2c;
-  cv::calibrateRobotWorldHandEye(r_w2c, t_w2c, r_b2g, t_b2g, r_b2w, t_b2w, r_g2c, t_g2c, method);
+  try {
+    cv::calibrateRobotWorldHandEye(r_w2c, t_w2c, r_b2g, t_b2g, r_b2w, t_b2w, r_g2c, t_g2c, method);
+  } catch (const cv::Exception& e) {
+    throw solve_failed("calibrateRobotWorldHandEye", e);
+  }
   return isometry(r_g2c, t_g2c).inverse();
 }
 

@@ -18,7 +18,9 @@
 //     mix-up: CalibrationError saying which convention fits and both residuals.
 //  5. cv::calibrateHandEye by Tsai, Park, Horaud, Andreff and Daniilidis, and
 //     cv::calibrateRobotWorldHandEye by Shah and Li; each with its AX = XB residuals (RMS over
-//     all pairs of poses of the rotation angle and translation of (A X)^-1 (X B)).
+//     all pairs of poses of the rotation angle and translation of (A X)^-1 (X B)). An OpenCV solver
+//     that throws (motions it cannot use) is CalibrationError "hand-eye calibration: OpenCV's
+//     FUNCTION failed on the robot poses (its reason)", here and in step 4.
 //  6. Refinement (Ceres, Levenberg-Marquardt): gripper_T_camera and base_T_target minimizing
 //     the reprojection error of every board corner in every used view, starting from the
 //     AX = XB method with the smallest rotation residual; RMS before and after are reported.

@@ -7,11 +7,13 @@
 #include <cstdlib>
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
 #include "host/camera/intrinsics.hpp"
 #include "host/files/input_file.hpp"
+#include "host/model/number_text.hpp"
 
 namespace kincal::camera {
 
@@ -59,7 +61,18 @@ void check_reach(const RobotPose& p, const std::string& source) {
                  std::to_string(static_cast<int>(kMaxRobotReach_m)) + " m: poses must be in metres (millimetres?)");
 }
 
-Eigen::Matrix3d rotation_of(RotationColumns rotation, const Eigen::Vector3d& r) {
+// The rotation of rx,ry,rz. An angle beyond a turn is refused: a rotation vector's length, or a
+// roll, pitch or yaw, over 2 pi rad (360 deg) is most likely degrees given as radians, and at
+// 1e300 no angle at all (OpenCV's hand-eye solve then failed on the motions).
+Eigen::Matrix3d rotation_of(RotationColumns rotation, const Eigen::Vector3d& r, const std::string& source, int line) {
+  const double turn = rotation == RotationColumns::kRpyDeg ? 360.0 : 2 * 3.14159265358979323846;
+  const double largest = rotation == RotationColumns::kRotationVector ? r.stableNorm() : r.cwiseAbs().maxCoeff();
+  if (!(largest <= turn))
+    bad_pose(source, line,
+             std::string(rotation == RotationColumns::kRotationVector ? "the rotation vector's angle" : "an angle") +
+                 " is " + model::shortest_number_text(largest) +
+                 (rotation == RotationColumns::kRpyDeg ? " deg" : " rad") + ", more than a turn: " +
+                 (rotation == RotationColumns::kRpyDeg ? "not degrees?" : "degrees given as radians?"));
   if (rotation == RotationColumns::kRotationVector) {
     const double angle = r.norm();
     return angle > 0 ? Eigen::AngleAxisd(angle, r / angle).toRotationMatrix() : Eigen::Matrix3d::Identity();
@@ -78,16 +91,25 @@ struct Line {
 std::vector<RobotPose> parse_csv(const std::vector<Line>& lines, const std::string& source, RotationColumns rotation) {
   const std::string separator = lines.front().text.find(',') != std::string::npos ? "," : ";";
   const std::vector<std::string> header = fields_of(lines.front().text, separator, true);
+  const int header_line = lines.front().number;
   std::map<std::string, std::size_t> column;
-  for (std::size_t i = 0; i < header.size(); ++i) column.emplace(header[i], i);
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    static const std::set<std::string> kRead{"x", "y", "z", "qw", "qx", "qy", "qz", "rx", "ry", "rz"};
+    if (!column.emplace(header[i], i).second && kRead.count(header[i]) > 0)
+      bad_pose(source, header_line, "the header names column " + header[i] + " twice");
+  }
   const auto has = [&](std::initializer_list<const char*> names) {
     return std::all_of(names.begin(), names.end(), [&](const char* n) { return column.count(n) > 0; });
   };
-  const int header_line = lines.front().number;
   if (!has({"x", "y", "z"})) bad_pose(source, header_line, "the header has no x,y,z columns");
   const bool quaternion = has({"qw", "qx", "qy", "qz"});
   if (!quaternion && !has({"rx", "ry", "rz"}))
     bad_pose(source, header_line, "the header has no rotation columns: qw,qx,qy,qz or rx,ry,rz");
+  if (quaternion && has({"rx", "ry", "rz"}))
+    bad_pose(source, header_line, "the header has both qw,qx,qy,qz and rx,ry,rz: which is the rotation?");
+  if (quaternion && rotation != RotationColumns::kUnnamed)
+    bad_pose(source, header_line,
+             "the rotation is qw,qx,qy,qz, yet a meaning of rx,ry,rz (rotvec, rpy or rpy-deg) was named");
   if (!quaternion && rotation == RotationColumns::kUnnamed)
     bad_pose(source, header_line,
              "rx,ry,rz can mean a rotation vector or roll-pitch-yaw angles: name which (rotvec, rpy or rpy-deg)");
@@ -108,7 +130,7 @@ std::vector<RobotPose> parse_csv(const std::vector<Line>& lines, const std::stri
         bad_pose(source, p.line, "the quaternion's norm is " + std::to_string(q.norm()) + ", not 1");
       p.pose.linear() = q.normalized().toRotationMatrix();
     } else {
-      p.pose.linear() = rotation_of(rotation, Eigen::Vector3d(value("rx"), value("ry"), value("rz")));
+      p.pose.linear() = rotation_of(rotation, Eigen::Vector3d(value("rx"), value("ry"), value("rz")), source, p.line);
     }
     check_reach(p, source);
     poses.push_back(p);
@@ -167,6 +189,9 @@ std::vector<RobotPose> parse_robot_poses(std::istream& in, const std::string& so
   const bool header = std::any_of(lines.front().text.begin(), lines.front().text.end(), [](char c) {
     return std::isalpha(static_cast<unsigned char>(c)) && c != 'e' && c != 'E';
   });
+  if (!header && rotation != RotationColumns::kUnnamed)
+    bad_pose(source, lines.front().number,
+             "the poses are 4x4 matrices, yet a meaning of rx,ry,rz (rotvec, rpy or rpy-deg) was named");
   std::vector<RobotPose> poses = header ? parse_csv(lines, source, rotation) : parse_matrices(lines, source);
   if (poses.empty()) throw CalibrationError(source + ": no robot poses");
   return poses;

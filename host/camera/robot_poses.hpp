@@ -20,9 +20,12 @@
 // 256 MiB, UTF-8 with an optional byte-order mark, CRLF accepted; directories, devices, FIFOs,
 // UTF-16/Latin-1 refused by name).
 // Errors (CalibrationError "FILE:LINE: what"): an unreadable file, no poses, a header without
-// x,y,z or a rotation, rx,ry,rz without `rotation` named, a field that is not a finite number, a
-// row with too few fields, a quaternion or rotation out of tolerance, an incomplete matrix, and a
-// translation longer than kMaxRobotReach_m (a file in millimetres, most likely).
+// x,y,z or a rotation, with both qw,qx,qy,qz and rx,ry,rz, or naming one of those columns twice,
+// rx,ry,rz without `rotation` named, `rotation` named for quaternions or matrices, a field that is
+// not a finite number, a row with too few fields, a quaternion or rotation out of tolerance, a
+// rotation vector longer than 2 pi or a roll, pitch or yaw beyond +-2 pi (+-360 deg: degrees
+// given as radians, most likely), an incomplete matrix, and a translation longer than
+// kMaxRobotReach_m (a file in millimetres, most likely).
 #pragma once
 
 #include <iosfwd>

@@ -1,7 +1,6 @@
 #include "host/capture/frame_source.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -21,16 +20,6 @@ namespace kincal::capture {
 namespace {
 
 namespace fs = std::filesystem;
-
-bool is_image_file(const fs::path& path) {
-  static constexpr std::array<const char*, 14> kExtensions = {".png",  ".jpg", ".jpeg", ".bmp", ".tif",
-                                                              ".tiff", ".pgm", ".ppm",  ".pbm", ".pnm",
-                                                              ".webp", ".exr", ".hdr",  ".jp2"};
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return std::find(kExtensions.begin(), kExtensions.end(), ext) != kExtensions.end();
-}
 
 bool all_digits(const std::string& s) {
   return !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
@@ -103,7 +92,7 @@ std::optional<Frame> CameraSource::next() {
 VideoFileSource::VideoFileSource(const std::string& path, double fps_override) : name_(path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw CaptureError(name_ + ": no such file");
-  if (is_image_file(path)) throw CaptureError(name_ + ": an image, not a video (use an image sequence)");
+  if (files::is_image_file(path)) throw CaptureError(name_ + ": an image, not a video (use an image sequence)");
   // Only the file backends: probing every backend (CAP_ANY) wakes GStreamer and camera
   // libraries that print noise and leak for a file none of them reads.
   for (const cv::VideoCaptureAPIs api : {cv::CAP_FFMPEG, cv::CAP_OPENCV_MJPEG}) {
@@ -133,7 +122,7 @@ ImageSequenceSource::ImageSequenceSource(const std::string& directory, double pe
   std::error_code ec;
   if (!fs::is_directory(directory, ec)) throw CaptureError(name_ + ": no such directory");
   for (const fs::directory_entry& entry : fs::directory_iterator(directory, ec)) {
-    if (entry.is_regular_file(ec) && is_image_file(entry.path())) files_.push_back(entry.path().string());
+    if (entry.is_regular_file(ec) && files::is_image_file(entry.path())) files_.push_back(entry.path().string());
   }
   if (ec) throw CaptureError(name_ + ": cannot list the directory (" + ec.message() + ")");
   if (files_.empty()) throw CaptureError(name_ + ": no image files in the directory");
@@ -204,7 +193,7 @@ std::unique_ptr<FrameSource> open_source(const std::vector<std::string>& given) 
     std::error_code ec;
     if (all_digits(a) || a.rfind("/dev/video", 0) == 0) return std::make_unique<CameraSource>(a);
     if (fs::is_directory(a, ec)) return std::make_unique<ImageSequenceSource>(a);
-    if (fs::is_regular_file(a, ec) && !is_image_file(a)) return std::make_unique<VideoFileSource>(a);
+    if (fs::is_regular_file(a, ec) && !files::is_image_file(a)) return std::make_unique<VideoFileSource>(a);
   }
   return std::make_unique<ImageSequenceSource>(arguments);
 }

@@ -70,6 +70,8 @@ core::ColourClassTable read_colour_table(const std::string& path) {
       throw std::runtime_error(path + ": colour table of an unsupported version");
     case core::ColourTableStatus::kUnknownColourSpace:
       throw std::runtime_error(path + ": colour table with an unknown colour space");
+    case core::ColourTableStatus::kReservedNotZero:
+      throw std::runtime_error(path + ": colour table with its reserved byte 7 not zero (of a newer version?)");
   }
   throw std::runtime_error(path + ": colour table not readable");
 }

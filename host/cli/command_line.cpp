@@ -94,9 +94,17 @@ std::optional<int> check_words(CLI::App& app, int argc, const char* const* argv,
         return usage_error(command, "unknown option '" + name + "'", nearest_word(name, option_names(command)));
       }
       const bool value_attached = is_long ? token.find('=') != std::string::npos : token.size() > 2;
+      // An empty value is one left out (an unset shell variable): taken as "not given", an empty
+      // --constraints or --candidates would plan without them.
+      const bool empty_value = value_attached
+                                   ? is_long && token.back() == '='
+                                   : option->get_items_expected_min() > 0 && i + 1 < argc && *argv[i + 1] == '\0';
+      if (empty_value) return usage_error(command, "option '" + name + "' is given an empty value");
       if (!value_attached && option->get_items_expected_min() > 0) ++i;  // its value, whatever it looks like
       continue;
     }
+    if (token.empty())  // a positional or a further value of an option, left out
+      return usage_error(command, "an empty argument (word " + std::to_string(i) + ")");
     if (CLI::App* sub = subcommand_named(command, token)) {
       command = sub;
       continue;

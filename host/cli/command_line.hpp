@@ -1,6 +1,8 @@
 // The command line as the ecosystem's tools treat it: bare `kincal` prints the help; an unknown
 // subcommand or option, or a value the option refuses, is a usage error that exits 2 naming the
-// word and, where one is close, the valid word meant ("did you mean identify?").
+// word and, where one is close, the valid word meant ("did you mean identify?"). So is an empty
+// word ('--constraints ""', an unset shell variable): taken as the option not given, it would
+// silently drop what it names.
 #pragma once
 
 #include <CLI/App.hpp>

@@ -90,7 +90,7 @@ int run_correct(const CorrectArgs& a) {
       if (targets.empty()) throw model::InputError(a.urscript + ": no movej, movel, movep or servoj line to correct");
     } else {
       source = a.joints.empty() ? a.poses : a.joints;
-      table = correct::read_target_table(source, n);
+      table = correct::read_target_table(source, n, correct::kMaxTargets);
       if (table.cartesian != a.joints.empty())
         throw model::InputError(source + ": " +
                                 (table.cartesian ? "Cartesian targets (x,y,z) given as --joints"

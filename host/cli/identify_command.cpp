@@ -1,6 +1,8 @@
 #include "host/cli/identify_command.hpp"
 
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <memory>
 #include <numbers>
@@ -20,6 +22,7 @@
 #include "host/model/dataset.hpp"
 #include "host/model/isometry.hpp"
 #include "host/model/model_file.hpp"
+#include "host/model/number_text.hpp"
 #include "host/model/ur_kinematics.hpp"
 #include "host/model/urdf.hpp"
 #include "host/report/identify_report.hpp"
@@ -175,6 +178,31 @@ model::RobotModel choose_model(const IdentifyArgs& a, const model::RobotModel& n
   return selection->chosen.model;
 }
 
+// What parse_prior_entry (identify/prior.hpp) leaves to the command, which knows the parameter:
+// the unit must be of its kind ("theta5=0.2mm" was taken as 0.2 mrad, "a5=0.5" as 0.5 m) and the
+// sigma at least model::kMinPriorSigma (1e-160 mm made every standard deviation NaN).
+void check_prior_entry(const std::string& entry, const std::pair<std::string, double>& prior,
+                       const model::RobotModel& m, core::ParameterId id) {
+  if (std::isinf(prior.second)) return;  // no prior
+  const std::string value = entry.substr(entry.find('=') + 1);
+  char* end = nullptr;
+  (void)std::strtod(value.c_str(), &end);
+  const std::string unit(end);
+  const std::string kind = model::display_unit(m, id).name;  // mm, deg, ppm, urad/Nm or um/N
+  const bool fits = kind == "mm"    ? unit == "mm" || unit == "m"
+                    : kind == "deg" ? unit == "deg" || unit == "rad"
+                                    : unit.empty();
+  if (!fits)
+    throw model::InputError("--prior '" + entry + "': " + prior.first + " is " +
+                            (kind == "mm"    ? "a length: give its unit, mm or m"
+                             : kind == "deg" ? "an angle: give its unit, deg or rad"
+                                             : "a scale or compliance: give no unit (SI)"));
+  if (!(prior.second >= model::kMinPriorSigma))
+    throw model::InputError("--prior '" + entry + "': " + model::shortest_number_text(prior.second) +
+                            " (m or rad) is below " + model::shortest_number_text(model::kMinPriorSigma) +
+                            ", too small for the solve; hold the parameter with --fix instead");
+}
+
 int run_identify(const IdentifyArgs& a) {
   identify::IdentifyOptions options;
   options.method = a.method == "cpa"           ? identify::Method::cpa
@@ -198,11 +226,13 @@ int run_identify(const IdentifyArgs& a) {
     if (!model::is_urdf_path(a.model.path)) options.prior.sigma = model::load_model_priors(a.model.path);
     for (const std::string& entry : a.prior) {
       options.prior.sigma.push_back(identify::parse_prior_entry(entry));
+      core::ParameterId id{};
       try {
-        (void)model::parse_parameter_name(options.prior.sigma.back().first, nominal.joint_count());
+        id = model::parse_parameter_name(options.prior.sigma.back().first, nominal.joint_count());
       } catch (const model::InputError& e) {
         throw model::InputError("--prior '" + entry + "': " + e.what());
       }
+      check_prior_entry(entry, options.prior.sigma.back(), nominal, id);
     }
     if (a.no_prior) options.prior.strength = 0.0;
     if (!a.hand_eye.empty() && nominal.tool != model::ToolKind::frame)

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -115,11 +116,16 @@ int run_plan(const PlanArgs& a) {
     }
     std::vector<int> candidate_lines;
     if (!a.candidates.empty()) {
-      const correct::TargetTable table = correct::read_target_table(a.candidates, m.joint_count());
+      const correct::TargetTable table =
+          correct::read_target_table(a.candidates, m.joint_count(), identify::kMaxCandidates);
       if (table.cartesian)
         throw model::InputError(a.candidates + ": the candidates are Cartesian targets; give joint readings q1..q" +
                                 std::to_string(m.joint_count()));
+      std::map<std::vector<double>, int> first_line;  // the plan holds distinct configurations
       for (const correct::TargetRow& row : table.rows) {
+        if (const auto [at, first] = first_line.emplace(row.q, row.line); !first)
+          throw model::InputError(a.candidates + ":" + std::to_string(row.line) + ": the same configuration as line " +
+                                  std::to_string(at->second) + " (a plan holds distinct configurations)");
         options.candidates.push_back(row.q);
         candidate_lines.push_back(row.line);
       }
@@ -164,7 +170,7 @@ void add_plan_command(CLI::App& app, int& status) {
   cmd->add_option("-n,--count", a->count, "number of configurations (default 30)")->check(whole_in(1, 100000));
   auto* pool = cmd->add_option("--pool", a->pool,
                                "random candidate configurations to choose from (default 1000; not with --candidates)")
-                   ->check(whole_in(1, 1000000));
+                   ->check(whole_in(1, static_cast<long long>(identify::kMaxCandidates)));
   cmd->add_option("--seed", a->seed, "random seed (default 1)");
   cmd->add_option("--candidates", a->candidates,
                   "choose from these configurations (CSV q1..qN: ones the robot reaches and the device sees) "

@@ -10,6 +10,7 @@
 // only). Not thread-safe (the joint corrector's workspace).
 #pragma once
 
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <vector>
@@ -19,6 +20,11 @@
 #include "host/correct/prediction_spread.hpp"
 
 namespace kincal::correct {
+
+// The most targets `correct` takes from a table or a program (a CAM path of a million points is
+// the largest real one): each costs about 0.5 kB with its result, so a 256 MiB table of short rows
+// (20 million) would have taken gigabytes; more are refused as the one past it is read.
+inline constexpr std::size_t kMaxTargets = 1000000;
 
 struct Target {
   int line = 0;

@@ -50,11 +50,13 @@ double parse_cell(std::string_view field, const std::string& name, const std::st
   return v;
 }
 
-TargetTable read_target_table(const std::string& path, int joint_count) {
-  return parse_target_table(files::read_text_or_throw<model::InputError>(path, files::kDatasetFile), path, joint_count);
+TargetTable read_target_table(const std::string& path, int joint_count, std::size_t max_rows) {
+  return parse_target_table(files::read_text_or_throw<model::InputError>(path, files::kDatasetFile), path, joint_count,
+                            max_rows);
 }
 
-TargetTable parse_target_table(std::string_view text, const std::string& source, int joint_count) {
+TargetTable parse_target_table(std::string_view text, const std::string& source, int joint_count,
+                               std::size_t max_rows) {
   TargetTable table;
   table.source = source;
   std::map<std::string, std::size_t> index;
@@ -103,6 +105,8 @@ TargetTable parse_target_table(std::string_view text, const std::string& source,
                  " joints (expected q1..q" + std::to_string(joint_count) + (table.cartesian ? ", or none)" : ")"));
       continue;
     }
+    if (table.rows.size() == max_rows)
+      fail(source, number, 1, "more than " + std::to_string(max_rows) + " targets, the most this command takes");
     if (f.text.size() != header.text.size())
       fail(source, number, 1,
            std::to_string(f.text.size()) + " fields, the header (line " + std::to_string(header_line) + ") has " +

@@ -19,6 +19,8 @@
 // 256 MiB, UTF-8).
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -40,8 +42,12 @@ struct TargetTable {
   std::vector<TargetRow> rows;
 };
 
-TargetTable read_target_table(const std::string& path, int joint_count);
-TargetTable parse_target_table(std::string_view text, const std::string& source, int joint_count);
+// max_rows: more targets are refused ("SOURCE:LINE:1: more than MAX_ROWS targets, ...") as the row
+// past it is reached, before more memory is taken (a row holds about 200 bytes: a 50 MB table of
+// short rows took 2.4 GB).
+TargetTable read_target_table(const std::string& path, int joint_count, std::size_t max_rows = SIZE_MAX);
+TargetTable parse_target_table(std::string_view text, const std::string& source, int joint_count,
+                               std::size_t max_rows = SIZE_MAX);
 
 // A number cell as read above: the whole (trimmed) field a finite std::from_chars double, else
 // model::InputError "SOURCE:LINE:COLUMN: column NAME: what". Shared with the URScript reader.

@@ -1,5 +1,8 @@
 #include "host/correct/urscript.hpp"
 
+#include <cmath>
+#include <numbers>
+
 #include <Eigen/Geometry>
 
 #include "host/correct/target_table.hpp"
@@ -46,11 +49,12 @@ Call find_call(std::string_view line) {
 
 }  // namespace
 
-UrProgram read_urscript(const std::string& path, int joint_count) {
-  return parse_urscript(files::read_text_or_throw<model::InputError>(path, files::kProgramFile), path, joint_count);
+UrProgram read_urscript(const std::string& path, int joint_count, std::size_t max_motions) {
+  return parse_urscript(files::read_text_or_throw<model::InputError>(path, files::kProgramFile), path, joint_count,
+                        max_motions);
 }
 
-UrProgram parse_urscript(std::string text, const std::string& source, int joint_count) {
+UrProgram parse_urscript(std::string text, const std::string& source, int joint_count, std::size_t max_motions) {
   UrProgram program;
   program.source = source;
   program.text = std::move(text);
@@ -82,6 +86,8 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
                      "runs, so kincal cannot correct it (write the target out)");
       const std::size_t close = line.find(']', at);
       if (close == std::string_view::npos) fail(at, call.name + ": no ']' closes the target on this line");
+      if (program.motions.size() == max_motions)
+        fail(call.at, "more than " + std::to_string(max_motions) + " motions, the most kincal correct takes");
       UrMotion m;
       m.call = call.name;
       m.begin = start + at + 1;
@@ -105,7 +111,11 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
       if (pose) {
         m.target.pose.translation = {values[0], values[1], values[2]};
         const Eigen::Vector3d r(values[3], values[4], values[5]);
-        if (r.norm() > 0.0) m.target.pose.rotation = Eigen::AngleAxisd(r.norm(), r / r.norm()).toRotationMatrix();
+        const double angle = r.stableNorm();  // norm() squares: 1e300 overflowed to a NaN rotation
+        if (!(angle <= 2 * std::numbers::pi))
+          fail(at, call.name + ": the rotation vector's angle is " + model::shortest_number_text(angle) +
+                       " rad, more than a turn: degrees given as radians?");
+        if (angle > 0.0) m.target.pose.rotation = Eigen::AngleAxisd(angle, r / angle).toRotationMatrix();
       } else {
         m.target.q = std::move(values);
       }

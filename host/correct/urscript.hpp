@@ -7,8 +7,10 @@
 // first). Refused (model::InputError "FILE:LINE:COLUMN: what"): a line longer than 64 KiB (no
 // program has one: the file is something else), a joint list whose length is not
 // the model's joint count, a pose without six values, a value that is not a plain finite number
-// (d2r(90), a variable inside the list), a motion call whose target is a variable (movej(home)):
-// its value is not known before the program runs, and a target left uncorrected would be silent.
+// (d2r(90), a variable inside the list), a pose's rotation vector longer than a turn (2 pi rad:
+// degrees, most likely), more than kMaxTargets motions, a motion call whose target is a variable
+// (movej(home)): its value is not known before the program runs, and a target left uncorrected
+// would be silent.
 //
 // Written: the program's bytes unchanged but for the text between each target's brackets, which
 // becomes the new values (shortest exact decimal, ", " between them). Line ends (LF, CRLF),
@@ -17,6 +19,7 @@
 // The text comes from files::read_text (kProgramFile).
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -37,8 +40,10 @@ struct UrProgram {
   std::vector<UrMotion> motions;
 };
 
-UrProgram read_urscript(const std::string& path, int joint_count);
-UrProgram parse_urscript(std::string text, const std::string& source, int joint_count);
+// max_motions: the motion past it is refused as it is read (kMaxTargets for `correct`).
+UrProgram read_urscript(const std::string& path, int joint_count, std::size_t max_motions = kMaxTargets);
+UrProgram parse_urscript(std::string text, const std::string& source, int joint_count,
+                         std::size_t max_motions = kMaxTargets);
 
 // The program with each motion's values replaced: values[i] for motions[i] (joint readings for a
 // joint target, x,y,z,rx,ry,rz for a pose). Throws std::invalid_argument when the counts differ.

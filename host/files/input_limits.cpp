@@ -2,7 +2,9 @@
 
 #include "host/files/input_file.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cctype>
 #include <fstream>
 #include <optional>
 #include <utility>
@@ -91,6 +93,16 @@ void check_image_header(const std::string& path) {
     size = pnm_size(in);
   }
   if (size) check_image_size(path, size->first, size->second);
+}
+
+bool is_image_file(const std::filesystem::path& path) {
+  static constexpr std::array<const char*, 14> kExtensions = {".png",  ".jpg", ".jpeg", ".bmp", ".tif",
+                                                              ".tiff", ".pgm", ".ppm",  ".pbm", ".pnm",
+                                                              ".webp", ".exr", ".hdr",  ".jp2"};
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return std::find(kExtensions.begin(), kExtensions.end(), ext) != kExtensions.end();
 }
 
 }  // namespace kincal::files

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 
@@ -37,5 +38,10 @@ inline constexpr const char* kTextLimitText = "at most 256 MiB";
 // reports those, and check_image_size() then checks the decoded size.
 void check_image_header(const std::string& path);
 void check_image_size(const std::string& path, std::int64_t width_px, std::int64_t height_px);
+
+// Whether a directory's file of this name is read as an image (a directory given as images, and
+// outputs kept out of one): .png, .jpg, .jpeg, .bmp, .tif(f), .p[gpbn]m, .webp, .exr, .hdr, .jp2,
+// in any case.
+bool is_image_file(const std::filesystem::path& path);
 
 }  // namespace kincal::files

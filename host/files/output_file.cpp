@@ -1,5 +1,7 @@
 #include "host/files/output_file.hpp"
 
+#include "host/files/input_limits.hpp"
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -32,6 +34,16 @@ bool same_file(const std::string& a, const std::string& b) {
 }
 
 std::string describe(const NamedPath& p) { return p.option + " " + p.path; }
+
+// Whether `output` is an image in `input`, a directory given as images: one of them, or one the
+// next run that reads the directory would take as a view. Other files beside them (a calibration
+// written next to its views) are not read from it.
+bool image_in_directory(const std::string& output, const std::string& input) {
+  std::error_code ec;
+  if (!is_image_file(output) || !fs::is_directory(input, ec)) return false;
+  const fs::path parent = fs::path(output).parent_path();
+  return same_file(parent.empty() ? "." : parent.string(), input);
+}
 
 // Why an existing output is not replaced, or "" for a regular file.
 std::string not_replaceable(mode_t mode) {
@@ -104,8 +116,12 @@ void refuse_overwriting(const std::vector<NamedPath>& outputs, const std::vector
   for (const NamedPath& o : outputs) check_output(o);
   for (auto o = outputs.begin(); o != outputs.end(); ++o) {
     if (!takes_part(*o)) continue;
-    for (const NamedPath& in : inputs)
+    for (const NamedPath& in : inputs) {
       if (takes_part(in) && same_file(o->path, in.path)) refuse(*o, in, "an input");
+      if (takes_part(in) && image_in_directory(o->path, in.path))
+        throw OutputError(describe(*o) + " is an image in the directory " + describe(in) +
+                          ": refusing to write among its views (choose another path for " + o->option + ")");
+    }
     for (auto later = o + 1; later != outputs.end(); ++later)
       if (takes_part(*later) && same_file(o->path, later->path)) refuse(*later, *o, "another output");
   }

@@ -6,7 +6,9 @@
 // (directory, device, named pipe, socket: never replaced), and "-" where the command writes no
 // standard output are refused by name; then it compares resolved paths
 // (std::filesystem::weakly_canonical, and std::filesystem::equivalent for hard links) of every
-// output against every input and every other output, and throws OutputError naming both options.
+// output against every input and every other output, and throws OutputError naming both options;
+// an output with an image's name (input_limits.hpp's is_image_file) in a directory given as an
+// input (of images: those files are its views, today's or the next run's) is refused the same way.
 // Commands write their outputs only after every input is read and checked, so a failed run leaves
 // no output behind.
 // write_file_atomically() writes into a temporary file in the target's directory, fsyncs it,

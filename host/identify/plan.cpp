@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <random>
 
@@ -96,12 +97,22 @@ PlanResult plan_configurations(const model::RobotModel& m, const PlanOptions& op
       rejected_mask.push_back(mask);
     }
   };
+  const std::size_t held = options.candidates.empty()
+                               ? static_cast<std::size_t>(std::max({options.pool, options.count, 0}))
+                               : options.candidates.size();
+  if (held > kMaxCandidates)
+    throw InputError("plan: " + std::to_string(held) + " candidate configurations, more than the " +
+                     std::to_string(kMaxCandidates) + " a plan holds");
   if (!options.candidates.empty()) {
+    std::map<std::vector<double>, std::size_t> first;
     for (std::size_t k = 0; k < options.candidates.size(); ++k) {
       if (options.candidates[k].size() != static_cast<std::size_t>(n))
         throw InputError("plan: candidate " + std::to_string(k + 1) + " has " +
                          std::to_string(options.candidates[k].size()) + " joint values, the model " +
                          std::to_string(n));
+      if (const auto [at, inserted] = first.emplace(options.candidates[k], k); !inserted)
+        throw InputError("plan: candidate " + std::to_string(k + 1) + " is the same configuration as candidate " +
+                         std::to_string(at->second + 1) + " (a plan holds distinct configurations)");
       consider(options.candidates[k], k);
     }
   } else {

@@ -33,6 +33,7 @@ struct Values {
   void keys(const YAML::Node& map, const std::string& key, std::initializer_list<const char*> allowed) const {
     if (!map.IsMap()) fail(map, key.empty() ? "the file" : key, "expected a mapping");
     for (const auto& entry : map) {
+      name_key(entry.first, key.empty() ? "the file" : key);
       const std::string name = entry.first.Scalar();
       bool known = false;
       std::string list;
@@ -44,6 +45,11 @@ struct Values {
         fail(entry.first, key.empty() ? files::excerpt(name) : key + "." + files::excerpt(name),
              "unknown key (expected " + list + ")");
     }
+  }
+
+  // A key of a mapping that is not a name (a list, a mapping or null: "? [a, b]").
+  void name_key(const YAML::Node& node, const std::string& key) const {
+    if (!node.IsScalar()) fail(node, key, "a key must be a name, not a list, a mapping or null");
   }
 
   double number(const YAML::Node& node, const std::string& key) const {
@@ -75,9 +81,11 @@ struct Values {
   }
 
   Vector3 direction(const YAML::Node& map, const std::string& parent, const char* name) const {
+    // stableNorm: norm() squares, so [1e300, 0, 1] made inf and normalized() a zero direction
+    // that every point meets, and [1e-200, 0, 0] 0.
     const Vector3 v = vector3(map, parent, name);
-    if (!(v.norm() > 0.0)) fail(map[name], parent + "." + name, "a zero vector has no direction");
-    return v.normalized();
+    if (!(v.stableNorm() > 0.0)) fail(map[name], parent + "." + name, "a zero vector has no direction");
+    return v.stableNormalized();
   }
 };
 
@@ -117,6 +125,7 @@ PlanConstraints read_root(const YAML::Node& root, const Values& r, const model::
     if (!j.IsMap()) r.fail(j, "joints", "expected a mapping of joint names (or q1..qN) to [lower, upper]");
     std::set<int> named;
     for (const auto& entry : j) {
+      r.name_key(entry.first, "joints");
       const std::string name = entry.first.Scalar();
       const std::string key = "joints." + files::excerpt(name);
       const int joint = joint_of(model, name);

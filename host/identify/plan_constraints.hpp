@@ -24,9 +24,12 @@
 // centimetres above the table leaves the links' thickness room.
 //
 // Refused (model::InputError "FILE:LINE:COLUMN: what", naming the key): YAML syntax, a file
-// without any constraint (empty, or only `angles`), an unknown key, a value that is not a number
+// without any constraint (empty, or only `angles`), an unknown key, a key given twice in one
+// mapping, a second YAML document (model/yaml_text.hpp), a key that is not a name (a list, a
+// mapping or null), a value that is not a number
 // or a list of the right length, non-finite numbers, a box whose min is not below its max on
-// every axis, a zero normal or axis, a half angle outside (0, 180) deg, a joint the model does not
+// every axis, a zero normal or axis (any other length is normalized without overflow: [1e300,
+// 0, 1] is the x axis), a half angle outside (0, 180) deg, a joint the model does not
 // have or named twice, a range whose lower end is not below its upper end or that lies outside
 // the joint's limits. Read through files::read_text() (kSettingsFile: a regular file of at most
 // 16 MiB, UTF-8).

@@ -174,6 +174,10 @@ std::vector<std::pair<std::string, double>> read_priors(const Reader& r, const Y
     const double sigma =
         angle ? r.angle(entry.second, "priors: " + name, unit) : r.number(entry.second, "priors: " + name);
     if (!(sigma > 0.0)) r.fail(entry.second, "priors: " + name + " must be positive (a standard deviation)");
+    if (sigma < kMinPriorSigma)
+      r.fail(entry.second, "priors: " + name + ": " + shortest_number_text(sigma) + " (m or rad) is below " +
+                               shortest_number_text(kMinPriorSigma) +
+                               ", too small for the solve; hold the parameter with identify --fix instead");
     out.emplace_back(name, sigma);
   }
   return out;

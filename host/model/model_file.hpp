@@ -41,7 +41,8 @@
 //     theta5: 0.2                # unit, scale<i> a ratio; names as identify prints them. Not
 //                                # written back (a calibrated model's deviations start anew)
 //
-// Reading is strict: unknown keys, missing parameters, wrong types, an unknown convention or
+// Reading is strict: unknown keys, a key given twice in one mapping or a second YAML document
+// (yaml_text.hpp), missing parameters, wrong types, an unknown convention or
 // joint type, more than core::kMaxJoints joints, non-finite numbers, lower >= upper (equal limits
 // leave a joint no motion), a coupling list of the wrong length or coupling rows that are
 // linearly dependent, a scale that is not positive, a negative mass or compliance, text that is
@@ -66,8 +67,15 @@ namespace kincal::model {
 RobotModel load_model(const std::string& path, const UrdfChainEnds& ends = {});
 // `source` names the text in messages.
 RobotModel parse_model(const std::string& text, const std::string& source);
+// The smallest prior sigma kincal takes (m, rad, or SI for a scale or compliance), from a model
+// file's priors or `identify --prior`: the solve squares its weight 1/sigma, and a sigma of
+// 1e-163 m made every standard deviation NaN and the written model unreadable. A parameter held
+// at its value is `identify --fix`'s.
+inline constexpr double kMinPriorSigma = 1e-12;
+
 // The `priors:` of a YAML model file (name, sigma in SI), in file order; empty without. Throws
-// InputError as load_model, and for an unknown parameter name or a sigma that is not positive.
+// InputError as load_model, and for an unknown parameter name or a sigma that is not positive
+// or is below kMinPriorSigma.
 std::vector<std::pair<std::string, double>> load_model_priors(const std::string& path);
 
 std::string write_model(const RobotModel& model);

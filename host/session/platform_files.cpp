@@ -12,6 +12,7 @@
 #include "firmware/core/range_plane.hpp"
 #include "host/camera/calibration_file.hpp"
 #include "host/files/input_file.hpp"
+#include "host/files/yaml_limits.hpp"
 #include "host/target/doty_square.hpp"
 
 namespace kincal::session {
@@ -145,6 +146,7 @@ shared::PlatformGeometry read_geometry_block(const std::string& path) {
   const std::string text = files::read_text_or_throw<PlatformSetupError>(path, files::kSettingsFile);
   YAML::Node root;
   try {
+    files::check_yaml_text<PlatformSetupError>(text, path);
     root = YAML::Load(text);
   } catch (const YAML::ParserException& e) {
     throw PlatformSetupError(path + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) +

@@ -27,7 +27,8 @@
 // Errors: PlatformSetupError, its message naming the file and, for a bad value, the line and the
 // key ("platform.yaml:4: rangers[1].direction: ..."): a missing file, a path that is not a regular
 // file or is over files::kSettingsFile.max_bytes, text that is not UTF-8 (files/input_file.hpp),
-// YAML that does not parse (with line:column), a top that is not a map, an unknown or missing
+// YAML that does not parse (with line:column) or that files::check_yaml_text refuses (too many
+// nodes, a key given twice, a second document, nested too deep), a top that is not a map, an unknown or missing
 // key, a value that is not a number, not finite or out of range; for a camera file the loader's
 // and to_platform's messages behind the file's name.
 // Cost: reading a file. Fuzzed by fuzz.camera_inputs (tests/fuzz/camera_inputs_fuzz.cpp).

@@ -9,6 +9,7 @@
 #include "firmware/core/blob_labeler.hpp"
 #include "firmware/core/colour_class.hpp"
 #include "firmware/core/pixel_formats.hpp"
+#include "shared/crc32.hpp"
 #include "tests/firmware/core/blob_test_images.hpp"
 
 using namespace kincal::core;
@@ -57,6 +58,13 @@ TEST_CASE("colour classes: cell indices, the parameter block round trip and its 
   g_block[100] ^= 1;
   CHECK(parse_colour_table(g_block, back) == ColourTableStatus::kBadCrc);
   g_block[100] ^= 1;
+  // The reserved byte set, under a valid CRC: refused, as the block would not serialize back.
+  g_block[7] = 1;
+  const std::uint32_t crc = kincal::shared::crc32(std::span<const std::uint8_t>(g_block, kColourTableBlockBytes - 4));
+  for (std::size_t i = 0; i < 4; ++i)
+    g_block[kColourTableBlockBytes - 4 + i] = static_cast<std::uint8_t>(crc >> (8 * i));
+  CHECK(parse_colour_table(g_block, back) == ColourTableStatus::kReservedNotZero);
+  g_block[7] = 0;
   g_block[0] = 'X';
   CHECK(parse_colour_table(g_block, back) == ColourTableStatus::kBadMagic);
 }

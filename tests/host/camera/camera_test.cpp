@@ -107,7 +107,10 @@ TEST_CASE("board texts parse, print back and name what is wrong") {
 
   CHECK(contains(error_of([] { parse_board("chessboard:9x6"); }), "board 'chessboard:9x6': wrong number of fields"));
   CHECK(contains(error_of([] { parse_board("chessboard:9by6:0.03"); }), "size '9by6' is not COLSxROWS"));
-  CHECK(contains(error_of([] { parse_board("chessboard:9x6:-1"); }), "square size '-1' must be > 0 m"));
+  CHECK(contains(error_of([] { parse_board("chessboard:9x6:-1"); }), "square size '-1' must be 1e-06 to 10 m"));
+  // Lengths OpenCV's pose solves fail on (its assertion's text, naming no input, was the message).
+  CHECK(contains(error_of([] { parse_board("chessboard:9x6:1e300"); }), "square size '1e300' must be 1e-06 to 10 m"));
+  CHECK(contains(error_of([] { parse_board("aprilgrid:6x6:nan:0.3"); }), "tag size 'nan' is not a number"));
   CHECK(contains(error_of([] { parse_board("charuco:7x5:0.04:0.05"); }), "marker must be smaller than the square"));
   CHECK(contains(error_of([] { parse_board("charuco:7x5:0.04:0.03:DICT_9X9"); }), "unknown dictionary 'DICT_9X9'"));
   CHECK(contains(error_of([] { parse_board("charuco:20x20:0.04:0.03:DICT_4X4_50"); }),
@@ -807,6 +810,28 @@ TEST_CASE("robot poses as controllers give them: x,y,z + quaternion without join
   std::istringstream skewed("1 0.1 0 0 0 1 0 0 0 0 1 0 0 0 0 1\n");
   CHECK(contains(error_of([&] { (void)parse_robot_poses(skewed, "s.txt", RotationColumns::kUnnamed); }),
                  "s.txt:1: the rotation is not orthonormal"));
+  // The hostile-input audit: rotation vectors in degrees (OpenCV's solve then failed in its own
+  // words), two rotations or a column twice (the first was taken), a rotation meaning named for a
+  // file without rx,ry,rz (ignored).
+  const auto refused = [&](const std::string& text, RotationColumns rotation) {
+    std::istringstream in(text);
+    return error_of([&] { (void)parse_robot_poses(in, "p.csv", rotation); });
+  };
+  CHECK(contains(refused("x,y,z,rx,ry,rz\n0.4,0,0.6,0,0,3\n0.4,0,0.6,90,0,0\n", RotationColumns::kRotationVector),
+                 "p.csv:3: the rotation vector's angle is 90 rad, more than a turn: degrees given as radians?"));
+  CHECK(contains(refused("x,y,z,rx,ry,rz\n0.4,0,0.6,1e300,0,0\n", RotationColumns::kRpy),
+                 "p.csv:2: an angle is 1e+300 rad"));
+  CHECK(contains(refused("x,y,z,rx,ry,rz\n0.4,0,0.6,0,0,400\n", RotationColumns::kRpyDeg),
+                 "p.csv:2: an angle is 400 deg, more than a turn: not degrees?"));
+  CHECK(contains(refused("x,y,z,qw,qx,qy,qz,rx,ry,rz\n0.4,0,0.6,1,0,0,0,0,0,0\n", RotationColumns::kRotationVector),
+                 "p.csv:1: the header has both qw,qx,qy,qz and rx,ry,rz"));
+  CHECK(contains(refused("x,y,z,qw,qx,qy,qz,z\n0.4,0,0.6,1,0,0,0,9\n", RotationColumns::kUnnamed),
+                 "p.csv:1: the header names column z twice"));
+  CHECK(contains(refused("x,y,z,qw,qx,qy,qz\n0.4,0,0.6,1,0,0,0\n", RotationColumns::kRpy),
+                 "p.csv:1: the rotation is qw,qx,qy,qz, yet a meaning of rx,ry,rz"));
+  CHECK(contains(refused(rows16.str(), RotationColumns::kRotationVector), "p.csv:1: the poses are 4x4 matrices, yet"));
+  std::istringstream twice_ignored("t,t,x,y,z,qw,qx,qy,qz\n1,2,0.4,0,0.6,1,0,0,0\n");  // columns not read may repeat
+  CHECK(parse_robot_poses(twice_ignored, "t.csv", RotationColumns::kUnnamed).size() == 1);
 }
 
 TEST_CASE("a 17x28 board in a rendered 4K view: the primary detector, a window sized to its squares") {

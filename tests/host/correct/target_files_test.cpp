@@ -56,6 +56,10 @@ TEST_CASE("target tables: joint and Cartesian targets read; bad tables refused w
   CHECK_FALSE(j.cartesian);
   REQUIRE(j.rows.size() == 2);
   CHECK(j.rows[1].line == 5);
+  // A cap on the rows (plan --candidates'), refused at the row past it.
+  CHECK(correct::parse_target_table("q1\n0\n1\n", "t.csv", 1, 2).rows.size() == 2);
+  CHECK_THROWS_WITH_AS(correct::parse_target_table("q1\n0\n# note\n1\n2\n", "t.csv", 1, 2),
+                       "t.csv:5:1: more than 2 targets, the most this command takes", model::InputError);
   CHECK(j.rows[1].q == std::vector<double>{1, 2, 3});
   const correct::TargetTable c = correct::parse_target_table("x,y,z,qw,qx,qy,qz\n1,2,3,0,1,0,0\n", "t.csv", 3);
   CHECK(c.cartesian);
@@ -92,6 +96,19 @@ TEST_CASE("URScript: refused targets name file:line:column") {
   CHECK(refused("movej([d2r(90), 0, 0, 0, 0, 0])\n")
             .find("p.script:1:8: column movej value 1: 'd2r(90)' is not a number") == 0);
   CHECK(refused("  # movej(home)\n  textmsg(\"movej\")\n  my_movej(1)\n") == "accepted");
+  // A rotation vector beyond a turn: degrees given as radians, or one whose norm overflows.
+  CHECK(refused("movel(p[0.5, 0, 0.5, 0, 180, 0])\n")
+            .find("p.script:1:8: movel: the rotation vector's angle is 180 rad, more than a turn") == 0);
+  CHECK(
+      refused("movel(p[0.5, 0, 0.5, 1e300, 0, 1e300])\n").find("p.script:1:8: movel: the rotation vector's angle is") ==
+      0);
+  CHECK(refused("movel(p[0.5, 0, 0.5, 0, 3.14159, 0])\n") == "accepted");
+  // More motions than the command takes: the one past the limit is named.
+  CHECK(correct::parse_urscript("movej([0, 0, 0, 0, 0, 0])\nmovel(p[0, 0, 1, 0, 0, 0])\n", "p.script", 6, 2)
+            .motions.size() == 2);
+  CHECK_THROWS_WITH_AS(
+      correct::parse_urscript("movej([0, 0, 0, 0, 0, 0])\n# x\nmovel(p[0, 0, 1, 0, 0, 0])\n", "p.script", 6, 1),
+      "p.script:3:1: more than 1 motions, the most kincal correct takes", model::InputError);
 }
 
 TEST_CASE("URScript round trip: other lines byte for byte, CRLF kept, targets equal to the CSV path's") {

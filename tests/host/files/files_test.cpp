@@ -63,6 +63,22 @@ TEST_CASE("an output that resolves to an input is refused, naming both options")
   CHECK_NOTHROW(kincal::files::refuse_overwriting({{"--out", s.path("o.yaml")}, {"--urdf", ""}, {"-o", "-", true}},
                                                   {{"--data", s.path("d.csv")}, {"--validate", ""}}));
   CHECK(contents(s.path("d.csv")) == "data\n");
+  // A directory given as an input (of images): an output with an image's name in it, over one of
+  // its views or a new one, by any spelling, is refused; one beside the directory, or another kind
+  // of file in it (a calibration beside its views), is not.
+  kincal::files::write_file_atomically(s.path("sub/view_00.png"), "png\n");
+  for (const std::string& spelling :
+       {s.path("sub/view_00.png"), s.path("sub/report.JPG"), s.path("sub/../sub/new.png")}) {
+    CAPTURE(spelling);
+    CHECK_THROWS_WITH_AS(kincal::files::refuse_overwriting({{"--report", spelling}}, {{"--images", s.path("sub")}}),
+                         ("--report " + spelling + " is an image in the directory --images " + s.path("sub") +
+                          ": refusing to write among its views (choose another path for --report)")
+                             .c_str(),
+                         kincal::files::OutputError);
+  }
+  CHECK_NOTHROW(kincal::files::refuse_overwriting({{"--report", s.path("r.png")}}, {{"--images", s.path("sub")}}));
+  CHECK_NOTHROW(kincal::files::refuse_overwriting({{"-o", s.path("sub/camera.yaml")}}, {{"--images", s.path("sub")}}));
+  CHECK(contents(s.path("sub/view_00.png")) == "png\n");
 }
 
 TEST_CASE("a write replaces the file whole, keeps its permissions and leaves no temporary file") {

@@ -713,6 +713,88 @@ case("board-poses:out=joints", BP + ["--images"] + view_paths + ["--joints", "bp
      r"-o bp_joints\.csv is the same file as --joints", protect=bp_inputs)
 
 
+# --- the hostile-input audit of `plan`'s constraints and candidates, `identify --prior`, the
+# robot poses, board texts and outputs among inputs: each once let nonsense through (exit 0),
+# failed in OpenCV's words, took gigabytes, or wrote over an input
+with open("plan_twice.yaml", "w") as f:  # yaml-cpp looked up the first of a key given twice
+    f.write("floor:\n  point: [0, 0, -2]\n  normal: [0, 0, 1]\n  normal: [0, 0, -1]\n")
+with open("plan_two_documents.yaml", "w") as f:  # YAML::Load read the first document only
+    f.write("floor:\n  point: [0, 0, -2]\n  normal: [0, 0, 1]\n---\nworkspace: {min: [0, 0, 0], max: [-1, 1, 1]}\n")
+with open("plan_dense.yaml", "w") as f:  # 14 MB of "0," took 3.5 GB and 30 s in yaml-cpp's tree
+    f.write("floor:\n  point: [" + "0," * (7 * MiB) + "0]\n  normal: [0, 0, 1]\n")
+candidate_rows = [l for l in open("plan_candidates.csv").read().splitlines() if not l.startswith("#")]
+with open("plan_dup.csv", "w") as f:  # a row twice: 100 copies of one made a plan of 12 copies, exit 0
+    f.write("\n".join(candidate_rows + [candidate_rows[1]]) + "\n")
+case("plan:a candidate twice", P + ["--candidates", "plan_dup.csv", "-o", "p10.csv"],
+     rf"plan_dup\.csv:{len(candidate_rows) + 1}: the same configuration as line 2 \(a plan holds distinct configurations\)")
+write_csv("plan_many.csv", [f"q{j}" for j in range(1, 7)], [[0.0] * 6] * 100001)  # 10^6 took 3.7 GB
+case("plan:constraints key given twice", P + ["--constraints", "plan_twice.yaml", "-o", "p4.csv"],
+     r"plan_twice\.yaml:4:3: 'normal' given twice in this mapping \(first at 3:3\)")
+case("plan:constraints second document", P + ["--constraints", "plan_two_documents.yaml", "-o", "p5.csv"],
+     r"plan_two_documents\.yaml:[0-9]+:[0-9]+: a second YAML document")
+case("plan:constraints of 7 M nodes", P + ["--constraints", "plan_dense.yaml", "-o", "p6.csv"],
+     r"plan_dense\.yaml:2:[0-9]+: more than 100000 YAML nodes")
+case("plan:empty --constraints", P + ["--constraints", "", "-o", "p7.csv"], r"option '--constraints' is given an empty value")
+case("plan:empty --candidates=", P + ["--candidates=", "-o", "p8.csv"], r"option '--candidates' is given an empty value")
+case("plan:100001 candidates", P + ["--candidates", "plan_many.csv", "-o", "p9.csv"],
+     r"plan_many\.csv:100002:1: more than 100000 targets, the most this command takes")
+case("plan:--pool 100001", ["plan", "--model", puma, "-n", "12", "--pool", "100001"], r"--pool: 100001 is out of range: must be in \[1, 100000\]")
+with open("puma_named_twice.yaml", "w") as f:
+    f.write(open(puma).read().replace("name: puma560\n", "name: puma560\nname: other\n", 1))
+case("plan:model key given twice", ["plan", "--model", "puma_named_twice.yaml", "-n", "12"],
+     r"puma_named_twice\.yaml:4:1: 'name' given twice in this mapping \(first at 3:1\)")
+with open("puma_tiny_prior.yaml", "w") as f:  # a prior of 1e-300 m: every stddev NaN, the model unreadable
+    f.write(open(puma).read().replace("joints:\n", "priors:\n  a5: 1e-300\njoints:\n", 1))
+case("identify:model file prior 1e-300", ["identify", "--model", "puma_tiny_prior.yaml", "--data", "d.csv", "--out", "o.yaml"],
+     r"puma_tiny_prior\.yaml:[0-9]+:[0-9]+: priors: a5: 1e-300 \(m or rad\) is below 1e-12")
+for entry, msg in [("a5=1e-300mm", r"[0-9.]+e-303 \(m or rad\) is below 1e-12, too small for the solve; hold the parameter with --fix"),
+                   ("theta5=0.2mm", r"theta5 is an angle: give its unit, deg or rad"), ("a5=0.5", r"a5 is a length: give its unit, mm or m"),
+                   ("a5=0.2deg", r"a5 is a length"), ("scale1=0.01mm", r"scale1 is a scale or compliance: give no unit")]:
+    case(f"identify:--prior {entry}", ident + ["--data", "d.csv", "--out", "o.yaml", "--prior", entry], re.escape(f"--prior '{entry}': ") + msg)
+# robot poses: rotation vectors in degrees (OpenCV's hand-eye then failed "determinant(R) is null"),
+# two rotations in one header, a column named twice, --rotation for quaternions
+rv_rows = open(os.path.join(camera_dir, "poses_rotvec.csv")).read().splitlines()
+with open("poses_rotvec_deg.csv", "w") as f:
+    f.write(rv_rows[0] + "\n" + "".join(",".join(r.split(",")[:3] + [repr(float(v) * 180 / math.pi) for v in r.split(",")[3:]]) + "\n"
+                                      for r in rv_rows[1:]))
+with open("poses_both.csv", "w") as f:
+    f.write("x,y,z,qw,qx,qy,qz,rx,ry,rz\n0.5,0,0.5,1,0,0,0,0,0,0\n")
+with open("poses_x_twice.csv", "w") as f:
+    f.write("x,y,z,qw,qx,qy,qz,x\n0.5,0,0.5,1,0,0,0,0.7\n")
+HE = ["camera", "hand-eye"] + board + ["--camera", "cam.yaml", "--images", bg]
+case("camera:hand-eye rotation vectors in degrees", HE + ["--poses", "poses_rotvec_deg.csv", "--rotation", "rotvec", "-o", "he2.yaml"],
+     r"poses_rotvec_deg\.csv:2: the rotation vector's angle is [0-9.]+ rad, more than a turn: degrees given as radians\?")
+case("camera:hand-eye two rotations", HE + ["--poses", "poses_both.csv", "-o", "he3.yaml"],
+     r"poses_both\.csv:1: the header has both qw,qx,qy,qz and rx,ry,rz")
+case("camera:hand-eye column twice", HE + ["--poses", "poses_x_twice.csv", "-o", "he4.yaml"], r"poses_x_twice\.csv:1: the header names column x twice")
+case("camera:hand-eye --rotation for quaternions", HE + ["--poses", os.path.join(camera_dir, "poses.csv"), "--rotation", "rpy-deg",
+     "-o", "he5.yaml"], r"poses\.csv:1: the rotation is qw,qx,qy,qz, yet a meaning of rx,ry,rz")
+rng = random.Random(0)  # poses of random turns: OpenCV's solver threw its own message
+with open("poses_random.csv", "w") as f:
+    f.write(rv_rows[0] + "\n")
+    for r in rv_rows[1:]:
+        v = [rng.uniform(-1, 1) for _ in range(3)]
+        turn = rng.uniform(0, 6.2) / math.sqrt(sum(x * x for x in v))
+        f.write(",".join(r.split(",")[:3] + [repr(x * turn) for x in v]) + "\n")
+case("camera:hand-eye poses of random turns", HE + ["--poses", "poses_random.csv", "--rotation", "rotvec", "-o", "he7.yaml"],
+     r"^(?!.*OpenCV\().*hand-eye calibration: (OpenCV's calibrate(RobotWorld)?HandEye failed on the robot poses \(|the robot poses)")
+case("camera:square 1e300 m", ["camera", "calibrate", "--board", "chessboard:9x6:1e300", "v0.png", "-o", "t2.yaml"],
+     r"square size '1e300' must be 1e-06 to 10 m")
+# outputs among the images of a directory given as input: the report replaced view_00.png
+shutil.copytree(bg, "views_here")
+here = sorted(os.listdir("views_here"))
+here_paths = [os.path.join("views_here", p) for p in here]
+HE_here = ["camera", "hand-eye"] + board + ["--camera", "cam.yaml", "--poses", os.path.join(camera_dir, "poses.csv"), "--images", "views_here"]
+case("camera:hand-eye --report over an image of --images DIR", HE_here + ["-o", "he6.yaml", "--report", here_paths[0]],
+     r"--report views_here/view_00\.png is an image in the directory image views_here: refusing to write among its views", protect=here_paths)
+case("camera:hand-eye --report as a new image in --images DIR", HE_here + ["-o", "he6.yaml", "--report", "views_here/zz.png"],
+     r"is an image in the directory image views_here", protect=here_paths)
+case("camera:calibrate -o over an image of DIR", ["camera", "calibrate"] + board + ["views_here", "-o", here_paths[1]],
+     r"-o views_here/view_01\.png is an image in the directory image views_here", protect=here_paths)
+case("board-poses:-o over an image of --images DIR", BP + ["--images", "views_here", "--joints", os.path.join(camera_dir, "poses.csv"),
+     "-o", here_paths[2]], r"-o views_here/view_02\.png is an image in the directory --images views_here", protect=here_paths)
+
+
 table_cases()
 only = re.compile(os.environ.get("KINCAL_HOSTILE_ONLY", ""))  # a developer's filter of the table's cases by name
 with ThreadPoolExecutor(max_workers=int(os.environ.get("KINCAL_HOSTILE_JOBS", "3"))) as pool:

@@ -127,6 +127,17 @@ TEST_CASE("plan --candidates: the plan holds distinct configurations of the give
   // A candidate of the wrong length is refused.
   o.candidates[3].pop_back();
   CHECK(plan_error(m, o) == "plan: candidate 4 has 5 joint values, the model 6");
+  // The same configuration twice: 100 copies of one row made a plan of 12 copies, exit 0.
+  o.candidates[3] = o.candidates[2];
+  CHECK(plan_error(m, o) ==
+        "plan: candidate 4 is the same configuration as candidate 3 (a plan holds distinct "
+        "configurations)");
+  // More than kMaxCandidates, given or drawn, before any is evaluated (10^6 took 3.7 GB).
+  o.candidates.assign(identify::kMaxCandidates + 1, std::vector<double>(6, 0.0));
+  CHECK(plan_error(m, o) == "plan: 100001 candidate configurations, more than the 100000 a plan holds");
+  o.candidates.clear();
+  o.pool = static_cast<int>(identify::kMaxCandidates) + 1;
+  CHECK(plan_error(m, o) == "plan: 100001 candidate configurations, more than the 100000 a plan holds");
 }
 
 TEST_CASE("no planned configuration violates a constraint, over random constraint sets and seeds") {
@@ -248,6 +259,33 @@ TEST_CASE("the constraints file: read in SI or degrees; errors name the key and 
   CHECK(constraints_error("angles: grad\n") == "c.yaml:1:9: angles: expected deg or rad");
   CHECK(constraints_error("floor: [1, 2\n").starts_with("c.yaml:2:1: YAML syntax:"));
   CHECK(constraints_error("- 1\n") == "c.yaml:1:1: the file: expected a mapping");
+
+  // The hostile-input audit: a key given twice or a second document was silently dropped, a
+  // normal of 1e300 became the zero vector (every point on the floor's side), a dense list of 14
+  // MB took 3.5 GB (files/yaml_limits.hpp).
+  CHECK(constraints_error("floor:\n  point: [0, 0, 0]\n  normal: [0, 0, 1]\n  normal: [0, 0, -1]\n") ==
+        "c.yaml:4:3: 'normal' given twice in this mapping (first at 3:3)");
+  CHECK(constraints_error(
+            "floor:\n  point: [0, 0, 0]\n  normal: [0, 0, 1]\nfloor: {point: [0, 0, 9], normal: [0, 0, 1]}\n") ==
+        "c.yaml:4:1: 'floor' given twice in this mapping (first at 1:1)");
+  CHECK(constraints_error("floor:\n  point: [0, 0, 0]\n  normal: [0, 0, 1]\n---\njoints: {elbow: [1, 0]}\n")
+            .find(": a second YAML document") != std::string::npos);
+  CHECK(constraints_error("? [floor]\n: 1\n") ==
+        "c.yaml:1:3: the file: a key must be a name, not a list, a mapping or null");
+  std::string dense = "floor:\n  point: [";
+  for (int k = 0; k < 100001; ++k) dense += "0,";
+  CHECK(constraints_error(dense + "0]\n  normal: [0, 0, 1]\n").starts_with("c.yaml:2:"));
+  CHECK(constraints_error(dense + "0]\n  normal: [0, 0, 1]\n")
+            .ends_with(": more than 100000 YAML nodes (values, lists, "
+                       "mappings): too many for any file kincal reads"));
+  CHECK(constraints_error("floor:\n  point: [" + std::string(600, '[') + std::string(600, ']') + "]\n")
+            .find("lists and mappings nested more than") != std::string::npos);
+  const identify::PlanConstraints far = identify::parse_plan_constraints(
+      "floor:\n  point: [0, 0, 0]\n  normal: [1e300, 0, 1]\nsight:\n  apex: [0, 0, 0]\n  axis: [0, 1e-200, 0]\n"
+      "  half_angle: 1\n",
+      "c.yaml", ur10());
+  CHECK(far.floor->normal == Vector3(1, 0, 1e-300));
+  CHECK(far.sight->axis == Vector3::UnitY());
 }
 
 TEST_CASE("the constraints as options: read as the file's keys; errors name the key; file and options combine") {
