@@ -1,6 +1,7 @@
-// libFuzzer target for the host's three text readers (issues #16, #23): the dataset CSV reader,
-// the robot model YAML reader and `kincal plan --constraints`' reader. The first input byte
-// selects the reader (modulo 3); the rest is the file's text.
+// libFuzzer target for the host's text readers of robot data (issues #16, #23, #24): the dataset
+// CSV reader, the robot model YAML reader, `kincal plan --constraints`' reader, and `kincal
+// correct`'s target tables and URScript programs. The first input byte selects the reader
+// (modulo 5); the rest is the file's text.
 //   0  parse_dataset: either InputError or a dataset that write_dataset writes and parse_dataset
 //      reads back to the same numbers (shortest exact form)
 //   1  parse_model: either InputError or a model whose write_model text reads back as the same
@@ -12,6 +13,13 @@
 //      max, a unit floor normal and sight axis, a half angle in (0, pi), joint indices of the
 //      model and distinct, each range with lower below upper inside the joint's limits -- and
 //      that describe() and violated_constraints() take at the middle of the limits
+//   3  parse_target_table for 3 joints, at most 50 rows: either InputError or a table of 1 to 50
+//      rows on increasing lines, each with 3 finite readings (joint targets) or none or 3 (a
+//      Cartesian target's seed), a finite point and a rotation orthonormal to 1e-9
+//   4  parse_urscript for 3 joints, at most 50 motions: either InputError or motions whose
+//      bracketed values lie in order inside the text; writing each target back (readings, or
+//      x,y,z and the rotation vector) and reading the result gives the same targets, and the
+//      text outside the brackets is kept byte for byte
 // Any other exception, a crash, a leak or undefined behaviour is a finding. Runs standalone too
 // (file arguments), and as the ctest fuzz.model_input for a bounded time.
 #include <cmath>
@@ -24,6 +32,10 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>
+
+#include "host/correct/target_table.hpp"
+#include "host/correct/urscript.hpp"
 #include "host/identify/plan_constraints.hpp"
 #include "host/model/dataset.hpp"
 #include "host/model/model_file.hpp"
@@ -105,16 +117,92 @@ void fuzz_plan_constraints(const std::string& text) {
   require((violated & 1u) == 0);  // the middle of the limits is within them
 }
 
+bool finite_pose(const model::Transform& pose) {
+  const Eigen::Matrix3d r(pose.rotation);
+  return pose.translation.allFinite() && r.allFinite() &&
+         (r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-9;
+}
+
+void fuzz_target_table(const std::string& text) {
+  correct::TargetTable t;
+  try {
+    t = correct::parse_target_table(text, "fuzz.csv", 3, 50);
+  } catch (const model::InputError&) {
+    return;
+  }
+  require(!t.rows.empty() && t.rows.size() <= 50 && (t.cartesian || !t.orientation));
+  int line = 0;
+  for (const correct::TargetRow& row : t.rows) {
+    require(row.line > line);
+    line = row.line;
+    require(row.q.size() == 3 || (t.cartesian && row.q.empty()));
+    for (const double v : row.q) require(std::isfinite(v));
+    if (t.cartesian) require(finite_pose(row.pose));
+  }
+}
+
+void fuzz_urscript(const std::string& text) {
+  correct::UrProgram p;
+  try {
+    p = correct::parse_urscript(text, "fuzz.script", 3, 50);
+  } catch (const model::InputError&) {
+    return;
+  }
+  require(p.motions.size() <= 50);
+  std::size_t after = 0;
+  std::vector<std::vector<double>> values;
+  for (const correct::UrMotion& m : p.motions) {
+    require(m.begin >= after && m.begin <= m.end && m.end <= p.text.size());
+    after = m.end;
+    if (!m.target.cartesian) {
+      require(m.target.q.size() == 3);
+      values.push_back(m.target.q);
+      continue;
+    }
+    require(finite_pose(m.target.pose));
+    const Eigen::AngleAxisd r{Eigen::Matrix3d(m.target.pose.rotation)};
+    const Eigen::Vector3d v = r.angle() * r.axis();
+    const model::Vector3& x = m.target.pose.translation;
+    values.push_back({x.x(), x.y(), x.z(), v.x(), v.y(), v.z()});
+  }
+  const std::string written = correct::write_urscript(p, values);
+  const correct::UrProgram again = correct::parse_urscript(written, "again.script", 3, 50);
+  require(again.motions.size() == p.motions.size());
+  for (std::size_t i = 0; i < p.motions.size(); ++i) {
+    const correct::Target &a = p.motions[i].target, &b = again.motions[i].target;
+    require(a.line == b.line && a.cartesian == b.cartesian && a.q == b.q);
+    require(a.pose.translation == b.pose.translation);
+    require((Eigen::Matrix3d(a.pose.rotation) - Eigen::Matrix3d(b.pose.rotation)).cwiseAbs().maxCoeff() < 1e-9);
+    // Outside the brackets, byte for byte: the text before each motion's values.
+    const std::size_t from = i == 0 ? 0 : p.motions[i - 1].end, to = p.motions[i].begin;
+    const std::size_t again_from = i == 0 ? 0 : again.motions[i - 1].end;
+    require(p.text.compare(from, to - from, written, again_from, again.motions[i].begin - again_from) == 0);
+  }
+  const std::size_t tail = p.motions.empty() ? 0 : p.motions.back().end;
+  const std::size_t again_tail = again.motions.empty() ? 0 : again.motions.back().end;
+  require(p.text.compare(tail, std::string::npos, written, again_tail, std::string::npos) == 0);
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
   const std::string text(reinterpret_cast<const char*>(data + 1), size - 1);
-  if (data[0] % 3 == 0)
-    fuzz_dataset(text);
-  else if (data[0] % 3 == 1)
-    fuzz_model(text);
-  else
-    fuzz_plan_constraints(text);
+  switch (data[0] % 5) {
+    case 0:
+      fuzz_dataset(text);
+      break;
+    case 1:
+      fuzz_model(text);
+      break;
+    case 2:
+      fuzz_plan_constraints(text);
+      break;
+    case 3:
+      fuzz_target_table(text);
+      break;
+    default:
+      fuzz_urscript(text);
+  }
   return 0;
 }
