@@ -1,5 +1,6 @@
 #include "host/camera/calibration_file.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -26,6 +27,15 @@ std::string read_camera_text(const std::string& path) {
 }
 
 cv::FileStorage open_for_reading(const std::string& path, const std::string& text) {
+  // OpenCV's parser keeps the first of a key given twice and fails on a second document in its own
+  // words: the YAML limits name both, and the node count (the "%YAML:1.0" line, which yaml-cpp
+  // refuses, blanked first). What yaml-cpp cannot parse is left to OpenCV's parser.
+  try {
+    std::string yaml = text;
+    if (yaml.rfind("%YAML:", 0) == 0) yaml.erase(0, std::min(yaml.find('\n'), yaml.size()));
+    files::check_yaml_text<CalibrationError>(yaml, path);
+  } catch (const YAML::Exception&) {
+  }
   cv::FileStorage fs;
   try {
     fs.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);

@@ -33,8 +33,8 @@
 // matrices; camera_calibration_parsers reads the keys it knows by name and skips the rest). The
 // views, when given, follow as YAML comments ("# view IMAGE: N corners, RMS X px, DETECTOR"),
 // which ROS's parser skips. load_camera reads both (a file not starting with OpenCV's
-// "%YAML:1.0" is read as ROS's, with yaml-cpp, after files::check_yaml_text: at most
-// kMaxYamlNodes nodes, no key given twice, one document); a ROS file's distortion_model must be
+// "%YAML:1.0" is read as ROS's, with yaml-cpp); both first pass files::check_yaml_text: at most
+// kMaxYamlNodes nodes, no key given twice, one document. A ROS file's distortion_model must be
 // plumb_bob.
 //
 // to_platform converts a camera to the firmware's camera block (shared::CameraIntrinsics, float

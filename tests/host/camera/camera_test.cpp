@@ -620,6 +620,14 @@ TEST_CASE("calibration files round-trip in OpenCV YAML and name bad keys") {
   }
   CHECK(load_camera(dir.file("crlf.yaml")).camera_matrix == load_camera(dir.file("camera.yaml")).camera_matrix);
   CHECK(contains(error_of([&] { (void)load_hand_eye(dir.file("camera.yaml")); }), "key 'gripper_T_camera' missing"));
+  // A key given twice (OpenCV's parser took the first, silently) and a second document (refused in
+  // OpenCV's words, naming its source line) are named by the YAML limits.
+  std::ofstream(dir.file("twice.yaml")) << "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\nimage_width: 800\n";
+  CHECK(error_of([&] { (void)load_camera(dir.file("twice.yaml")); }) ==
+        dir.file("twice.yaml") + ":5:1: 'image_width' given twice in this mapping (first at 3:1)");
+  std::ofstream(dir.file("two.yaml")) << "%YAML:1.0\n---\nimage_width: 640\n---\nimage_width: 800\n";
+  CHECK(contains(error_of([&] { (void)load_camera(dir.file("two.yaml")); }), dir.file("two.yaml") + ":4:"));
+  CHECK(contains(error_of([&] { (void)load_camera(dir.file("two.yaml")); }), "a second YAML document"));
 }
 
 TEST_CASE("a camera in ROS camera_info YAML: the keys ROS reads, read back exactly") {

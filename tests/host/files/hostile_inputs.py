@@ -769,6 +769,12 @@ case("camera:hand-eye two rotations", HE + ["--poses", "poses_both.csv", "-o", "
 case("camera:hand-eye column twice", HE + ["--poses", "poses_x_twice.csv", "-o", "he4.yaml"], r"poses_x_twice\.csv:1: the header names column x twice")
 case("camera:hand-eye --rotation for quaternions", HE + ["--poses", os.path.join(camera_dir, "poses.csv"), "--rotation", "rpy-deg",
      "-o", "he5.yaml"], r"poses\.csv:1: the rotation is qw,qx,qy,qz, yet a meaning of rx,ry,rz")
+cam_text = open("cam.yaml").read()  # a key given twice in OpenCV's format: its parser took the first, silently
+at = cam_text.index("distortion_coefficients")
+with open("cam_twice.yaml", "w") as f:
+    f.write(cam_text[:at] + cam_text[cam_text.index("camera_matrix"):at] + cam_text[at:])
+case("camera:hand-eye camera file with a key twice", ["camera", "hand-eye"] + board + ["--camera", "cam_twice.yaml", "--images", bg,
+     "--poses", os.path.join(camera_dir, "poses.csv"), "-o", "he8.yaml"], r"cam_twice\.yaml:[0-9]+:1: 'camera_matrix' given twice in this mapping")
 rng = random.Random(0)  # poses of random turns: OpenCV's solver threw its own message
 with open("poses_random.csv", "w") as f:
     f.write(rv_rows[0] + "\n")
