@@ -61,6 +61,35 @@ Residual ax_xb(const std::vector<Isometry3d>& base_T_gripper, const std::vector<
   return r;
 }
 
+// The factor k on the board's lengths (so on the camera's translations B) that fits the robot's
+// motions best with X's rotation, and the AX = XB translation RMS it leaves: linear least squares
+// over all pairs i < j in t_X and k of (R_A - I) t_X - k R_X t_B = -t_A (the translation of
+// (A X)^-1 (X B) with B's scaled by k). The rotation part does not depend on the board's size, so
+// a board given at the wrong size (a square measured wrong) leaves the rotations fitting and the
+// translations off by k - 1 of the camera's motion.
+struct BoardScale {
+  double factor = 1.0;
+  double translation_rms_m = 0.0;
+};
+BoardScale fit_board_scale(const std::vector<Isometry3d>& base_T_gripper,
+                           const std::vector<Isometry3d>& camera_T_target, const Matrix3d& gripper_R_camera) {
+  const std::size_t n = base_T_gripper.size(), pairs = n * (n - 1) / 2;
+  Eigen::MatrixXd m(3 * pairs, 4);
+  Eigen::VectorXd rhs(3 * pairs);
+  Eigen::Index row = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = i + 1; j < n; ++j, row += 3) {
+      const Isometry3d a = base_T_gripper[i].inverse() * base_T_gripper[j];
+      const Isometry3d b = camera_T_target[i] * camera_T_target[j].inverse();
+      m.block<3, 3>(row, 0) = a.linear() - Matrix3d::Identity();
+      m.block<3, 1>(row, 3) = -gripper_R_camera * b.translation();
+      rhs.segment<3>(row) = -a.translation();
+    }
+  }
+  const Eigen::Vector4d x = m.colPivHouseholderQr().solve(rhs);
+  return {x(3), std::sqrt((m * x - rhs).squaredNorm() / static_cast<double>(pairs))};
+}
+
 HandEyeEstimate estimate(const char* method, const Isometry3d& gripper_T_camera,
                          const std::vector<Isometry3d>& base_T_gripper,
                          const std::vector<Isometry3d>& camera_T_target) {
@@ -408,14 +437,21 @@ HandEyeCalibration calibrate_hand_eye(const std::vector<HandEyeView>& views, con
   if (result.rotation_rms_rad > options.max_rotation_rms_rad ||
       result.translation_rms_m > options.max_translation_rms_m ||
       result.rms_after_px > options.max_reprojection_rms_px) {
+    // A board of another size than --board gives fits the motions once its lengths are scaled.
+    const BoardScale scale = fit_board_scale(base_T_gripper, camera_T_target, start.gripper_T_camera.linear());
+    const std::string mismatch_cause =
+        scale.translation_rms_m <= options.max_translation_rms_m && std::abs(scale.factor - 1.0) > 0.01
+            ? "the views fit the robot's motions with the board's lengths " + fixed(scale.factor, 3) +
+                  " times those given (AX = XB translation " + fixed(scale.translation_rms_m * 1e3, 1) +
+                  " mm RMS): is the board's square size right?"
+            : std::string("a poses file of another run, rows out of order, or another camera");
     throw CalibrationError(
         "hand-eye calibration: the robot poses and the images do not belong together: AX = XB "
         "residual " +
         fixed(result.rotation_rms_rad * kDeg, 2) + " degrees / " + fixed(result.translation_rms_m * 1e3, 1) +
         " mm RMS (at most " + fixed(options.max_rotation_rms_rad * kDeg, 2) + " degrees / " +
         fixed(options.max_translation_rms_m * 1e3, 1) + " mm), reprojection " + fixed(result.rms_after_px, 2) +
-        " px RMS (at most " + fixed(options.max_reprojection_rms_px, 2) +
-        " px): a poses file of another run, rows out of order, or another camera");
+        " px RMS (at most " + fixed(options.max_reprojection_rms_px, 2) + " px): " + mismatch_cause);
   }
   return result;
 }

@@ -27,7 +27,10 @@
 //  7. Consistency: poses and images that do not belong together (another run's poses, shifted
 //     by one, the wrong camera) still give a solution; it is refused with CalibrationError and
 //     the numbers when the refined AX = XB residual exceeds max_rotation_rms_rad or
-//     max_translation_rms_m, or the reprojection RMS exceeds max_reprojection_rms_px.
+//     max_translation_rms_m, or the reprojection RMS exceeds max_reprojection_rms_px. When
+//     scaling the board's lengths by a factor k (|k - 1| > 1 %) brings the AX = XB translation
+//     within max_translation_rms_m, the message says so and asks after the square size (a board
+//     given at the wrong size fits the rotations and misses the translations).
 // Robot poses are taken as exact (their errors are what the kinematic calibration finds).
 // Cost: O(n^2) motions for the checks and residuals (n poses), O(m^2) in the m large motions for
 // the axis check; the refinement is milliseconds for tens of views.

@@ -1,6 +1,7 @@
 #include <doctest/doctest.h>
 
 #include <unistd.h>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +18,7 @@
 #include "host/camera/calibration_file.hpp"
 #include "host/camera/hand_eye.hpp"
 #include "host/camera/intrinsics.hpp"
+#include "host/camera/number_text.hpp"
 #include "host/camera/robot_poses.hpp"
 #include "host/camera/stereo.hpp"
 #include "host/camera/uncertainty.hpp"
@@ -536,6 +538,27 @@ TEST_CASE("hand-eye checks refuse weak pose sets and detect a swapped convention
     const HandEyeCalibration h = calibrate_hand_eye(views, camera, options);
     CHECK((h.gripper_T_camera.translation() - gripper_T_camera.translation()).norm() < 0.001);
     CHECK(rotation_error_rad(h.gripper_T_camera, gripper_T_camera) < 0.1 * kDeg);
+  }
+  SUBCASE("a board given at another size") {
+    std::vector<Eigen::Isometry3d> board_T_camera;
+    for (const Eigen::Isometry3d& v : scenes::board_views(board, 8)) board_T_camera.push_back(v.inverse());
+    std::vector<HandEyeView> views = views_from(board_T_camera);
+    for (double k : {1.2, 1 / 1.2}) {  // the square given 1.2 times too small, or too large
+      std::vector<HandEyeView> scaled = views;
+      for (HandEyeView& v : scaled)
+        for (cv::Point3f& p : v.detection.board_m) p *= static_cast<float>(1 / k);
+      const std::string message = error_of([&] { (void)calibrate_hand_eye(scaled, camera); });
+      CAPTURE(message);
+      CHECK(contains(message, "the views fit the robot's motions with the board's lengths " + fixed(k, 2)));
+      CHECK(contains(message, "is the board's square size right?"));
+    }
+    // Poses of another run fit no scale: the message keeps its other causes.
+    std::vector<HandEyeView> shuffled = views;
+    std::rotate(shuffled.begin(), shuffled.begin() + 3, shuffled.end());
+    for (std::size_t i = 0; i < views.size(); ++i) shuffled[i].detection = views[i].detection;
+    const std::string message = error_of([&] { (void)calibrate_hand_eye(shuffled, camera); });
+    CAPTURE(message);
+    CHECK(contains(message, "a poses file of another run, rows out of order, or another camera"));
   }
 }
 
