@@ -1,8 +1,8 @@
 // The field split of a text line, shared by the dataset reader (dataset.cpp) and the import of
 // measurement exports (measurement_import.cpp): fields between separators, each trimmed of
-// spaces, tabs and carriage returns; an export's fields may also stand in double quotes. The
-// dataset's fields may be quoted as RFC 4180 says (split_quoted_fields), which its text column
-// (a row id that holds a comma) needs.
+// spaces, tabs and carriage returns. The dataset's and an export's fields may be quoted as RFC
+// 4180 says (split_quoted_fields), which a text column (a row id or a spreadsheet's time stamp
+// that holds a comma) needs.
 #pragma once
 
 #include <optional>
@@ -22,13 +22,13 @@ inline std::string trim_field(std::string_view s, bool unquote = false) {
 }
 
 // The trimmed fields of `line` between `separator`s (one field for a line without any).
-inline std::vector<std::string> split_fields(const std::string& line, char separator, bool unquote = false) {
+inline std::vector<std::string> split_fields(const std::string& line, char separator) {
   std::vector<std::string> fields;
   std::size_t start = 0;
   while (true) {
     const std::size_t at = line.find(separator, start);
-    fields.push_back(trim_field(
-        std::string_view(line).substr(start, at == std::string::npos ? std::string::npos : at - start), unquote));
+    fields.push_back(
+        trim_field(std::string_view(line).substr(start, at == std::string::npos ? std::string::npos : at - start)));
     if (at == std::string::npos) break;
     start = at + 1;
   }

@@ -35,6 +35,20 @@ char detect_separator(const std::string& header) {
   throw InputError(source + ":" + std::to_string(line) + ":" + std::to_string(column + 1) + ": " + what);
 }
 
+// The fields of an export's line as RFC 4180 quotes them (a quoted field may hold the separator, ""
+// stands for a quote), each trimmed of blanks: a spreadsheet quotes a time stamp or a comment that
+// holds a comma. A quote left open (a field spanning lines) or text after a closing quote is
+// refused.
+std::vector<std::string> export_fields(const std::string& line, char separator, const std::string& source, int number) {
+  std::optional<std::vector<std::string>> fields = split_quoted_fields(line, separator);
+  if (!fields)
+    fail(source, number, 0,
+         "a double quote is not closed on this line, or text follows a closing quote (a quoted field may hold the "
+         "separator, not a line break)");
+  for (std::string& f : *fields) f = trim_field(f);
+  return *fields;
+}
+
 struct Table {
   const std::string& source;
   std::map<std::string, std::size_t> index;
@@ -190,7 +204,7 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   if (trim_field(line, true).empty()) throw InputError(source + ": empty file (expected a header row)");
   t.header_line = number;
   result.separator = o.separator != 0 ? o.separator : detect_separator(line);
-  t.names = split_fields(line, result.separator, true);
+  t.names = export_fields(line, result.separator, source, number);
   for (std::size_t i = 0; i < t.names.size(); ++i)
     if (!t.names[i].empty() && !t.index.emplace(t.names[i], i).second)
       fail(source, number, i, "header: column '" + files::excerpt(t.names[i]) + "' appears twice");
@@ -228,7 +242,7 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   while (std::getline(in, line)) {
     ++number;
     if (trim_field(line, true).empty()) continue;
-    const std::vector<std::string> fields = split_fields(line, result.separator, true);
+    const std::vector<std::string> fields = export_fields(line, result.separator, source, number);
     if (fields.size() != t.names.size())
       fail(source, number, std::min(fields.size(), t.names.size()),
            "expected " + std::to_string(t.names.size()) + " fields as in the header, found " +

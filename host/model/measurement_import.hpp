@@ -29,7 +29,10 @@
 //
 // Reads: import_measurements_file() reads through files::read_text() (files/input_file.hpp: a
 // regular file or "-" for standard input, at most files::kExportFile.max_bytes, UTF-8 with or
-// without a byte-order mark, CRLF or LF); fields quoted in messages are cut to 80 bytes.
+// without a byte-order mark, CRLF or LF); fields quoted in messages are cut to 80 bytes. Fields
+// may stand in double quotes as RFC 4180 says (a spreadsheet quotes a time stamp or a comment
+// holding the separator; "" for a quote); a quote not closed on its line (a field spanning lines)
+// or text after a closing quote is refused.
 //
 // Errors (InputError "FILE:LINE:COLUMN: what", COLUMN 1-based, the header name in the message):
 // a named column missing or named twice in the header, one header column named for two roles

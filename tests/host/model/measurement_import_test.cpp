@@ -162,6 +162,24 @@ TEST_CASE("import --id: the row id is kept, written to the dataset, read back an
   std::ostringstream plain_written;
   model::write_dataset(plain_written, plain);
   CHECK(plain_written.str() == "q1,x,y,z\n0.5,1,2,3\n");
+  // A comma export whose quoted fields hold commas (a spreadsheet's time stamp, a comment) and a
+  // quote: the fields as RFC 4180 reads them.
+  {
+    model::ImportOptions c = two_joint_options();
+    c.id = "Stamp";
+    std::istringstream commas(
+        "\"Stamp\",J 1,J 2,X,Y,Z,\"Note, free\"\n\"Nov 27, 2026 10:00\",1,2,3,4,5,\"moved \"\"a\"\", then b\"\n");
+    const model::ImportResult q = model::import_measurements(commas, "c.csv", c);
+    REQUIRE(q.data.rows.size() == 1);
+    CHECK(q.data.rows[0].id == "Nov 27, 2026 10:00");
+    CHECK(q.data.rows[0].position.z() == doctest::Approx(0.005));
+    // A field spanning lines, and text after a closing quote.
+    CHECK(error_of("Stamp,J 1,J 2,X,Y,Z\n\"a\nb\",1,2,3,4,5\n", c) ==
+          "x.csv:2:1: a double quote is not closed on this line, or text follows a closing quote (a quoted field may "
+          "hold the separator, not a line break)");
+    CHECK(
+        error_of("Stamp,J 1,J 2,X,Y,Z\n\"a\"b,1,2,3,4,5\n", c).starts_with("x.csv:2:1: a double quote is not closed"));
+  }
   // Messages about a row name its id; an empty id and an open quote are refused.
   CHECK(error_of("Stamp;J 1;J 2;X;Y;Z\nt1;1;2;3;oops;5\n", o) ==
         "x.csv:2:5: column 'Y': 'oops' is not a number (id t1)");
