@@ -164,13 +164,14 @@ std::optional<double> contrast(const cv::Mat& grey, const std::vector<SquareSamp
   return sum[0] / count[0] - sum[1] / count[1];
 }
 
-// Whether the chessboard's pattern continues beyond one side of the detected grid (see the
-// header): the squares next to the outermost ones (ring 2) alternate like the board's own; false
-// when they do not or when that cannot be told (out of the image). The ring is placed by a
+// How the would-be squares of ring `ring` (1: the board's outer squares, 2: those beyond them)
+// beyond one side of the detected grid alternate, as their parity contrast over the interior's
+// (see the header): about 1 where they are the board's squares, about 0 where they are margin
+// or background; nullopt when that cannot be told (out of the image). The ring is placed by a
 // homography fitted to the three lines of corners nearest that side, which follows the lens's
 // distortion locally.
-bool ring_beyond(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, int cols, int rows, int side,
-                 double interior_contrast) {
+std::optional<double> ring_contrast_ratio(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, int cols,
+                                          int rows, int side, int ring, double interior_contrast) {
   // side: 0 left (u < 0), 1 right (u > cols - 1), 2 top (v < 0), 3 bottom (v > rows - 1).
   const bool along_u = side < 2;
   const int lines = along_u ? cols : rows, across = along_u ? rows : cols;
@@ -185,14 +186,14 @@ bool ring_beyond(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, i
     }
   }
   const cv::Mat h = cv::findHomography(grid, image);
-  if (h.empty()) return false;
+  if (h.empty()) return std::nullopt;
   const auto project = [&h](float u, float v) {
     std::vector<cv::Point2f> out;
     cv::perspectiveTransform(std::vector<cv::Point2f>{{u, v}}, out, h);
     return out[0];
   };
-  // Ring 2's squares: square index a (along the side's normal) and b = -1 .. across - 1.
-  const int a = low ? -2 : lines;
+  // The ring's squares: square index a (along the side's normal) and b = -1 .. across - 1.
+  const int a = low ? -ring : lines - 2 + ring;
   std::vector<SquareSample> squares;
   for (int b = -1; b < across; ++b) {
     // The quarter of the square nearest the board: outer squares are often cut narrower.
@@ -204,12 +205,14 @@ bool ring_beyond(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, i
     squares.push_back({centre, 0.125f * side_px, parity(along_u ? a : b, along_u ? b : a)});
   }
   const std::optional<double> c = contrast(grey, squares);
-  return c && *c / interior_contrast >= kExtensionContrastRatio;
+  if (!c) return std::nullopt;
+  return *c / interior_contrast;
 }
 
-// Whether the detected grid's squares continue beyond any side of it (the board given is part of
-// a larger one).
-bool board_continues(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, int cols, int rows) {
+// The parity contrast of the detected grid's own squares; nullopt when it is too weak to judge
+// rings by (below one grey level) or out of the image.
+std::optional<double> interior_contrast(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, int cols,
+                                        int rows) {
   std::vector<SquareSample> interior;
   for (int b = 0; b + 1 < rows; ++b) {
     for (int a = 0; a + 1 < cols; ++a) {
@@ -221,9 +224,37 @@ bool board_continues(const cv::Mat& grey, const std::vector<cv::Point2f>& corner
     }
   }
   const std::optional<double> c = contrast(grey, interior);
-  if (!c || std::abs(*c) < 1.0) return false;
-  for (int side = 0; side < 4; ++side)
-    if (ring_beyond(grey, corners, cols, rows, side, *c)) return true;
+  if (!c || std::abs(*c) < 1.0) return std::nullopt;
+  return c;
+}
+
+// The grid's sides, as the messages name them (side indices as in ring_contrast_ratio).
+constexpr std::array<const char*, 4> kGridSides = {"first column", "last column", "first row", "last row"};
+
+// The first side of the detected grid with no squares beyond it (ring 1 does not alternate like
+// the board's own: the grid's outer corners there are not the board's inner corners, as when a
+// detector takes the board's edge for a line of corners), or nullopt when every side that can be
+// judged has them.
+std::optional<int> side_without_squares(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, int cols,
+                                        int rows) {
+  const std::optional<double> c = interior_contrast(grey, corners, cols, rows);
+  if (!c) return std::nullopt;
+  for (int side = 0; side < 4; ++side) {
+    const std::optional<double> ratio = ring_contrast_ratio(grey, corners, cols, rows, side, 1, *c);
+    if (ratio && *ratio < kOuterSquaresContrastRatio) return side;
+  }
+  return std::nullopt;
+}
+
+// Whether the detected grid's squares continue beyond any side of it (the board given is part of
+// a larger one): ring 2 alternates there.
+bool board_continues(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, int cols, int rows) {
+  const std::optional<double> c = interior_contrast(grey, corners, cols, rows);
+  if (!c) return false;
+  for (int side = 0; side < 4; ++side) {
+    const std::optional<double> ratio = ring_contrast_ratio(grey, corners, cols, rows, side, 2, *c);
+    if (ratio && *ratio >= kExtensionContrastRatio) return true;
+  }
   return false;
 }
 
@@ -240,6 +271,30 @@ cv::Size whole_chessboard(cv::Size found, cv::Size pattern) {
   const bool like_given = (found.width >= found.height) == (pattern.width >= pattern.height);
   const cv::Size first = like_given ? found : turned, second = like_given ? turned : found;
   return holds(first) ? first : holds(second) ? second : pattern;
+}
+
+// The whole chessboard a view shows when the given size was not found in it (see the header): the
+// grid grown from the smallest one, when it has the board's outer squares beyond every side and
+// margin beyond those, all inside the image, and is not `pattern` (in either orientation); turned
+// like `pattern` (both wider than tall, or not). nullopt otherwise.
+std::optional<cv::Size> seen_whole_chessboard(const cv::Mat& grey, cv::Size pattern) {
+  std::vector<cv::Point2f> corners;
+  cv::Mat meta;
+  if (!cv::findChessboardCornersSB(grey, kGrowSeed, corners, kGrowFlags, meta)) return std::nullopt;
+  const int cols = meta.cols, rows = meta.rows;
+  if (cols < 2 || rows < 2 || corners.size() != static_cast<std::size_t>(cols * rows)) return std::nullopt;
+  const std::optional<double> c = interior_contrast(grey, corners, cols, rows);
+  if (!c) return std::nullopt;
+  for (int side = 0; side < 4; ++side) {
+    const std::optional<double> outer = ring_contrast_ratio(grey, corners, cols, rows, side, 1, *c);
+    const std::optional<double> beyond = ring_contrast_ratio(grey, corners, cols, rows, side, 2, *c);
+    if (!outer || !beyond || *outer < kOuterSquaresContrastRatio || *beyond >= kExtensionContrastRatio)
+      return std::nullopt;
+  }
+  const cv::Size seen =
+      (cols >= rows) == (pattern.width >= pattern.height) ? cv::Size(cols, rows) : cv::Size(rows, cols);
+  if (seen == pattern || seen == cv::Size(pattern.height, pattern.width)) return std::nullopt;
+  return seen;
 }
 
 // A ChArUco sheet of cols x rows squares as cv::aruco::CharucoBoard lays it out (OpenCV 4.6):
@@ -722,6 +777,17 @@ BoardDetection detect_board(const Board& board, const cv::Mat& image, const std:
                  d.fitting_board;
       return d;
     };
+    // The given size not found: the whole board of another size the view shows, named (step 5).
+    const auto note_seen_board = [&] {
+      const std::optional<cv::Size> seen = seen_whole_chessboard(grey, pattern);
+      if (!seen) return;
+      Board other = board;
+      other.cols = seen->width;
+      other.rows = seen->height;
+      d.seen_board = other.text();
+      d.reason += "; the view shows a whole chessboard of " + std::to_string(seen->width) + "x" +
+                  std::to_string(seen->height) + " inner corners";
+    };
     cv::Mat meta;
     if (cv::findChessboardCornersSB(grey, pattern, corners, kGrowFlags, meta)) {
       d.detector = "findChessboardCornersSB";
@@ -732,6 +798,13 @@ BoardDetection detect_board(const Board& board, const cv::Mat& image, const std:
       d.detector = "findChessboardCorners";
     } else {
       d.reason = "pattern not found";
+      note_seen_board();
+      return d;
+    }
+    if (const std::optional<int> side = side_without_squares(grey, corners, board.cols, board.rows)) {
+      d.reason = "pattern not found: the " + given + " grid " + d.detector + " found has no squares beyond its " +
+                 kGridSides[static_cast<std::size_t>(*side)] + " (its corners there are not the board's)";
+      note_seen_board();
       return d;
     }
     d.refine_half_window_px = refine_half_window_px(smallest_spacing_px(corners, board.cols, board.rows));

@@ -45,7 +45,15 @@
 //  3. the whole board or nothing: a grid of the given size found inside a larger board (8x6
 //     corners of a 9x6 board, a different part in different views) is refused (larger_board),
 //     with fitting_board the size that fits ("chessboard:9x6:0.025") and the reason naming it
-//     when it is measured. Two checks:
+//     when it is measured. And a grid whose own outer corners are not the board's is not found.
+//     Three checks:
+//     - beyond each side of the grid found (by either detector), ring 1 of would-be squares
+//       (placed and sampled as below) is the board's outer squares and must alternate like the
+//       board's own: a parity contrast of at least kOuterSquaresContrastRatio of the interior's.
+//       On OpenCV's 26 sample views at least 0.66 whichever detector served; -0.04 where
+//       findChessboardCorners took left12.jpg's board edge for a tenth line of corners and
+//       "found" 10x6 on the 9x6 board. Otherwise the view is not found, the reason naming the
+//       side (checked before step 2);
 //     - step 1's detector grew the grid beyond the given size: its size is the board's, turned
 //       to the orientation that holds the given size (both wider than tall, or both not, when
 //       either holds it);
@@ -70,6 +78,14 @@
 //     ordered so that the square diagonally outside corner 0 is the dark one, which keeps the
 //     board frame the same in every view (stereo and hand-eye need that). Boards with
 //     COLS + ROWS even stay ambiguous: use COLS + ROWS odd, or ChArUco.
+//  5. the given size not found (or refused by ring 1): the whole board the view shows is
+//     measured -- the smallest grid grown as in step 3, kept when on all four sides ring 1
+//     alternates and ring 2 does not, all inside the image, and when it is not the given size --
+//     and named in the reason and BoardDetection::seen_board. Not a refusal by itself (a board
+//     partly hidden by a hand can look whole and smaller); seen_board_hint (intrinsics.hpp) names
+//     the size most views show when a calibration has too few views. Given 10x6, 9x7 or 7x12
+//     for the sample board, 10 of the 13 left views and 6 of the 13 right ones name 9x6 (6x9),
+//     and no view names another size (right02.jpg's grid grows to a false 9x7, refused by ring 1).
 // ChArUco detection: cv::aruco::detectMarkers, refineDetectedMarkers, interpolateCornersCharuco
 // (with its own cornerSubPix: a window sized to the square would reach the markers' edges).
 // The whole board or nothing: interpolateCornersCharuco places corners by the given board's
@@ -174,6 +190,7 @@ inline constexpr int kMaxRefineHalfWindow_px = 40;
 inline constexpr int kRefineIterations = 30;
 inline constexpr double kRefineEpsilon_px = 0.001;
 inline constexpr double kExtensionContrastRatio = 0.5;
+inline constexpr double kOuterSquaresContrastRatio = 0.5;
 inline constexpr int kMinAprilTags = 4;
 inline constexpr std::size_t kMinMarkersToJudgeLayout = 4;
 inline constexpr double kLayoutTolerance = 1.0 / 3.0;
@@ -192,6 +209,7 @@ struct BoardDetection {
   int refine_half_window_px = 0;  // chessboard: step 2's half window
   bool larger_board = false;      // chessboard: the grid found is part of a larger board (step 3)
   std::string fitting_board;      // a board of the wrong size: the board text that fits, if measured; else empty
+  std::string seen_board;         // chessboard not found: the whole board of another size the view shows (step 5)
   std::vector<int> ids;
   std::vector<cv::Point2f> image_px;
   std::vector<cv::Point3f> board_m;

@@ -275,6 +275,9 @@ const char* convention_name(PoseConvention c) {
 
 HandEyeCalibration calibrate_hand_eye(const std::vector<HandEyeView>& views, const CameraModel& camera,
                                       const HandEyeOptions& options) {
+  std::vector<BoardDetection> given;
+  for (const HandEyeView& v : views) given.push_back(v.detection);
+  refuse_wrong_board(given);
   HandEyeCalibration result;
   std::vector<Isometry3d> base_T_gripper, camera_T_target;
   std::vector<const BoardDetection*> detections;
@@ -311,7 +314,7 @@ HandEyeCalibration calibrate_hand_eye(const std::vector<HandEyeView>& views, con
     for (const HandEyeViewReport& r : result.views) {
       if (!r.used) message += "\n  " + r.view + ": " + r.rejection;
     }
-    throw CalibrationError(message);
+    throw CalibrationError(message + seen_board_hint(given));
   }
 
   // Rotation diversity of the gripper's relative motions.

@@ -3,10 +3,12 @@
 // of a fixed board taken by a camera on the gripper (eye-in-hand, the sensor platform's case).
 //
 // What it does, in order, and how each step can refuse:
+//  0. Another board than the one given in any view: refuse_wrong_board (intrinsics.hpp).
 //  1. Per view: the board's pose in the camera (camera_T_target, cv::solvePnP with the camera
 //     model). A view without the board, or whose pose fails, is left out with its reason.
 //  2. Enough poses: at least options.min_poses usable views, else CalibrationError "N usable
-//     poses ... at least M needed" listing the views left out.
+//     poses ... at least M needed" listing the views left out (and the board they show, when
+//     it is another one: seen_board_hint).
 //  3. Rotation diversity (AX = XB is degenerate without it): over all pairs of poses, the
 //     relative gripper rotation; the largest must reach options.min_rotation_rad, and among the
 //     motions that reach it two axes must differ by options.min_axis_angle_rad or more.

@@ -55,6 +55,17 @@ void refuse_wrong_board(const std::vector<BoardDetection>& detections) {
                          (votes.size() > 1 ? ", " + std::to_string(most->second) + " of them this size" : "") + ")");
 }
 
+std::string seen_board_hint(const std::vector<BoardDetection>& detections) {
+  std::map<std::string, int> votes;
+  for (const BoardDetection& d : detections)
+    if (!d.seen_board.empty()) ++votes[d.seen_board];
+  const auto most =
+      std::max_element(votes.begin(), votes.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+  if (most == votes.end()) return "";
+  return "\n  " + std::to_string(most->second) + " of " + std::to_string(detections.size()) +
+         " views show a whole board " + most->first + ": give --board " + most->first + "?";
+}
+
 void refuse_other_image_sizes(const std::vector<BoardDetection>& detections, cv::Size expected,
                               const std::string& whose) {
   std::string others;
@@ -109,7 +120,7 @@ IntrinsicCalibration calibrate_intrinsics(const std::vector<BoardDetection>& det
     for (const ViewReport& v : result.views) {
       if (!v.used) message += "\n  " + v.view + ": " + v.rejection;
     }
-    throw CalibrationError(message);
+    throw CalibrationError(message + seen_board_hint(detections));
   };
   refuse_if_too_few();
   const cv::Size image_size = detections[used.front()].image_size;

@@ -192,7 +192,9 @@ StereoCalibration calibrate_stereo(const std::vector<BoardDetection>& left, cons
     for (const StereoPairReport& p : result.pairs) {
       if (!p.used) message += "\n  " + p.left_view + " / " + p.right_view + ": " + p.rejection;
     }
-    throw CalibrationError(message);
+    std::vector<BoardDetection> both = left;
+    both.insert(both.end(), right.begin(), right.end());
+    throw CalibrationError(message + seen_board_hint(both));
   }
 
   const std::vector<std::optional<PairPose>> own_poses =

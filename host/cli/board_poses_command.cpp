@@ -78,7 +78,9 @@ int run_board_poses(const BoardPosesArgs& a) {
               << " mm, rotation sigma "
               << fixed(std::sqrt(c.bottomRightCorner<3, 3>().trace()) * 180 / 3.14159265358979323846, 4) << " deg\n";
   }
-  if (data.rows.empty()) throw camera::CalibrationError("no usable view of " + std::to_string(detections.size()));
+  if (data.rows.empty())
+    throw camera::CalibrationError("no usable view of " + std::to_string(detections.size()) +
+                                   camera::seen_board_hint(detections));
   std::ostringstream text;
   model::write_dataset(text, data);
   files::write_file_atomically(a.out, text.str());

@@ -132,6 +132,30 @@ TEST_CASE("every smaller grid of the board is refused, naming only the board's o
   }
 }
 
+// The other half of the class: a size larger than the board (a row or a column too many, or
+// both) is found in no view -- findChessboardCorners took left12.jpg's board edge for a tenth
+// line of corners and "found" 10x6, refused now for the missing squares beyond that line -- and
+// calibration names the whole board the views show. Each view names only the board's own size.
+TEST_CASE("every larger size is found in no view, and the size the views show is named") {
+  for (const std::string given : {"10x6", "9x7", "7x12"}) {
+    const Board board = parse_board("chessboard:" + given + ":0.025");
+    const std::string whole = board.cols >= board.rows ? "chessboard:9x6:0.025" : "chessboard:6x9:0.025";
+    for (const char* side : {"left", "right"}) {
+      const std::vector<BoardDetection> d = detect_samples(board, side);
+      for (const BoardDetection& v : d) {
+        CHECK_MESSAGE(!v.found, v.view << " accepted " << given);
+        CHECK_MESSAGE((v.seen_board.empty() || v.seen_board == whole),
+                      v.view << ": " << given << " saw " << v.seen_board);
+      }
+      const std::string message = error_of([&] { (void)calibrate_intrinsics(d); });
+      CHECK_MESSAGE(contains(message, "give --board " + whole + "?"), message);
+    }
+  }
+  const std::string left12 = sample("left", 12);
+  const BoardDetection edge = detect_board(parse_board("chessboard:10x6:0.025"), cv::imread(left12), left12);
+  CHECK_MESSAGE(contains(edge.reason, "has no squares beyond its first column"), edge.reason);
+}
+
 TEST_CASE("a right list shifted by one is refused, naming the first pair") {
   const Board board = parse_board("chessboard:9x6:0.025");
   const std::vector<BoardDetection> left = detect_samples(board, "left"), right = detect_samples(board, "right");

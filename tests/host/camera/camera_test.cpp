@@ -560,6 +560,20 @@ TEST_CASE("hand-eye checks refuse weak pose sets and detect a swapped convention
     CAPTURE(message);
     CHECK(contains(message, "a poses file of another run, rows out of order, or another camera"));
   }
+  SUBCASE("a view of another board") {
+    // As intrinsic and stereo calibration do: one view whose detector found part of a larger
+    // board refuses the set, naming the view and the board that fits.
+    std::vector<Eigen::Isometry3d> board_T_camera;
+    for (const Eigen::Isometry3d& v : scenes::board_views(board, 8)) board_T_camera.push_back(v.inverse());
+    std::vector<HandEyeView> views = views_from(board_T_camera);
+    views[2].detection.found = false;
+    views[2].detection.larger_board = true;
+    views[2].detection.fitting_board = "chessboard:10x7:0.02";
+    views[2].detection.reason = "the board has 10x7 inner corners";
+    const std::string message = error_of([&] { (void)calibrate_hand_eye(views, camera); });
+    CAPTURE(message);
+    CHECK(contains(message, "pose2: the board has 10x7 inner corners (1 of 8 views show another board)"));
+  }
 }
 
 TEST_CASE("calibration files round-trip in OpenCV YAML and name bad keys") {
