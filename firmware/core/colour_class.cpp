@@ -1,21 +1,13 @@
 #include "firmware/core/colour_class.hpp"
 
+#include "shared/crc32.hpp"
+
 namespace kincal::core {
 
 namespace {
 
 constexpr std::uint8_t kMagic[4] = {'K', 'C', 'C', 'T'};
 constexpr std::size_t kCrcOffset = kColourTableBlockBytes - 4;
-
-// CRC-32 (zlib), bitwise: the block is checked once when loaded, so speed does not matter.
-std::uint32_t crc32(std::span<const std::uint8_t> bytes) {
-  std::uint32_t crc = 0xFFFFFFFFu;
-  for (const std::uint8_t b : bytes) {
-    crc ^= b;
-    for (int bit = 0; bit < 8; ++bit) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
-  }
-  return ~crc;
-}
 
 }  // namespace
 
@@ -43,7 +35,7 @@ ColourTableStatus parse_colour_table(std::span<const std::uint8_t> block, Colour
     if (block[i] != kMagic[i]) return ColourTableStatus::kBadMagic;
   const std::uint32_t stored = std::uint32_t{block[kCrcOffset]} | std::uint32_t{block[kCrcOffset + 1]} << 8 |
                                std::uint32_t{block[kCrcOffset + 2]} << 16 | std::uint32_t{block[kCrcOffset + 3]} << 24;
-  if (crc32(block.first(kCrcOffset)) != stored) return ColourTableStatus::kBadCrc;
+  if (shared::crc32(block.first(kCrcOffset)) != stored) return ColourTableStatus::kBadCrc;
   if (block[4] != kColourTableVersion) return ColourTableStatus::kUnsupportedVersion;
   if (block[5] > static_cast<std::uint8_t>(ColourSpace::kYuv422)) return ColourTableStatus::kUnknownColourSpace;
   if (block[7] != 0) return ColourTableStatus::kReservedNotZero;
@@ -61,7 +53,7 @@ void serialize_colour_table(const ColourClassTable& table,
   block[6] = table.threshold;
   block[7] = 0;
   for (std::size_t i = 0; i < kColourCells; ++i) block[8 + i] = table.score[i];
-  const std::uint32_t crc = crc32(std::span<const std::uint8_t>(block).first(kCrcOffset));
+  const std::uint32_t crc = shared::crc32(std::span<const std::uint8_t>(block).first(kCrcOffset));
   for (std::size_t i = 0; i < 4; ++i) block[kCrcOffset + i] = static_cast<std::uint8_t>(crc >> (8 * i));
 }
 

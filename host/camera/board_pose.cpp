@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <sstream>
 #include <vector>
 
@@ -95,9 +96,9 @@ BoardPose board_pose(const BoardDetection& detection, const CameraModel& camera,
     return pose;
   }
   if (pose.tilt_rad > options.max_tilt_rad) {
-    pose.refusal = "the board nearly edge-on: its normal " + number(pose.tilt_rad * 180 / 3.14159265358979323846) +
-                   " deg from the line of sight (at most " +
-                   number(options.max_tilt_rad * 180 / 3.14159265358979323846) + ")";
+    pose.refusal = "the board nearly edge-on: its normal " + number(pose.tilt_rad * 180 / std::numbers::pi) +
+                   " deg from the line of sight (at most " + number(options.max_tilt_rad * 180 / std::numbers::pi) +
+                   ")";
     return pose;
   }
 

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <map>
+#include <numbers>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -19,7 +20,7 @@ namespace kincal::camera {
 
 namespace {
 
-constexpr double kRadPerDegree = 3.14159265358979323846 / 180;
+constexpr double kRadPerDegree = std::numbers::pi / 180;
 constexpr double kPoseTolerance = 1e-3;
 
 [[noreturn]] void bad_pose(const std::string& source, int line, const std::string& what) {
@@ -65,7 +66,7 @@ void check_reach(const RobotPose& p, const std::string& source) {
 // roll, pitch or yaw, over 2 pi rad (360 deg) is most likely degrees given as radians, and at
 // 1e300 no angle at all (OpenCV's hand-eye solve then failed on the motions).
 Eigen::Matrix3d rotation_of(RotationColumns rotation, const Eigen::Vector3d& r, const std::string& source, int line) {
-  const double turn = rotation == RotationColumns::kRpyDeg ? 360.0 : 2 * 3.14159265358979323846;
+  const double turn = rotation == RotationColumns::kRpyDeg ? 360.0 : 2 * std::numbers::pi;
   const double largest = rotation == RotationColumns::kRotationVector ? r.stableNorm() : r.cwiseAbs().maxCoeff();
   if (!(largest <= turn))
     bad_pose(source, line,

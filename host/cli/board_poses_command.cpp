@@ -3,6 +3,7 @@
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -73,10 +74,10 @@ int run_board_poses(const BoardPosesArgs& a) {
     const auto [device_T_tool, c] = camera::pose_measurement(p, hand);
     data.rows.push_back(model::pose_row(joints[i], device_T_tool, c, static_cast<int>(i) + 1));
     std::cout << p.view << ": " << p.corners << " corners, RMS " << fixed(p.rms_px, 3) << " px, sigma "
-              << fixed(p.corner_sigma_px, 3) << " px, tilt " << fixed(p.tilt_rad * 180 / 3.14159265358979323846, 1)
+              << fixed(p.corner_sigma_px, 3) << " px, tilt " << fixed(p.tilt_rad * 180 / std::numbers::pi, 1)
               << " deg, position sigma " << fixed(std::sqrt(c.topLeftCorner<3, 3>().trace()) * 1e3, 3)
               << " mm, rotation sigma "
-              << fixed(std::sqrt(c.bottomRightCorner<3, 3>().trace()) * 180 / 3.14159265358979323846, 4) << " deg\n";
+              << fixed(std::sqrt(c.bottomRightCorner<3, 3>().trace()) * 180 / std::numbers::pi, 4) << " deg\n";
   }
   if (data.rows.empty())
     throw camera::CalibrationError("no usable view of " + std::to_string(detections.size()) +

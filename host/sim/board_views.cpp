@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 
@@ -49,8 +50,7 @@ BoardRig board_rig(const model::RobotModel& arm, BoardMount mount, std::span<con
     device_T_base = base_T_board.inverse();
   } else {
     // flange_T_board: the board's face away from the flange (its z into the flange), its centre on the axis.
-    const Eigen::Matrix3d turned =
-        Eigen::AngleAxisd(3.14159265358979323846, Eigen::Vector3d::UnitX()).toRotationMatrix();
+    const Eigen::Matrix3d turned = Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitX()).toRotationMatrix();
     mount_pose = pose(turned, Eigen::Vector3d(0, 0, 0.02) - turned * board_centre_m);
     const Eigen::Isometry3d base_T_camera = base_T_flange * mount_pose * camera_T_board0.inverse();
     device_T_base = base_T_camera.inverse();

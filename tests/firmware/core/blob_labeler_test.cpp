@@ -7,7 +7,9 @@
 
 #include <cstdint>
 #include <cstring>
+#include <span>
 
+#include "shared/crc32.hpp"
 #include "tests/firmware/core/blob_test_images.hpp"
 
 using namespace kincal::core;
@@ -325,14 +327,9 @@ TEST_CASE("labeler: zero-copy rows give the same blobs as copied rows") {
 }
 
 namespace {
+// zlib's crc32(crc, data, size): the running CRC-32 continued over `data`.
 std::uint32_t crc32_bytes(std::uint32_t crc, const void* data, std::size_t size) {
-  const auto* p = static_cast<const std::uint8_t*>(data);
-  crc = ~crc;
-  for (std::size_t i = 0; i < size; ++i) {
-    crc ^= p[i];
-    for (int bit = 0; bit < 8; ++bit) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
-  }
-  return ~crc;
+  return ~kincal::shared::crc32_update(~crc, std::span(static_cast<const std::uint8_t*>(data), size));
 }
 template <class T>
 std::uint32_t crc_value(std::uint32_t crc, T v) {

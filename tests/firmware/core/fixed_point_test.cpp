@@ -9,6 +9,7 @@
 #include <cstring>
 
 #include "fixed_point_vectors.inc"
+#include "shared/crc32.hpp"
 
 using namespace kincal::core;
 
@@ -62,12 +63,9 @@ std::uint32_t float_bits(float f) {
 
 // CRC-32 (zlib's polynomial) over little-endian 32-bit words, as the reference computes it.
 std::uint32_t crc32_word(std::uint32_t crc, std::uint32_t word) {
-  crc = ~crc;
-  for (int byte = 0; byte < 4; ++byte) {
-    crc ^= (word >> (8 * byte)) & 0xFFu;
-    for (int bit = 0; bit < 8; ++bit) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
-  }
-  return ~crc;
+  const std::uint8_t bytes[] = {static_cast<std::uint8_t>(word), static_cast<std::uint8_t>(word >> 8),
+                                static_cast<std::uint8_t>(word >> 16), static_cast<std::uint8_t>(word >> 24)};
+  return ~kincal::shared::crc32_update(~crc, bytes);
 }
 
 template <class T>
