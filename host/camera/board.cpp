@@ -297,6 +297,33 @@ std::optional<cv::Size> seen_whole_chessboard(const cv::Mat& grey, cv::Size patt
   return seen;
 }
 
+// The ArUco dictionary a view's markers come from when none are of the given one (see the
+// header): each family's largest dictionary (4X4 to 7X7 with 1000 markers, ARUCO_ORIGINAL) is
+// tried, the one finding the most markers (at least kMinMarkersToJudgeLayout) kept, and named by
+// the smallest dictionary of its family that holds the largest id seen (a family's smaller
+// dictionaries are its larger one's first markers). nullopt when none finds enough.
+std::optional<std::string> seen_dictionary(const cv::Mat& grey) {
+  struct Family {
+    std::size_t first, last;  // indices into kDictionaries, smallest to largest
+  };
+  constexpr std::array<Family, 5> kFamilies = {{{0, 3}, {4, 7}, {8, 11}, {12, 15}, {16, 16}}};
+  std::size_t most = 0;
+  std::string name;
+  for (const Family& f : kFamilies) {
+    std::vector<std::vector<cv::Point2f>> corners;
+    std::vector<int> ids;
+    cv::aruco::detectMarkers(grey, cv::aruco::getPredefinedDictionary(kDictionaries[f.last].id), corners, ids);
+    if (ids.size() < kMinMarkersToJudgeLayout || ids.size() <= most) continue;
+    most = ids.size();
+    const int largest_id = *std::max_element(ids.begin(), ids.end());
+    std::size_t k = f.first;
+    while (k < f.last && cv::aruco::getPredefinedDictionary(kDictionaries[k].id)->bytesList.rows <= largest_id) ++k;
+    name = kDictionaries[k].name;
+  }
+  if (name.empty()) return std::nullopt;
+  return name;
+}
+
 // A ChArUco sheet of cols x rows squares as cv::aruco::CharucoBoard lays it out (OpenCV 4.6):
 // markers on the squares whose x + y is odd, numbered along the rows from the top; each
 // marker's four corners (in squares; clockwise from its top left) at its square's centre
@@ -831,6 +858,12 @@ BoardDetection detect_board(const Board& board, const cv::Mat& image, const std:
     cv::aruco::detectMarkers(grey, board.charuco->dictionary, marker_corners, marker_ids, parameters, rejected);
     if (marker_ids.empty()) {
       d.reason = "pattern not found (no markers of " + board.dictionary + ")";
+      if (const std::optional<std::string> seen = seen_dictionary(grey)) {
+        Board other = board;
+        other.dictionary = *seen;
+        d.seen_board = other.text();
+        d.reason += "; the view shows markers of " + *seen;
+      }
       return d;
     }
     if (const std::optional<cv::Size> sheet = fitting_charuco(board, marker_corners, marker_ids)) {

@@ -88,6 +88,11 @@
 //     and no view names another size (right02.jpg's grid grows to a false 9x7, refused by ring 1).
 // ChArUco detection: cv::aruco::detectMarkers, refineDetectedMarkers, interpolateCornersCharuco
 // (with its own cornerSubPix: a window sized to the square would reach the markers' edges).
+// No markers of the given dictionary: each ArUco family's largest dictionary is tried and the
+// one that finds the most markers (kMinMarkersToJudgeLayout at least) is named in the reason and
+// BoardDetection::seen_board, by the smallest dictionary of its family holding every id seen
+// (a sheet of DICT_5X5_100 given with the default DICT_4X4_50: "the view shows markers of
+// DICT_5X5_50", whose markers are DICT_5X5_100's first fifty).
 // The whole board or nothing: interpolateCornersCharuco places corners by the given board's
 // layout whatever sheet the markers come from (a 7x5 sheet given as 5x7, 6x5, 8x5 or 4x3 was
 // "found" with wrong board coordinates). So first the markers' layout is checked: with

@@ -100,7 +100,7 @@ struct IntrinsicCalibration {
 // most views measured (BoardDetection::fitting_board) and that board text, or the first such
 // view when none could measure it; returns otherwise. Stereo and hand-eye calibration use it too.
 void refuse_wrong_board(const std::vector<BoardDetection>& detections);
-// For a message refusing too few views: "\n  N of M views show a whole chessboard:9x6:0.025
+// For a message refusing too few views: "\n  N of M views show a chessboard:9x6:0.025
 // board: give --board chessboard:9x6:0.025?", the board most views show where the given one was
 // not found (BoardDetection::seen_board); "" when none shows one.
 std::string seen_board_hint(const std::vector<BoardDetection>& detections);

@@ -227,6 +227,25 @@ TEST_CASE("ChArUco views of another sheet are refused, naming the sheet the mark
     CHECK_MESSAGE(d.fitting_board.empty(), d.view << ": " << d.reason);
 }
 
+// The same class for the dictionary: a sheet printed from another ArUco family (or the original
+// ArUco markers) has no markers of the given dictionary; the view names the one it shows.
+TEST_CASE("ChArUco views of another dictionary name the dictionary the markers come from") {
+  const sim::CameraSpec truth = scenes::test_camera();
+  const std::string sheet = "charuco:7x5:0.04:0.03:";
+  for (const std::string printed : {"DICT_5X5_100", "DICT_6X6_250", "DICT_ARUCO_ORIGINAL"}) {
+    CAPTURE(printed);
+    const Board board = parse_board(sheet + printed);
+    const cv::Mat image = scenes::render(truth, scenes::board_views(board, 1)[0], scenes::target_of(board), 7);
+    const BoardDetection d = detect_board(parse_board(sheet + "DICT_4X4_50"), image, "other.png");
+    CHECK_FALSE(d.found);
+    const std::string named = printed == "DICT_ARUCO_ORIGINAL" ? printed : printed.substr(0, 9) + "50";
+    CHECK(d.seen_board == sheet + named);
+    CHECK(contains(d.reason, "no markers of DICT_4X4_50); the view shows markers of " + named));
+    const std::string message = error_of([&] { (void)calibrate_intrinsics({d, d, d}); });
+    CHECK(contains(message, "3 of 3 views show a board " + sheet + named + ": give --board " + sheet + named + "?"));
+  }
+}
+
 TEST_CASE("AprilGrid texts parse, number the corners as Kalibr does and name what is wrong") {
   const Board april = parse_board("aprilgrid:6x5:0.04:0.3");
   CHECK(april.kind == BoardKind::kAprilGrid);
