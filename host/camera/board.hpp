@@ -189,6 +189,15 @@ cv::Mat draw_charuco(const Board& board, int px_per_square);
 cv::Mat draw_aprilgrid(const Board& board, int px_per_bit);
 int aprilgrid_gap_px(const Board& board, int px_per_bit);
 
+// The range of a --min-corners option (detect_board's min_corners): fewer than four corners are
+// no view for OpenCV (solvePnP asserts 4 points; calibrateCamera starts each view from a
+// homography, which needs 4); 10000 corners is the largest board a board text gives (100x100).
+inline constexpr int kMinViewCorners = 4;
+inline constexpr int kMaxViewCorners = 10000;
+inline constexpr const char* kMinCornersHelp =
+    "fewest corners a view may have (4..10000: OpenCV's pose solve and calibration need 4 corners of a view; 10000 is "
+    "the largest board's, a 100x100 chessboard)";
+
 inline constexpr double kRefineWindowFraction = 0.35;
 inline constexpr int kMinRefineHalfWindow_px = 2;
 inline constexpr int kMaxRefineHalfWindow_px = 40;

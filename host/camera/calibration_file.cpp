@@ -8,6 +8,7 @@
 #include <opencv2/core/eigen.hpp>
 
 #include "host/files/input_file.hpp"
+#include "host/files/input_limits.hpp"
 #include "host/files/output_file.hpp"
 #include "host/files/yaml_limits.hpp"
 #include "host/model/number_text.hpp"
@@ -77,12 +78,19 @@ double read_number(const cv::FileStorage& fs, const std::string& path, const std
   return static_cast<double>(node);
 }
 
-cv::Size read_size(const cv::FileStorage& fs, const std::string& path) {
-  const double w = read_number(fs, path, "image_width"), h = read_number(fs, path, "image_height");
-  if (!(w >= 1 && h >= 1) || w != std::floor(w) || h != std::floor(h)) {
-    throw CalibrationError(path + ": image_width and image_height must be positive integers");
+// A camera's image size as a file gives it: whole numbers of pixels, 1 to the image limit a side
+// (files/input_limits.hpp; 1e300 was cast to int and named -2147483648 pixels).
+cv::Size checked_size(const std::string& path, double w, double h) {
+  if (!(w >= 1 && h >= 1 && w <= files::kMaxImageSide && h <= files::kMaxImageSide) || w != std::floor(w) ||
+      h != std::floor(h)) {
+    throw CalibrationError(path + ": image_width and image_height must be whole numbers of pixels, 1 to " +
+                           std::to_string(files::kMaxImageSide));
   }
   return {static_cast<int>(w), static_cast<int>(h)};
+}
+
+cv::Size read_size(const cv::FileStorage& fs, const std::string& path) {
+  return checked_size(path, read_number(fs, path, "image_width"), read_number(fs, path, "image_height"));
 }
 
 CameraModel camera_from(const cv::Mat& k, const cv::Mat& d, cv::Size size) {
@@ -271,11 +279,10 @@ CameraModel load_ros_camera(const std::string& path, const std::string& text) {
     const std::string model = root["distortion_model"] ? root["distortion_model"].as<std::string>() : "";
     if (model != "plumb_bob")
       throw CalibrationError(path + ": distortion_model '" + model + "': only plumb_bob (k1 k2 p1 p2 k3) is supported");
-    if (!root["image_width"] || !root["image_height"] || root["image_width"].as<int>() < 1 ||
-        root["image_height"].as<int>() < 1)
-      throw CalibrationError(path + ": image_width and image_height must be positive integers");
+    if (!root["image_width"] || !root["image_height"])
+      throw CalibrationError(path + ": image_width and image_height must be given");
     return camera_from(matrix("camera_matrix", 3, 3), matrix("distortion_coefficients", 1, 5),
-                       {root["image_width"].as<int>(), root["image_height"].as<int>()});
+                       checked_size(path, root["image_width"].as<double>(), root["image_height"].as<double>()));
   } catch (const YAML::Exception& e) {
     throw CalibrationError(path + ": " + e.what());
   }

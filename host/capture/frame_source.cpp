@@ -4,6 +4,7 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <system_error>
 #include <utility>
@@ -13,6 +14,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio/registry.hpp>
 
+#include "host/files/input_file.hpp"
 #include "host/files/input_limits.hpp"
 
 namespace kincal::capture {
@@ -20,6 +22,22 @@ namespace kincal::capture {
 namespace {
 
 namespace fs = std::filesystem;
+
+// FFmpeg's demuxers a video file may be read by (FFmpeg matches any of a demuxer's names:
+// "mov" is "mov,mp4,m4a,3gp,3g2,mj2", "matroska" is "matroska,webm") and the protocol: a local file.
+constexpr const char* kFfmpegCaptureOptions =
+    "protocol_whitelist;file|format_whitelist;avi,mov,matroska,mpeg,mpegts,mjpeg,h264,hevc,asf,flv,ogg";
+constexpr const char* kVideoContainers = "AVI, MP4/MOV, MKV/WebM, MPEG-PS/TS, MJPEG, H.264/H.265, ASF, FLV, Ogg";
+
+// A regular file within the kind's limit, else CaptureError naming what the path is instead
+// ("no such file", a named pipe, a device, a directory).
+void check_file(const std::string& path, const files::InputKind& kind) {
+  try {
+    files::check_input_file(path, kind);
+  } catch (const files::InputFileError& e) {
+    throw CaptureError(e.what());
+  }
+}
 
 bool all_digits(const std::string& s) {
   return !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
@@ -62,11 +80,10 @@ bool natural_less(const std::string& a, const std::string& b) {
 CameraSource::CameraSource(const std::string& device, int width_px, int height_px) : name_(device) {
   bool opened = false;
   if (all_digits(device)) {
-    const int index = std::stoi(device);
     std::error_code ec;
-    if (!fs::exists("/dev/video" + device, ec))
+    if (device.size() > 9 || !fs::exists("/dev/video" + device, ec))
       throw CaptureError(name_ + ": no such device (/dev/video" + device + ")");
-    opened = capture_.open(index, cv::CAP_V4L2);
+    opened = capture_.open(std::stoi(device), cv::CAP_V4L2);
   } else {
     std::error_code ec;
     if (!fs::exists(device, ec)) throw CaptureError(name_ + ": no such device");
@@ -90,9 +107,13 @@ std::optional<Frame> CameraSource::next() {
 }
 
 VideoFileSource::VideoFileSource(const std::string& path, double fps_override) : name_(path) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) throw CaptureError(name_ + ": no such file");
+  check_file(path, files::kVideoFile);
   if (files::is_image_file(path)) throw CaptureError(name_ + ": an image, not a video (use an image sequence)");
+  // FFmpeg reads this file and nothing else: local files only (no network, no pipes), and only
+  // the containers of recorded video -- an HLS playlist or a concat list named .avi made FFmpeg
+  // open the files it lists, a FIFO among them blocking forever. OpenCV passes these options to
+  // avformat_open_input at every open.
+  setenv("OPENCV_FFMPEG_CAPTURE_OPTIONS", kFfmpegCaptureOptions, 1);
   // Only the file backends: probing every backend (CAP_ANY) wakes GStreamer and camera
   // libraries that print noise and leak for a file none of them reads.
   for (const cv::VideoCaptureAPIs api : {cv::CAP_FFMPEG, cv::CAP_OPENCV_MJPEG}) {
@@ -103,7 +124,8 @@ VideoFileSource::VideoFileSource(const std::string& path, double fps_override) :
       // this backend cannot read it; try the next
     }
   }
-  if (!capture_.isOpened()) throw CaptureError(name_ + ": not a video OpenCV can read");
+  if (!capture_.isOpened())
+    throw CaptureError(name_ + ": not a video OpenCV can read (containers read: " + kVideoContainers + ")");
   fps_ = fps_override > 0 ? fps_override : capture_.get(cv::CAP_PROP_FPS);
   if (!(fps_ > 0) || !std::isfinite(fps_)) throw CaptureError(name_ + ": frame rate unknown (give one)");
 }
@@ -132,10 +154,7 @@ ImageSequenceSource::ImageSequenceSource(const std::string& directory, double pe
 ImageSequenceSource::ImageSequenceSource(std::vector<std::string> files, double period_s)
     : name_(files.empty() ? std::string("image list") : files.front()), files_(std::move(files)), period_s_(period_s) {
   if (files_.empty()) throw CaptureError("image list: no image files given");
-  std::error_code ec;
-  for (const std::string& f : files_) {
-    if (!fs::is_regular_file(f, ec)) throw CaptureError(f + ": no such file");
-  }
+  for (const std::string& f : files_) check_file(f, files::kImageFile);
 }
 
 std::optional<Frame> ImageSequenceSource::next() {

@@ -14,6 +14,7 @@
 #include "host/camera/calibration_file.hpp"
 #include "host/camera/intrinsics.hpp"
 #include "host/capture/frame_source.hpp"
+#include "host/cli/number_options.hpp"
 #include "host/files/input_limits.hpp"
 #include "host/files/output_file.hpp"
 #include "host/model/dataset.hpp"
@@ -106,7 +107,9 @@ void add_board_poses_command(CLI::App& app, int& status) {
       ->required();
   cmd->add_option("--joints", a->joints, "joint readings of the views (CSV q1..qN)")->required();
   cmd->add_option("-o,--out", a->out, "dataset to write (CSV)")->required();
-  cmd->add_option("--min-corners", a->min_corners, "fewest corners a view may have")->capture_default_str();
+  cmd->add_option("--min-corners", a->min_corners, camera::kMinCornersHelp)
+      ->check(whole_in(camera::kMinViewCorners, camera::kMaxViewCorners))
+      ->capture_default_str();
   cmd->callback([a, &status] {
     try {
       status = run_board_poses(*a);

@@ -170,7 +170,9 @@ void guarded(const char* name, int& status, const CameraArgs& a, F&& run) {
 void add_common(CLI::App* cmd, CameraArgs& a) {
   cmd->add_option("--board", a.board, camera::kBoardForms)->required();
   cmd->add_option("-o,--out", a.out, "output file (OpenCV YAML)")->required();
-  cmd->add_option("--min-corners", a.min_corners, "fewest corners a view may have")->capture_default_str();
+  cmd->add_option("--min-corners", a.min_corners, camera::kMinCornersHelp)
+      ->check(whole_in(camera::kMinViewCorners, camera::kMaxViewCorners))
+      ->capture_default_str();
 }
 
 }  // namespace

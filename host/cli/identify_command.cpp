@@ -1,5 +1,6 @@
 #include "host/cli/identify_command.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -8,6 +9,9 @@
 #include <numbers>
 #include <optional>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "host/camera/calibration_file.hpp"
 #include "host/cli/model_option.hpp"
@@ -135,6 +139,17 @@ std::string next_steps(const IdentifyArgs& a, const identify::IdentifyResult& re
   return out.str();
 }
 
+// The option that leaves --model-select no choice (the candidates are full solves from the
+// nominal with their own parameters and priors), or "" if none does.
+std::string model_fixed_by(const IdentifyArgs& a, const identify::IdentifyOptions& options) {
+  std::string not_here;
+  if (!a.params.empty()) not_here = "--params";
+  if (a.no_prior) not_here = "--no-prior";
+  if (options.method != identify::Method::full) not_here = "--method " + a.method;
+  if (options.start != identify::Start::nominal) not_here = "--start " + a.start;
+  return not_here;
+}
+
 // --model-select: auto (cross-validation over the candidate models, model_selection.hpp, with
 // enough rows), off (every parameter the model names, the default priors), or a candidate's name.
 // Returns the model to identify from (the nominal, or the nominal with scales added); `how` says
@@ -144,11 +159,7 @@ model::RobotModel choose_model(const IdentifyArgs& a, const model::RobotModel& n
                                std::optional<identify::Selection>& selection) {
   how = "every parameter the model names, the default priors (--model-select " + a.model_select + ")";
   if (a.model_select == "off") return nominal;
-  std::string not_here;
-  if (!a.params.empty()) not_here = "--params";
-  if (a.no_prior) not_here = "--no-prior";
-  if (options.method != identify::Method::full) not_here = "--method " + a.method;
-  if (options.start != identify::Start::nominal) not_here = "--start " + a.start;
+  const std::string not_here = model_fixed_by(a, options);
   if (!not_here.empty()) {
     if (a.model_select != "auto")
       throw model::InputError(
@@ -203,6 +214,75 @@ void check_prior_entry(const std::string& entry, const std::pair<std::string, do
                             ", too small for the solve; hold the parameter with --fix instead");
 }
 
+// The parameters named by --params or --fix, "base" and "tool" as their six motions; each with
+// the entry that named it. Throws InputError naming the option and the entry for an unknown name.
+std::vector<std::pair<std::string, std::string>> named_parameters(const std::string& option,
+                                                                  const std::vector<std::string>& names,
+                                                                  int joint_count) {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const std::string& name : names) {
+    if (name == "base" || name == "tool") {
+      const int first = static_cast<int>(name == "base" ? core::ParameterKind::base_x : core::ParameterKind::tool_x);
+      for (int k = 0; k < 6; ++k)
+        out.emplace_back(model::parameter_name({static_cast<core::ParameterKind>(first + k), 0}), name);
+      continue;
+    }
+    try {
+      out.emplace_back(model::parameter_name(model::parse_parameter_name(name, joint_count)), name);
+    } catch (const model::InputError& e) {
+      throw model::InputError(option + " '" + name + "': " + e.what());
+    }
+  }
+  return out;
+}
+
+// A parameter is identified (--params) or held at its start value (--fix), not both: given both, it
+// was reported "fixed on request" and identified all the same.
+void refuse_fixed_and_requested(const IdentifyArgs& a, int joint_count) {
+  const auto fixed = named_parameters("--fix", a.fix, joint_count);
+  for (const auto& [name, entry] : named_parameters("--params", a.params, joint_count))
+    for (const auto& [fixed_name, fixed_entry] : fixed)
+      if (name == fixed_name)
+        throw model::InputError("--params '" + entry + "' and --fix '" + fixed_entry + "' both name " + name +
+                                ": a parameter is identified or held fixed, not both");
+}
+
+// The models choose_model may give the solve: the nominal, the candidate --model-select names, or
+// with cross-validation every candidate (model_selection.hpp: geometry+scales adds a scale to each
+// joint, geometry+gravity a compliance).
+std::vector<model::RobotModel> models_in_play(const IdentifyArgs& a, const model::RobotModel& nominal,
+                                              const identify::IdentifyOptions& options, std::size_t rows) {
+  if (a.model_select == "off" || !model_fixed_by(a, options).empty()) return {nominal};
+  if (a.model_select != "auto") return {identify::find_candidate(nominal, options, a.model_select).model};
+  if (rows < static_cast<std::size_t>(identify::kMinRowsForSelection)) return {nominal};
+  std::vector<model::RobotModel> models;
+  for (const identify::Candidate& c : identify::candidate_models(nominal, options)) models.push_back(c.model);
+  return models;
+}
+
+// A --prior for a parameter none of those models has was silently ignored (scale1 for a model
+// whose joints declare no scale, tool_rx for a point tool): refused, naming it. A parameter the
+// solve has but holds fixed or cannot identify may take a prior. The models as identify
+// parameterizes them (a link promoted to Doty's convention has a beta); with a CPA start or
+// method, the start model's conventions come from the data, so beta<i> is taken for every link.
+void refuse_priors_of_absent_parameters(const std::vector<std::pair<std::string, std::string>>& priors,
+                                        const std::vector<model::RobotModel>& models,
+                                        const identify::IdentifyOptions& options) {
+  std::vector<std::string> present;
+  for (const model::RobotModel& m : models)
+    for (const core::ParameterId& id :
+         model::all_parameters(identify::reparameterize_for_identification(m, options.parallel_tolerance_rad, nullptr)))
+      present.push_back(model::parameter_name(id));
+  if (options.method == identify::Method::cpa || options.start == identify::Start::cpa)
+    for (int i = 0; i < models.front().joint_count(); ++i)
+      present.push_back(model::parameter_name({core::ParameterKind::link_beta, static_cast<std::uint8_t>(i)}));
+  for (const auto& [entry, name] : priors)
+    if (std::find(present.begin(), present.end(), name) == present.end())
+      throw model::InputError("--prior '" + entry + "': the model '" + models.front().name + "' has no parameter " +
+                              name + (models.size() > 1 ? " (nor has any candidate of --model-select)" : "") +
+                              ", so the prior would be ignored");
+}
+
 int run_identify(const IdentifyArgs& a) {
   identify::IdentifyOptions options;
   options.method = a.method == "cpa"           ? identify::Method::cpa
@@ -222,8 +302,11 @@ int run_identify(const IdentifyArgs& a) {
         {{"--out", a.out}, {"--urdf", a.urdf}, {"--hand-eye", a.hand_eye}, {"--report", a.report}},
         {{"--model", a.model.path}, {"--data", a.data}, {"--validate", a.validate}});
     const model::RobotModel nominal = a.model.load();
-    // Priors: the model file's (a YAML model), then --prior's; later entries win.
+    refuse_fixed_and_requested(a, nominal.joint_count());
+    // Priors: the model file's (a YAML model), then --prior's, which win; each parameter at most
+    // once on the command line.
     if (!model::is_urdf_path(a.model.path)) options.prior.sigma = model::load_model_priors(a.model.path);
+    std::vector<std::pair<std::string, std::string>> prior_entries;  // (entry, parameter name)
     for (const std::string& entry : a.prior) {
       options.prior.sigma.push_back(identify::parse_prior_entry(entry));
       core::ParameterId id{};
@@ -232,6 +315,12 @@ int run_identify(const IdentifyArgs& a) {
       } catch (const model::InputError& e) {
         throw model::InputError("--prior '" + entry + "': " + e.what());
       }
+      const std::string name = model::parameter_name(id);
+      for (const auto& [earlier, earlier_name] : prior_entries)
+        if (earlier_name == name)
+          throw model::InputError("--prior '" + earlier + "' and --prior '" + entry + "' both give the prior of " +
+                                  name + ": give it once");
+      prior_entries.emplace_back(entry, name);
       check_prior_entry(entry, options.prior.sigma.back(), nominal, id);
     }
     if (a.no_prior) options.prior.strength = 0.0;
@@ -240,6 +329,8 @@ int run_identify(const IdentifyArgs& a) {
           "--hand-eye: the model's tool is a point; a camera or a board on the flange is a frame "
           "(tool: frame in the model file)");
     const model::Dataset data = model::read_dataset(a.data);
+    if (!prior_entries.empty())
+      refuse_priors_of_absent_parameters(prior_entries, models_in_play(a, nominal, options, data.rows.size()), options);
     std::optional<model::Dataset> held_out;  // read before the solve: a bad file fails in a second
     if (!a.validate.empty()) {
       held_out = model::read_dataset(a.validate);

@@ -1,5 +1,7 @@
 // Entry point of the `kincal` command: parses the command line (CLI11) and dispatches to the
 // subcommands, each registered by its own file in host/cli/.
+#include <iostream>
+
 #include <CLI/CLI.hpp>
 
 #include "host/cli/blobs.hpp"
@@ -52,5 +54,12 @@ int main(int argc, char** argv) {
   kincal::cli::add_board_poses_command(app, status);
 
   if (const auto stop = kincal::cli::parse_command_line(app, argc, argv)) return *stop;
+  // Whatever a command printed is its output (a URDF, the blobs' JSON, a decoded log): if standard
+  // output could not take it (a full disk, a closed pipe), the command failed.
+  std::cout.flush();
+  if (!std::cout) {
+    std::cerr << "kincal: standard output: cannot write (a full disk or a closed pipe?): the output is lost\n";
+    return status != 0 ? status : 1;
+  }
   return status;
 }

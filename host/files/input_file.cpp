@@ -64,6 +64,19 @@ void decode(std::string& text, const std::string& path, const InputKind& kind) {
   if (const std::size_t i = text.find('\0'); i != std::string::npos)
     refuse(path + ":" + line_column(text, i), "a NUL byte (byte " + std::to_string(i) +
                                                   "): UTF-16 text or a binary file, not a " + kind.what + " in UTF-8");
+  for (std::size_t i = text.find('\r'); i != std::string::npos; i = text.find('\r', i + 1))
+    if (i + 1 == text.size() || text[i + 1] != '\n')
+      refuse(path + ":" + line_column(text, i), "a CR line end without LF (byte " + std::to_string(i) + "): a " +
+                                                    kind.what + " takes LF or CRLF line ends");
+  if (kind.max_line_bytes > 0)
+    for (std::size_t start = 0; start < text.size();) {
+      const std::size_t end = std::min(text.find('\n', start), text.size());
+      if (end - start > kind.max_line_bytes)
+        refuse(path + ":" + line_column(text, start), "a line of " + size_text(end - start) + ", more than the " +
+                                                          size_text(kind.max_line_bytes) + " a " + kind.what +
+                                                          " line may have");
+      start = end + 1;
+    }
   if (const std::size_t i = first_invalid_utf8(text); i != std::string::npos) {
     char hex[8];
     std::snprintf(hex, sizeof hex, "0x%02X", static_cast<unsigned>(static_cast<unsigned char>(text[i])));

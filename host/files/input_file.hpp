@@ -15,7 +15,9 @@
 //   - a file larger than its kind's limit (the size is checked before reading, and reading stops
 //     at the limit whatever the size said, so a file that grows, or standard input, is bounded).
 // Refused after reading, with "PATH:LINE:COLUMN (byte N)": UTF-16 or UTF-32 text (a byte-order
-// mark, or NUL bytes), bytes that are not UTF-8 (Latin-1, Windows-1252 ...).
+// mark, or NUL bytes), bytes that are not UTF-8 (Latin-1, Windows-1252 ...), a CR line end
+// without LF (a classic Mac file: every reader saw one long line and named a wrong cause), and
+// in a line-oriented kind a line longer than its max_line_bytes.
 //
 // Cost: one open(), one fstat() and reads of 64 KiB; memory: the file's text, at most the limit.
 #pragma once
@@ -42,17 +44,23 @@ struct InputKind {
   const char* what;
   std::uintmax_t max_bytes;
   Decoding decoding = Decoding::utf8;
+  std::size_t max_line_bytes = 0;  // a line-oriented kind's longest line (0: no limit)
 };
 
 inline constexpr std::uintmax_t kMiB = std::uintmax_t{1} << 20;
-inline constexpr InputKind kDatasetFile{"dataset", 256 * kMiB};  // also joints files and plans
-inline constexpr InputKind kExportFile{"measurement export", 256 * kMiB};
+// The longest line of a table or log: a row of a few hundred numbers is kilobytes; a 240 MB line
+// took 35 bytes of memory a byte as its fields were split (8.4 GB).
+inline constexpr std::size_t kMaxTableLineBytes = kMiB;
+inline constexpr InputKind kDatasetFile{"dataset", 256 * kMiB, Decoding::utf8,
+                                        kMaxTableLineBytes};  // also joints files, plans, targets
+inline constexpr InputKind kExportFile{"measurement export", 256 * kMiB, Decoding::utf8, kMaxTableLineBytes};
 inline constexpr InputKind kModelFile{"model file", 16 * kMiB};
 inline constexpr InputKind kUrdfFile{"URDF", 64 * kMiB};
 inline constexpr InputKind kJournalFile{"journal", 256 * kMiB, Decoding::none};
-inline constexpr InputKind kCandumpFile{"candump log", 256 * kMiB};
+inline constexpr InputKind kCandumpFile{"candump log", 256 * kMiB, Decoding::utf8, kMaxTableLineBytes};
 inline constexpr InputKind kSettingsFile{"settings file (YAML)", 16 * kMiB};  // platform, camera
 inline constexpr InputKind kImageFile{"image", 512 * kMiB};
+inline constexpr InputKind kVideoFile{"video", 64 * 1024 * kMiB, Decoding::none};
 inline constexpr InputKind kProgramFile{"robot program", 64 * kMiB, Decoding::utf8_keeping_mark};  // URScript (correct)
 inline constexpr InputKind kOriginalUrdfFile{"URDF", 64 * kMiB, Decoding::utf8_keeping_mark};
 inline constexpr InputKind kColourTableFile{"colour table", kMiB, Decoding::none};

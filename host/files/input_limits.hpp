@@ -2,9 +2,15 @@
 // PNG is a few kilobytes on disk and 1.2 GB decoded, and OpenCV's own limit (2^30 pixels) lets
 // it through.
 //
-//   images      at most kMaxImageSide pixels a side and kMaxImagePixels pixels, read from the
-//               file's header (PNG IHDR, JPEG SOFn, PNM) before decoding; other formats are
-//               checked after decoding.
+//   images      PNG, JPEG, TIFF, BMP or PNM only, at most kMaxImageSide pixels a side and
+//               kMaxImagePixels pixels, read from the file's header (PNG IHDR, JPEG SOFn, TIFF's
+//               first directory, BMP's info header, PNM) before decoding; every decoded image is
+//               checked again. Other formats are refused by name: OpenCV's decoders allocate
+//               first, and its own limit (OPENCV_IO_MAX_IMAGE_PIXELS) is read when the library
+//               loads, before main could set it (a 20 KB TIFF declaring 32000 x 32000 pixels
+//               took 3.1 GB; a WebP, HDR or PFM file would too). A JPEG cut short (no
+//               end-of-image marker) is refused: libjpeg decodes it grey where the data ends,
+//               with a warning naming no file.
 //   text files  input_file.hpp: a limit per kind, checked by read_text().
 //
 // Why read image headers here: OpenCV 4.6 (Debian 12) has no call that reports an image's size
@@ -34,8 +40,9 @@ inline constexpr const char* kTextLimitText = "at most 256 MiB";
 
 // Throws InputLimitError when the image's header states a size over the limits, and
 // InputFileError (input_file.hpp) for a path that is not a regular file of at most
-// kImageFile.max_bytes. Headers it cannot read (other formats, damaged files) pass: the decoder
-// reports those, and check_image_size() then checks the decoded size.
+// kImageFile.max_bytes, a file that is not PNG, JPEG, TIFF, BMP or PNM, or a JPEG cut short. A
+// damaged header of one of these formats passes: the decoder reports it, and check_image_size()
+// then checks the decoded size.
 void check_image_header(const std::string& path);
 void check_image_size(const std::string& path, std::int64_t width_px, std::int64_t height_px);
 

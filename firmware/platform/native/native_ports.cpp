@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -19,11 +20,17 @@
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 #include <vector>
 
 #include "firmware/app/parameter_store.hpp"
+#include "firmware/app/platform_measurement.hpp"
 
 namespace kincal::native {
+
+static_assert(kMaxFrameWidthPx == app::MeasurementPipeline::kMaxWidthPx &&
+                  kMaxFrameHeightPx == static_cast<std::size_t>(core::kLabelerMaxRows),
+              "read_pgm's frame limit is the labeler's frame, as --camera-size's");
 
 namespace {
 
@@ -177,53 +184,126 @@ app::RangerStatus LineRangers::read(std::array<std::uint32_t, shared::kRangers>&
 
 namespace {
 
-// The next header token of a PGM, skipping whitespace and # comments.
-std::string pgm_token(std::istream& in) {
+// What a file system object is, for messages: "a FIFO", "a character device", ...
+std::string file_kind(mode_t mode) {
+  if (S_ISREG(mode)) return "a regular file";
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+// The next header token of a PGM from data[at], skipping whitespace and # comments (to the end of
+// their line), and the one whitespace byte that ends it. Empty at the end of the data. A token
+// longer than kMaxPgmTokenBytes throws, naming the file and the byte where the token starts:
+// without the bound, a file of NULs would be one endless token.
+std::string pgm_token(std::string_view data, std::size_t& at, const std::string& path) {
   std::string token;
-  char c = 0;
-  while (in.get(c)) {
+  std::size_t start = 0;
+  while (at < data.size()) {
+    const char c = data[at];
     if (c == '#') {
-      std::string comment;
-      std::getline(in, comment);
+      const std::size_t end = data.find('\n', at);
+      at = end == std::string_view::npos ? data.size() : end;
     } else if (std::isspace(static_cast<unsigned char>(c))) {
+      ++at;
       if (!token.empty()) return token;
     } else {
+      if (token.empty()) start = at;
+      if (token.size() == kMaxPgmTokenBytes)
+        throw std::runtime_error("frame " + path + ": the PGM header token at byte " + std::to_string(start) +
+                                 " is longer than " + std::to_string(kMaxPgmTokenBytes) +
+                                 " bytes (the header is P5, width, height, maxval)");
       token += c;
+      ++at;
     }
   }
   return token;
 }
 
+// A header number: decimal digits only, within long.
+bool parse_pgm_number(const std::string& token, long& value) {
+  if (token.empty() || !std::all_of(token.begin(), token.end(), [](char c) { return c >= '0' && c <= '9'; }))
+    return false;
+  const auto [end, error] = std::from_chars(token.data(), token.data() + token.size(), value);
+  return error == std::errc() && end == token.data() + token.size();
+}
+
+// Throws, naming the path and what it is (a FIFO, a device, ...), unless it is a regular file.
+// stat() only: nothing is opened.
+void require_regular_file(const std::string& path, const std::string& what) {
+  struct stat status {};
+  if (::stat(path.c_str(), &status) != 0) throw std::runtime_error(what + " " + path + ": " + std::strerror(errno));
+  if (!S_ISREG(status.st_mode))
+    throw std::runtime_error(what + " " + path + " is " + file_kind(status.st_mode) + ", not a regular file");
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> read_pgm(const std::string& path, std::uint16_t& width_px, std::uint16_t& height_px) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error("cannot open frame " + path);
   const auto bad = [&path](const std::string& what) { return std::runtime_error("frame " + path + ": " + what); };
-  if (pgm_token(in) != "P5") throw bad("not a binary PGM (the file must start with P5)");
-  long width = 0, height = 0, maxval = 0;
-  try {
-    width = std::stol(pgm_token(in));
-    height = std::stol(pgm_token(in));
-    maxval = std::stol(pgm_token(in));
-  } catch (const std::exception&) {
-    throw bad("malformed PGM header (width, height, maxval)");
+  // Checked before open (opening a FIFO would wait for a writer, a device may act on open) and
+  // again on the descriptor, opened non-blocking, in case the path changed in between.
+  require_regular_file(path, "frame");
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+  if (fd < 0) throw bad(std::string("cannot open: ") + std::strerror(errno));
+  const struct Closer {
+    int descriptor;
+    ~Closer() { ::close(descriptor); }
+  } closer{fd};
+  struct stat status {};
+  if (::fstat(fd, &status) != 0) throw bad(std::string("fstat: ") + std::strerror(errno));
+  if (!S_ISREG(status.st_mode)) throw bad("is " + file_kind(status.st_mode) + ", not a regular file");
+  if (status.st_size < 0 || static_cast<std::uint64_t>(status.st_size) > kMaxPgmFileBytes)
+    throw bad(std::to_string(status.st_size) + " bytes is more than a frame file may hold (" +
+              std::to_string(kMaxPgmFileBytes) + " bytes: " + std::to_string(kMaxFrameWidthPx) + " x " +
+              std::to_string(kMaxFrameHeightPx) + " pixels and " + std::to_string(kMaxPgmHeaderBytes) +
+              " header bytes)");
+  std::string data(static_cast<std::size_t>(status.st_size), '\0');
+  std::size_t got = 0;
+  while (got < data.size()) {
+    const ssize_t n = ::read(fd, data.data() + got, data.size() - got);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) throw bad(std::string("read: ") + std::strerror(errno));
+    if (n == 0) break;  // the file shrank since fstat: the checks below see what was read
+    got += static_cast<std::size_t>(n);
   }
+  data.resize(got);
+
+  std::size_t at = 0;
+  if (pgm_token(data, at, path) != "P5") throw bad("not a binary PGM (the file must start with P5)");
+  const auto number = [&](const char* name) {
+    const std::string token = pgm_token(data, at, path);
+    long value = 0;
+    if (!parse_pgm_number(token, value))
+      throw bad("malformed PGM header (width, height, maxval): the " + std::string(name) + " '" + token +
+                "' is not a decimal number");
+    return value;
+  };
+  const long width = number("width");
+  const long height = number("height");
+  const long maxval = number("maxval");
+  if (at > kMaxPgmHeaderBytes)
+    throw bad("the PGM header is " + std::to_string(at) + " bytes, more than " + std::to_string(kMaxPgmHeaderBytes));
   if (width < 1 || width > 65535 || height < 1 || height > 65535)
     throw bad("frame size " + std::to_string(width) + " x " + std::to_string(height) + " is outside 1..65535");
   if (maxval < 1 || maxval > 255) throw bad("maxval " + std::to_string(maxval) + " is not 8-bit (1..255)");
-  // The header's size is checked against the file's before the pixels are allocated.
-  std::error_code size_error;
-  const auto file_bytes = static_cast<long long>(std::filesystem::file_size(path, size_error));
-  const long long pixel_bytes = static_cast<long long>(width) * height;
-  if (!size_error && file_bytes - static_cast<long long>(in.tellg()) < pixel_bytes)
+  const auto width_u = static_cast<std::size_t>(width), height_u = static_cast<std::size_t>(height);
+  const std::size_t pixel_bytes = width_u * height_u;
+  if (data.size() - at < pixel_bytes)
     throw bad("truncated: the header says " + std::to_string(width) + " x " + std::to_string(height) + " = " +
-              std::to_string(pixel_bytes) + " pixel bytes, the file holds " +
-              std::to_string(file_bytes - static_cast<long long>(in.tellg())) + " after the header");
-  std::vector<std::uint8_t> pixels(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
-  in.read(reinterpret_cast<char*>(pixels.data()), static_cast<std::streamsize>(pixels.size()));
-  if (in.gcount() != static_cast<std::streamsize>(pixels.size()))
-    throw bad("truncated: " + std::to_string(in.gcount()) + " of " + std::to_string(pixels.size()) + " pixel bytes");
+              std::to_string(pixel_bytes) + " pixel bytes, the file holds " + std::to_string(data.size() - at) +
+              " after the header");
+  if (width_u > kMaxFrameWidthPx || height_u > kMaxFrameHeightPx)
+    throw bad("frame size " + std::to_string(width) + " x " + std::to_string(height) +
+              " is larger than the labeler's " + std::to_string(kMaxFrameWidthPx) + " x " +
+              std::to_string(kMaxFrameHeightPx));
+  std::vector<std::uint8_t> pixels(pixel_bytes);
+  std::transform(data.begin() + static_cast<std::ptrdiff_t>(at),
+                 data.begin() + static_cast<std::ptrdiff_t>(at + pixel_bytes), pixels.begin(),
+                 [](char c) { return static_cast<std::uint8_t>(c); });
   width_px = static_cast<std::uint16_t>(width);
   height_px = static_cast<std::uint16_t>(height);
   return pixels;
@@ -232,14 +312,23 @@ std::vector<std::uint8_t> read_pgm(const std::string& path, std::uint16_t& width
 PgmFrames::PgmFrames(const std::string& path) {
   if (path.empty()) return;
   namespace fs = std::filesystem;
-  std::error_code error;
-  if (fs::is_directory(path, error)) {
-    for (const fs::directory_entry& e : fs::directory_iterator(path))
-      if (e.is_regular_file() && e.path().extension() == ".pgm") files_.push_back(e.path().string());
+  // What the path is, before anything opens it: a FIFO would block open() until a writer came.
+  struct stat status {};
+  if (::stat(path.c_str(), &status) != 0) throw std::runtime_error("frames " + path + ": " + std::strerror(errno));
+  if (S_ISDIR(status.st_mode)) {
+    for (const fs::directory_entry& e : fs::directory_iterator(path)) {
+      if (e.path().extension() != ".pgm") continue;
+      const std::string file = e.path().string();
+      require_regular_file(file, "frames directory " + path + ": frame");
+      files_.push_back(file);
+    }
     std::sort(files_.begin(), files_.end());
     if (files_.empty()) throw std::runtime_error("frames directory " + path + " holds no .pgm file");
-  } else {
+  } else if (S_ISREG(status.st_mode)) {
     files_.push_back(path);
+  } else {
+    throw std::runtime_error("frames " + path + " is " + file_kind(status.st_mode) +
+                             ": give a PGM file or a directory of them");
   }
   pixels_ = read_pgm(files_.front(), width_px_, height_px_);  // the frame size, and an early error
 }

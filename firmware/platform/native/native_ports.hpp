@@ -11,7 +11,9 @@
 //                   *.pgm of a directory in name order, one per measurement (the metering frame
 //                   moves to the next file, the measurement frame reads the same file again;
 //                   after the last file every frame fails), or a single file for every
-//                   measurement. All frames must have the first file's size. Without a source
+//                   measurement. All frames must have the first file's size, at most the
+//                   labeler's frame (640 x 4096, as --camera-size). Only regular files are read:
+//                   a FIFO, a device or a socket is refused before it is opened. Without a source
 //                   the camera is absent: size 0 x 0, every frame fails (camera sections
 //                   report kCameraFailure). Rows are always ready (never kPending); the
 //                   exposure time is the clock when the frame was requested.
@@ -20,6 +22,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <fstream>
 #include <memory>
@@ -82,7 +85,9 @@ class LineRangers {
 class PgmFrames {
  public:
   // path empty: no camera. Throws std::runtime_error naming the path if it is neither a
-  // readable PGM file nor a directory holding at least one, or if the first file is malformed.
+  // readable PGM file nor a directory holding at least one, if it or one of the directory's
+  // *.pgm is not a regular file (naming what it is: a FIFO, a character device, ...; checked with
+  // stat() before anything is opened, so a FIFO never blocks), or if the first file is malformed.
   explicit PgmFrames(const std::string& path);
   std::uint16_t width_px() const { return width_px_; }
   std::uint16_t height_px() const { return height_px_; }
@@ -101,7 +106,24 @@ class PgmFrames {
   bool frame_ok_ = false;
 };
 
-// Reads a binary 8-bit PGM (P5). Throws std::runtime_error naming the file and what is wrong.
+// read_pgm's bounds, so that no input makes it block or grow without limit: a header token (P5,
+// width, height, maxval) is at most kMaxPgmTokenBytes; the header, comments included, at most
+// kMaxPgmHeaderBytes; the frame at most the labeler's frame (kMaxFrameWidthPx x
+// kMaxFrameHeightPx, MeasurementPipeline::kMaxWidthPx x core::kLabelerMaxRows, static_assert in
+// native_ports.cpp); the file at most kMaxPgmFileBytes (a header and the largest frame).
+inline constexpr std::size_t kMaxPgmTokenBytes = 20;
+inline constexpr std::size_t kMaxPgmHeaderBytes = 4096;
+inline constexpr std::size_t kMaxFrameWidthPx = 640;
+inline constexpr std::size_t kMaxFrameHeightPx = 4096;
+inline constexpr std::size_t kMaxPgmFileBytes = kMaxPgmHeaderBytes + kMaxFrameWidthPx * kMaxFrameHeightPx;
+
+// Reads a binary 8-bit PGM (P5): the first image of the file (bytes after it are ignored).
+// Throws std::runtime_error naming the file and what is wrong: not a regular file (checked with
+// stat() before open, and again with fstat() on the descriptor, opened O_NONBLOCK), over
+// kMaxPgmFileBytes, not P5, a header token over kMaxPgmTokenBytes or not a decimal number, a header
+// over kMaxPgmHeaderBytes, a size outside 1..65535, maxval outside 1..255, fewer pixel bytes than
+// the header says, or a frame larger than kMaxFrameWidthPx x kMaxFrameHeightPx. Memory: the file,
+// then the pixels (width x height bytes), both within kMaxPgmFileBytes.
 std::vector<std::uint8_t> read_pgm(const std::string& path, std::uint16_t& width_px, std::uint16_t& height_px);
 
 std::uint64_t monotonic_us();

@@ -1,6 +1,8 @@
 #include <doctest/doctest.h>
 
+#include <sys/stat.h>
 #include <unistd.h>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -103,6 +105,28 @@ TEST_CASE("image sequence errors name the directory or the file") {
   ImageSequenceSource source(std::vector<std::string>{dir.file("good.png"), dir.file("bad.png")});
   CHECK(source.next().has_value());
   CHECK_THROWS_WITH(source.next(), doctest::Contains((dir.file("bad.png") + ": unreadable image").c_str()));
+}
+
+TEST_CASE("a JPEG cut short and a named pipe are refused by name") {
+  TempDir dir("cut");
+  cv::Mat gradient(48, 64, CV_8UC1);
+  for (int y = 0; y < gradient.rows; ++y)
+    for (int x = 0; x < gradient.cols; ++x) gradient.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(3 * x + y);
+  std::vector<std::uint8_t> jpeg;
+  REQUIRE(cv::imencode(".jpg", gradient, jpeg));
+  std::ofstream(dir.file("whole.jpg"), std::ios::binary)
+      .write(reinterpret_cast<const char*>(jpeg.data()), static_cast<std::streamsize>(jpeg.size()));
+  std::ofstream(dir.file("cut.jpg"), std::ios::binary)
+      .write(reinterpret_cast<const char*>(jpeg.data()), static_cast<std::streamsize>(jpeg.size() * 9 / 10));
+  ImageSequenceSource source(std::vector<std::string>{dir.file("whole.jpg"), dir.file("cut.jpg")});
+  CHECK(source.next().has_value());
+  CHECK_THROWS_WITH(source.next(), doctest::Contains((dir.file("cut.jpg") + ": a JPEG cut short").c_str()));
+  REQUIRE(::mkfifo(dir.file("pipe.png").c_str(), 0600) == 0);
+  CHECK_THROWS_WITH(ImageSequenceSource(std::vector<std::string>{dir.file("pipe.png")}),
+                    doctest::Contains((dir.file("pipe.png") + ": is a named pipe").c_str()));
+  REQUIRE(::mkfifo(dir.file("pipe.avi").c_str(), 0600) == 0);
+  CHECK_THROWS_WITH(VideoFileSource(dir.file("pipe.avi")),
+                    doctest::Contains((dir.file("pipe.avi") + ": is a named pipe").c_str()));
 }
 
 TEST_CASE("a video file gives its frames at index / fps") {

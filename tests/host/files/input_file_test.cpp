@@ -97,6 +97,19 @@ TEST_CASE("read_text: UTF-16, NUL bytes and Latin-1 refused with line, column an
   CHECK(has(refusal(s.write("cut.csv", "ab\xE2\x82")), ":1:3: byte 0xE2"));
 }
 
+TEST_CASE("read_text: CR line ends without LF, and over-long lines of a line-oriented kind, refused with their line") {
+  const Scratch s;
+  CHECK(has(refusal(s.write("mac.csv", "q1,q2\r1,2\r")),
+            "mac.csv:1:6: a CR line end without LF (byte 5): a dataset takes LF or CRLF line ends"));
+  CHECK(refusal(s.write("crlf.csv", "q1,q2\r\n1,2\r\n")).empty());
+  constexpr files::InputKind kLines{"test table", 1024, files::Decoding::utf8, 8};
+  CHECK(refusal(s.write("long.csv", "q1,q2\n1,2,3,4,5\n"), kLines) ==
+        s.path("long.csv") + ":2:1: a line of 9 bytes, more than the 8 bytes a test table line may have");
+  CHECK(refusal(s.write("last.csv", "q1,q2\n1,2,3,4,5"), kLines) ==
+        s.path("last.csv") + ":2:1: a line of 9 bytes, more than the 8 bytes a test table line may have");
+  CHECK(refusal(s.write("short.csv", "q1,q2\n1,2,3,4\n"), kLines).empty());
+}
+
 TEST_CASE("excerpt and line_column") {
   CHECK(files::excerpt("short") == "short");
   const std::string cell(8 << 20, '7');
