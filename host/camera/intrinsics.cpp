@@ -62,8 +62,8 @@ std::string seen_board_hint(const std::vector<BoardDetection>& detections) {
   const auto most =
       std::max_element(votes.begin(), votes.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
   if (most == votes.end()) return "";
-  return "\n  " + std::to_string(most->second) + " of " + std::to_string(detections.size()) +
-         " views show a board " + most->first + ": give --board " + most->first + "?";
+  return "\n  " + std::to_string(most->second) + " of " + std::to_string(detections.size()) + " views show a board " +
+         most->first + ": give --board " + most->first + "?";
 }
 
 void refuse_other_image_sizes(const std::vector<BoardDetection>& detections, cv::Size expected,

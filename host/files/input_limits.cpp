@@ -175,8 +175,8 @@ void check_image_header(const std::string& path) {
   }
   if (!size && !known_image_format(in))
     throw InputFileError(path +
-                         ": not a PNG, JPEG, TIFF, BMP or PNM image (kincal reads only formats whose size it can "
-                         "check before decoding)");
+                         ": not an image kincal reads (PNG, JPEG, TIFF, BMP or PNM: the formats whose size it "
+                         "checks before decoding)");
   if (size) check_image_size(path, size->first, size->second);
   if (jpeg && !jpeg_ends(in)) throw InputFileError(path + ": a JPEG cut short (no end-of-image marker after its data)");
 }

@@ -104,7 +104,7 @@ TEST_CASE("image sequence errors name the directory or the file") {
   cv::imwrite(dir.file("good.png"), grey_image(5));
   ImageSequenceSource source(std::vector<std::string>{dir.file("good.png"), dir.file("bad.png")});
   CHECK(source.next().has_value());
-  CHECK_THROWS_WITH(source.next(), doctest::Contains((dir.file("bad.png") + ": unreadable image").c_str()));
+  CHECK_THROWS_WITH(source.next(), doctest::Contains((dir.file("bad.png") + ": not an image kincal reads").c_str()));
 }
 
 TEST_CASE("a JPEG cut short and a named pipe are refused by name") {

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <string>
 
+#include "host/files/input_file.hpp"
 #include "host/files/input_limits.hpp"
 #include "host/files/output_file.hpp"
 
@@ -121,7 +122,26 @@ TEST_CASE("image headers over the limits are refused before decoding") {
   // JPEG: SOI, an APP0 segment, then SOF0 with height 20000 and width 20000.
   const std::string jpeg = std::string("\xff\xd8\xff\xe0\x00\x04\x00\x00\xff\xc0\x00\x11\x08\x4e\x20\x4e\x20", 17);
   CHECK_THROWS_AS(kincal::files::check_image_header(write("big.jpg", jpeg)), kincal::files::InputLimitError);
-  CHECK_NOTHROW(kincal::files::check_image_header(write("text.png", "not an image")));
+  // Formats whose size is not read before decoding are refused: a 20 KB TIFF of 32000 x 32000
+  // took 3.1 GB; TIFF's and BMP's headers are read.
+  CHECK_THROWS_WITH_AS(kincal::files::check_image_header(write("text.png", "not an image")),
+                       doctest::Contains("text.png: not an image kincal reads (PNG, JPEG, TIFF, BMP or PNM"),
+                       kincal::files::InputFileError);
+  std::string tiff("II*\0\x08\0\0\0\x02\0", 10);  // little-endian, two entries: width and length, LONG
+  for (const int tag : {256, 257}) {
+    tiff += std::string(1, static_cast<char>(tag & 0xFF)) + std::string(1, static_cast<char>(tag >> 8));
+    tiff += std::string("\x04\0\x01\0\0\0\x00\x7d\0\0", 10);  // 32000
+  }
+  tiff += std::string(4, '\0');
+  CHECK_THROWS_WITH_AS(kincal::files::check_image_header(write("big.tif", tiff)),
+                       doctest::Contains("image of 32000 x 32000 pixels is over the limit"),
+                       kincal::files::InputLimitError);
+  std::string bmp("BM", 2);
+  bmp += std::string(12, '\0') + std::string("\x28\0\0\0", 4);                 // BITMAPINFOHEADER
+  bmp += std::string("\x20\x4e\0\0", 4) + std::string("\xe0\xb1\xff\xff", 4);  // 20000, -20000 (top-down)
+  CHECK_THROWS_WITH_AS(kincal::files::check_image_header(write("big.bmp", bmp)),
+                       doctest::Contains("image of 20000 x 20000 pixels is over the limit"),
+                       kincal::files::InputLimitError);
   CHECK_THROWS_WITH_AS(kincal::files::check_image_size("x.bmp", 20000, 20000),
                        "x.bmp: image of 20000 x 20000 pixels is over the limit of 16384 pixels a side and 64 Mpx",
                        kincal::files::InputLimitError);

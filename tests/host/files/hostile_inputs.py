@@ -231,7 +231,7 @@ with open("huge.bmp", "wb") as f:  # RLE8, top-down: a few bytes on disk
 case("blobs:BMP 20000x20000", ["blobs", "huge.bmp"], r"huge\.bmp: image of 20000 x 20000 pixels is over the limit")
 with open("huge.pfm", "wb") as f:  # a float map OpenCV decodes, header first: 32000 x 32000
     f.write(b"Pf\n32000 32000\n-1.0\n" + b"\0" * 64)
-case("blobs:PFM", ["blobs", "huge.pfm"], r"huge\.pfm: not a PNG, JPEG, TIFF, BMP or PNM image")
+case("blobs:PFM", ["blobs", "huge.pfm"], r"huge\.pfm: not an image kincal reads \(PNG, JPEG, TIFF, BMP or PNM")
 # a JPEG's frame header behind a thousand comments is still read before decoding
 with open("late_header.jpg", "wb") as f:
     f.write(b"\xff\xd8" + b"\xff\xfe\x00\x04ab" * 1001 + b"\xff\xc0\x00\x0b\x08" + struct.pack(">HH", 16000, 65000) +
@@ -636,7 +636,7 @@ def table_cases():
     for command, argv, kind in [("import", ["import", long_line, "-o", "o.csv"] + six, "measurement export"),
                                 ("identify", ["identify", "--model", puma, "--data", long_line, "--out", "o.yaml"], "dataset"),
                                 ("predict", ["predict", "--model", puma, "--joints", long_line, "-o", "o.csv"], "dataset")]:
-        tcase(f"{command}:an 8 MiB line", argv, rf"long_line\.csv:2:1: a line of 8 MiB, more than the 1 MiB a {kind} line may have",
+        tcase(f"{command}:an 8 MiB line", argv, rf"long_line\.csv:2:1: a line of [0-9]+ MiB, more than the 1 MiB a {kind} line may have",
               absent=["o.csv", "o.yaml"], max_message=1000)
 
 
