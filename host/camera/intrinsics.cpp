@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include <opencv2/calib3d.hpp>
@@ -37,33 +38,46 @@ cv::Mat CameraModel::distortion_mat() const {
   return d;
 }
 
+namespace {
+
+// The board text most detections give in `field` (fitting_board or seen_board), with how many give
+// it and how many different texts they give; nullopt when none gives one.
+struct BoardVote {
+  std::string board;
+  int views = 0, sizes = 0;
+};
+std::optional<BoardVote> most_given(const std::vector<BoardDetection>& detections, std::string BoardDetection::*field) {
+  std::map<std::string, int> votes;
+  for (const BoardDetection& d : detections)
+    if (!(d.*field).empty()) ++votes[d.*field];
+  const auto most =
+      std::max_element(votes.begin(), votes.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+  if (most == votes.end()) return std::nullopt;
+  return BoardVote{most->first, most->second, static_cast<int>(votes.size())};
+}
+
+}  // namespace
+
 void refuse_wrong_board(const std::vector<BoardDetection>& detections) {
   const auto wrong = [](const BoardDetection& d) { return d.larger_board || !d.fitting_board.empty(); };
   const auto count = std::count_if(detections.begin(), detections.end(), wrong);
   if (count == 0) return;
   // The view to name: the first measuring the size most views measured, else the first wrong one.
-  std::map<std::string, int> votes;
-  for (const BoardDetection& d : detections)
-    if (!d.fitting_board.empty()) ++votes[d.fitting_board];
-  const auto most =
-      std::max_element(votes.begin(), votes.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+  const std::optional<BoardVote> most = most_given(detections, &BoardDetection::fitting_board);
   const auto named = std::find_if(detections.begin(), detections.end(), [&](const BoardDetection& d) {
-    return most == votes.end() ? wrong(d) : d.fitting_board == most->first;
+    return most ? d.fitting_board == most->board : wrong(d);
   });
   throw CalibrationError(named->view + ": " + named->reason + " (" + std::to_string(count) + " of " +
                          std::to_string(detections.size()) + " views show another board" +
-                         (votes.size() > 1 ? ", " + std::to_string(most->second) + " of them this size" : "") + ")");
+                         (most && most->sizes > 1 ? ", " + std::to_string(most->views) + " of them this size" : "") +
+                         ")");
 }
 
 std::string seen_board_hint(const std::vector<BoardDetection>& detections) {
-  std::map<std::string, int> votes;
-  for (const BoardDetection& d : detections)
-    if (!d.seen_board.empty()) ++votes[d.seen_board];
-  const auto most =
-      std::max_element(votes.begin(), votes.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
-  if (most == votes.end()) return "";
-  return "\n  " + std::to_string(most->second) + " of " + std::to_string(detections.size()) + " views show a board " +
-         most->first + ": give --board " + most->first + "?";
+  const std::optional<BoardVote> most = most_given(detections, &BoardDetection::seen_board);
+  if (!most) return "";
+  return "\n  " + std::to_string(most->views) + " of " + std::to_string(detections.size()) + " views show a board " +
+         most->board + ": give --board " + most->board + "?";
 }
 
 void refuse_other_image_sizes(const std::vector<BoardDetection>& detections, cv::Size expected,
