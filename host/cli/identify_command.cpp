@@ -221,14 +221,9 @@ std::vector<std::pair<std::string, std::string>> named_parameters(const std::str
                                                                   int joint_count) {
   std::vector<std::pair<std::string, std::string>> out;
   for (const std::string& name : names) {
-    if (name == "base" || name == "tool") {
-      const int first = static_cast<int>(name == "base" ? core::ParameterKind::base_x : core::ParameterKind::tool_x);
-      for (int k = 0; k < 6; ++k)
-        out.emplace_back(model::parameter_name({static_cast<core::ParameterKind>(first + k), 0}), name);
-      continue;
-    }
     try {
-      out.emplace_back(model::parameter_name(model::parse_parameter_name(name, joint_count)), name);
+      for (const core::ParameterId& id : identify::parameter_entry_ids(name, joint_count))
+        out.emplace_back(model::parameter_name(id), name);
     } catch (const model::InputError& e) {
       throw model::InputError(option + " '" + name + "': " + e.what());
     }

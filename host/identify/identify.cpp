@@ -257,16 +257,12 @@ SolveSummary solve_ceres(Parameterization& p, const model::Dataset& data, const 
   return out;
 }
 
-// Parses --fix / --params entries; "base" and "tool" stand for their six motions.
+// Parses --fix / --params entries (parameter_entry_ids).
 ParameterIds parse_names(const std::vector<std::string>& names, const RobotModel& m) {
   ParameterIds ids;
   for (const std::string& name : names) {
-    if (name == "base" || name == "tool") {
-      const int first = static_cast<int>(name == "base" ? core::ParameterKind::base_x : core::ParameterKind::tool_x);
-      for (int k = 0; k < 6; ++k) ids.push_back({static_cast<core::ParameterKind>(first + k), 0});
-      continue;
-    }
-    ids.push_back(model::parse_parameter_name(name, m.joint_count()));
+    const ParameterIds entry = parameter_entry_ids(name, m.joint_count());
+    ids.insert(ids.end(), entry.begin(), entry.end());
   }
   return ids;
 }
@@ -438,6 +434,14 @@ Eigen::Matrix3d prediction_covariance(const IdentifyResult& r, std::span<const d
 }
 
 // Candidates in order of preference: base, tool, then link by link (theta, d, a, alpha, beta).
+ParameterIds parameter_entry_ids(const std::string& name, int joint_count) {
+  if (name != "base" && name != "tool") return {model::parse_parameter_name(name, joint_count)};
+  const int first = static_cast<int>(name == "base" ? core::ParameterKind::base_x : core::ParameterKind::tool_x);
+  ParameterIds ids;
+  for (int k = 0; k < 6; ++k) ids.push_back({static_cast<core::ParameterKind>(first + k), 0});
+  return ids;
+}
+
 ParameterIds candidate_parameters(const RobotModel& m) {
   const ParameterIds all = model::all_parameters(m);
   ParameterIds out;

@@ -230,6 +230,10 @@ RobotModel reparameterize_for_identification(const RobotModel& model, double par
 // motions, the tool's, then link by link (theta, d, a, alpha, beta). Where parameters cannot be
 // told apart, the later ones are held fixed -- so theta1 and d1 give way to the base, and the last
 // link's parameters to the tool.
+// The parameters one --fix / --params entry names: "base" and "tool" stand for their six
+// motions, any other entry for the parameter of that name (model::parse_parameter_name, whose
+// InputError it throws).
+ParameterIds parameter_entry_ids(const std::string& name, int joint_count);
 ParameterIds candidate_parameters(const RobotModel& model);
 
 // The noise model's lines of the report: the instrument's noise, the model error (mm, deg), the
