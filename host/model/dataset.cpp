@@ -125,6 +125,7 @@ void read_table(std::istream& in, const std::string& source, bool joints_only, O
   std::string line;
   int number = 0;
   std::optional<Header> h;
+  std::size_t rows = 0;
   while (std::getline(in, line)) {
     ++number;
     if (skipped(line)) continue;
@@ -133,6 +134,7 @@ void read_table(std::istream& in, const std::string& source, bool joints_only, O
       on_header(*h, number);
       continue;
     }
+    if (rows++ == kMaxRows) fail_at(source, number, too_many_rows());
     const std::optional<std::vector<std::string>> split = split_quoted_fields(line, ',');
     if (!split) fail_at(source, number, "a double quote is not closed, or text follows a closing quote");
     const std::vector<std::string>& fields = *split;
@@ -148,6 +150,11 @@ void read_table(std::istream& in, const std::string& source, bool joints_only, O
 }
 
 }  // namespace
+
+std::string too_many_rows() {
+  return "more than " + std::to_string(kMaxRows) +
+         " data rows, the most a dataset holds (a calibration needs hundreds: keep every n-th row)";
+}
 
 Dataset parse_dataset(std::istream& in, const std::string& source) {
   Dataset data;

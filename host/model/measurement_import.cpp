@@ -242,6 +242,7 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   while (std::getline(in, line)) {
     ++number;
     if (trim_field(line, true).empty()) continue;
+    if (result.data.rows.size() == kMaxRows) fail(source, number, 0, too_many_rows());
     const std::vector<std::string> fields = export_fields(line, result.separator, source, number);
     if (fields.size() != t.names.size())
       fail(source, number, std::min(fields.size(), t.names.size()),

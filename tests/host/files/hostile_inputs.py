@@ -638,6 +638,15 @@ def table_cases():
                                 ("predict", ["predict", "--model", puma, "--joints", long_line, "-o", "o.csv"], "dataset")]:
         tcase(f"{command}:an 8 MiB line", argv, rf"long_line\.csv:2:1: a line of [0-9]+ MiB, more than the 1 MiB a {kind} line may have",
               absent=["o.csv", "o.yaml"], max_message=1000)
+    # valid rows past the row cap (7.1 M rows under the size limit took identify 8.7 GB): refused at the row past it
+    with open("many_rows.csv", "w") as f:
+        f.write("q1,q2,q3,q4,q5,q6,x,y,z\n" + "0.1,0.2,0.3,0.4,0.5,0.6,1,1,1\n" * 100001)
+    many_rows = os.path.join(work, "many_rows.csv")
+    for command, argv in [("import", ["import", many_rows, "-o", "o.csv"] + six),
+                          ("identify", ["identify", "--model", puma, "--data", many_rows, "--out", "o.yaml"]),
+                          ("predict", ["predict", "--model", puma, "--joints", many_rows, "-o", "o.csv"])]:
+        tcase(f"{command}:100001 rows", argv, r"many_rows\.csv:100002:(1:)? more than 100000 data rows, the most a dataset holds",
+              absent=["o.csv", "o.yaml"], max_message=1000)
 
 
 # --- kincal correct (issue #24): its target tables and URScript programs at every hostile class of

@@ -108,6 +108,10 @@ TEST_CASE("tabs and points; errors name file, line and column") {
   CHECK(error_of("J 1,J 2,X,Y,Z,SX,SY,SZ\n0,2,3,4,5,0,1,1\n", o) ==
         "x.csv:2:6: column 'SX': a standard deviation must be > 0");
   CHECK(error_of("J 1,J 2,X,Y,Z,SX,SY,SZ\n", o) == "x.csv: no data rows after the header");
+  o.position_std.reset();  // at most kMaxRows data rows (dataset.hpp): the dataset written must be one to read
+  std::string rows = "J 1,J 2,X,Y,Z\n";
+  for (std::size_t i = 0; i <= model::kMaxRows; ++i) rows += "1,2,3,4,5\n";
+  CHECK(error_of(rows, o) == "x.csv:" + std::to_string(model::kMaxRows + 2) + ":1: " + model::too_many_rows());
 }
 
 TEST_CASE("the real UR10 laser-tracker export, read as it is") {

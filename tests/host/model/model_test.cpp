@@ -262,6 +262,18 @@ TEST_CASE("datasets: read, write, read back, and malformed rows") {
         "d.csv:2: the covariance (cxx..czz) is not positive definite");
   CHECK(dataset_error("") == "d.csv:0: no header row (expected q1,...,qN,x,y,z)");
   CHECK(dataset_error("q1,x,y,z\n0,1,2,inf\n") == "d.csv:2: column z is not finite");
+
+  // At most kMaxRows data rows, in datasets and joints files alike; blank and comment lines do not count.
+  std::string rows = "# a comment\nq1,x,y,z\n\n";
+  for (std::size_t i = 0; i < model::kMaxRows; ++i) rows += "0,1,2,3\n";
+  std::istringstream full(rows);
+  CHECK(model::parse_dataset(full, "d.csv").rows.size() == model::kMaxRows);
+  rows += "# the last one\n0,1,2,3\n";
+  const std::string past = "d.csv:" + std::to_string(model::kMaxRows + 5) + ": " + model::too_many_rows();
+  CHECK(dataset_error(rows) == past);
+  std::istringstream joints(rows);
+  CHECK_THROWS_WITH_AS(model::parse_joints(joints, "d.csv"), past.c_str(), model::InputError);
+  CHECK(model::too_many_rows().starts_with("more than 100000 data rows"));
 }
 
 TEST_CASE("axes to chain reproduces the kinematics of any model") {
