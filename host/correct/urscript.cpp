@@ -23,23 +23,55 @@ std::size_t skip_blanks(std::string_view s, std::size_t at) {
   return at;
 }
 
-// The motion call on a line (its text without the line end), if any: the first of kCalls that
-// stands as a whole name followed by '(' and is not behind a '#'.
+// A line as code: the text inside string literals ("..." or '...', a backslash escaping the next
+// character) blanked and the line cut at a '#' outside them, so that a motion inside a string or a
+// comment is not one. `unclosed`: the offset of a quote its line does not close, else npos.
+struct Code {
+  std::string text;
+  std::size_t unclosed = std::string_view::npos;
+};
+
+Code code_of(std::string_view line) {
+  Code code{std::string(line)};
+  std::string& c = code.text;
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    if (code.unclosed != std::string_view::npos) {
+      if (c[i] == '\\' && i + 1 < c.size()) {
+        c[i] = c[i + 1] = ' ';
+        ++i;
+        continue;
+      }
+      if (c[i] == c[code.unclosed]) {
+        code.unclosed = std::string_view::npos;
+        continue;
+      }
+      c[i] = ' ';
+    } else if (c[i] == '"' || c[i] == '\'') {
+      code.unclosed = i;
+    } else if (c[i] == '#') {
+      c.resize(i);
+      break;
+    }
+  }
+  return code;
+}
+
+// The motion call in a line's code (code_of), if any: the first of kCalls that stands as a whole
+// name followed by '('.
 struct Call {
   std::string name;
   std::size_t at = std::string_view::npos, open = 0;  // the name's offset, the offset after '('
 };
 
-Call find_call(std::string_view line) {
+Call find_call(std::string_view code) {
   Call found;
-  const std::size_t comment = line.find('#');
   for (const char* name : kCalls) {
     const std::string_view n(name);
-    for (std::size_t at = line.find(n); at != std::string_view::npos && at < comment; at = line.find(n, at + 1)) {
-      if ((at > 0 && name_char(line[at - 1])) || (at + n.size() < line.size() && name_char(line[at + n.size()])))
+    for (std::size_t at = code.find(n); at != std::string_view::npos; at = code.find(n, at + 1)) {
+      if ((at > 0 && name_char(code[at - 1])) || (at + n.size() < code.size() && name_char(code[at + n.size()])))
         continue;
-      const std::size_t paren = skip_blanks(line, at + n.size());
-      if (paren >= line.size() || line[paren] != '(') continue;
+      const std::size_t paren = skip_blanks(code, at + n.size());
+      if (paren >= code.size() || code[paren] != '(') continue;
       if (at < found.at) found = {std::string(n), at, paren + 1};
       break;
     }
@@ -70,22 +102,29 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
       throw model::InputError(source + ":" + std::to_string(number) + ":1: a line of " + std::to_string(line.size()) +
                               " bytes: not a URScript program (at most " + std::to_string(kMaxLineBytes) +
                               " bytes a line)");
-    const Call call = find_call(line);
+    const auto where = [&](std::size_t offset) { return static_cast<int>(offset + 1); };
+    const auto fail = [&](std::size_t offset, const std::string& what) {
+      throw model::InputError(source + ":" + std::to_string(number) + ":" + std::to_string(where(offset)) + ": " +
+                              what);
+    };
+    const Code code = code_of(line);
+    if (code.unclosed != std::string_view::npos) fail(code.unclosed, "a string is not closed on its line");
+    const Call call = find_call(code.text);
     if (call.at != std::string_view::npos) {
-      const auto where = [&](std::size_t offset) { return static_cast<int>(offset + 1); };
-      const auto fail = [&](std::size_t offset, const std::string& what) {
-        throw model::InputError(source + ":" + std::to_string(number) + ":" + std::to_string(where(offset)) + ": " +
-                                what);
-      };
-      std::size_t at = skip_blanks(line, call.open);
-      const bool pose = at < line.size() && line[at] == 'p';
-      if (pose) at = skip_blanks(line, at + 1);
-      if (at >= line.size() || line[at] != '[')
-        fail(at, call.name +
-                     "'s target is not a literal [...] or p[...]: its value is not known before the program "
-                     "runs, so kincal cannot correct it (write the target out)");
-      const std::size_t close = line.find(']', at);
+      const std::string_view code_text = code.text;
+      std::size_t at = skip_blanks(code_text, call.open);
+      const bool pose = at < code_text.size() && code_text[at] == 'p';
+      if (pose) at = skip_blanks(code_text, at + 1);
+      const std::string not_literal = "its value is not known before the program runs, so kincal cannot correct it "
+                                      "(write the target out)";
+      if (at >= code_text.size() || code_text[at] != '[')
+        fail(at, call.name + "'s target is not a literal [...] or p[...]: " + not_literal);
+      const std::size_t close = code_text.find(']', at);
       if (close == std::string_view::npos) fail(at, call.name + ": no ']' closes the target on this line");
+      const std::size_t after = skip_blanks(code_text, close + 1);
+      if (after >= code_text.size() || (code_text[after] != ',' && code_text[after] != ')'))
+        fail(after, call.name + "'s target goes on past its literal (an expression such as [...] + [...], or a call "
+                                "continued on the next line): " + not_literal);
       if (program.motions.size() == max_motions)
         fail(call.at, "more than " + std::to_string(max_motions) + " motions, the most kincal correct takes");
       UrMotion m;
@@ -97,8 +136,8 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
       m.target.orientation = pose;
       std::vector<double> values;
       for (std::size_t from = at + 1; from <= close;) {
-        const std::size_t comma = std::min(line.find(',', from), close);
-        values.push_back(parse_cell(line.substr(from, comma - from),
+        const std::size_t comma = std::min(code_text.find(',', from), close);
+        values.push_back(parse_cell(code_text.substr(from, comma - from),
                                     call.name + " value " + std::to_string(values.size() + 1), source, number,
                                     where(from)));
         from = comma + 1;

@@ -1,11 +1,14 @@
 // Universal Robots' URScript programs in and out (issue #24): the literal targets of motion lines
 // read as joint or Cartesian targets, and the program written back with corrected targets.
 //
-// Read: every call movej(, movel(, movep( or servoj( that is not behind a '#' on its line, with a
-// literal first argument -- [q1, ..., qN] (joint positions, rad) or p[x, y, z, rx, ry, rz] (a pose
-// in the robot's base frame: m, and a rotation vector in rad). One call per line is read (the
-// first). Refused (model::InputError "FILE:LINE:COLUMN: what"): a line longer than 64 KiB (no
-// program has one: the file is something else), a joint list whose length is not
+// Read: every call movej(, movel(, movep( or servoj( in the code of a line -- not inside a string
+// ("..." or '...', a backslash escaping the next character) nor behind a '#' -- whose first argument
+// is a literal: [q1, ..., qN] (joint positions, rad) or p[x, y, z, rx, ry, rz] (a pose in the
+// robot's base frame: m, and a rotation vector in rad) followed by ',' or ')'. One call per line
+// is read (the first). Refused (model::InputError "FILE:LINE:COLUMN: what"): a line longer than
+// 64 KiB (no program has one: the file is something else), a string not closed on its line, a
+// target that goes on past its literal ([...] + [...], [...] * 2: the program would move where no
+// correction was computed), a joint list whose length is not
 // the model's joint count, a pose without six values, a value that is not a plain finite number
 // (d2r(90), a variable inside the list), a pose's rotation vector longer than a turn (2 pi rad:
 // degrees, most likely), more than kMaxTargets motions, a motion call whose target is a variable

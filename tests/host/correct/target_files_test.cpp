@@ -96,6 +96,24 @@ TEST_CASE("URScript: refused targets name file:line:column") {
   CHECK(refused("movej([d2r(90), 0, 0, 0, 0, 0])\n")
             .find("p.script:1:8: column movej value 1: 'd2r(90)' is not a number") == 0);
   CHECK(refused("  # movej(home)\n  textmsg(\"movej\")\n  my_movej(1)\n") == "accepted");
+  // Strings are not code: a motion written in one is text, a '#' in one starts no comment, and an
+  // escaped quote does not end one (the audit's finding: a textmsg's movej was rewritten).
+  const std::string q6 = "[0.1, -0.4, 0.3, 0.2, -0.5, 0.7]";
+  for (const std::string& text :
+       {"textmsg(\"movej(" + q6 + ")\")\n", "textmsg('movel(p" + q6 + ")')\n",
+        "popup(\"say \\\"movej(" + q6 + ")\\\" # not a comment\")\n", "s = \"servoj(\" # movej(" + q6 + ")\n"})
+    CHECK(correct::parse_urscript(text, "p.script", 6).motions.empty());
+  const correct::UrProgram after_string =
+      correct::parse_urscript("textmsg(\"# movej(\") movej(" + q6 + ", a=1)\n", "p.script", 6);
+  REQUIRE(after_string.motions.size() == 1);
+  CHECK(after_string.motions[0].begin == 27);
+  CHECK(refused("textmsg(\"movej(" + q6 + "))\n") == "p.script:1:9: a string is not closed on its line");
+  CHECK(refused("movej(" + q6 + ", a=1) # don't\nx = 'it''s'\ny = 'a\\'\n") == "p.script:3:5: a string is not closed on its line");
+  // A target that goes on past its literal is an expression: refused, not corrected as the literal.
+  for (const std::string rest : {" + [0.01, 0, 0, 0, 0, 0])", "*2)", "[0])", " ", ""})
+    CHECK(refused("movej(" + q6 + rest + "\n").find("p.script:1:" + std::to_string(39 + (rest[0] == ' ')) +
+                                                   ": movej's target goes on past its literal") == 0);
+  CHECK(refused("movel(p" + q6 + " , a=1)\nmovej(" + q6 + ")\nservoj( " + q6 + "\t)\n") == "accepted");
   // A rotation vector beyond a turn: degrees given as radians, or one whose norm overflows.
   CHECK(refused("movel(p[0.5, 0, 0.5, 0, 180, 0])\n")
             .find("p.script:1:8: movel: the rotation vector's angle is 180 rad, more than a turn") == 0);

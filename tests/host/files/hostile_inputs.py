@@ -692,6 +692,17 @@ case("correct:joints as poses", C + ["--poses", "targets.csv"], r"joint targets 
 case("correct:out of reach", C + ["--poses", "far.csv", "--frame", "device", "-o", "-"], r"far\.csv:2: not reached: out-of-reach")
 case("correct:URScript variable target", C + ["--urscript", "variable.script", "-o", "o6.script"],
      r"variable\.script:2:9: movej's target is not a literal")
+with open("string.script", "w") as f:
+    f.write('def p():\n  textmsg("movej([0.1, -0.4, 0.3, 0.2, -0.5, 0.7])")\n  movej([0.1, -0.4, 0.3, 0.2, -0.5, 0.7])\nend\n')
+run(C + ["--urscript", "string.script", "-o", "o7.script"])  # the string kept byte for byte, the motion corrected
+string_lines, corrected_lines = open("string.script").read().split("\n"), open("o7.script").read().split("\n")
+if corrected_lines[1] != string_lines[1] or corrected_lines[2] == string_lines[2]:
+    fail("correct:URScript motion in a string: the string was rewritten or the motion not:\n" + "\n".join(corrected_lines))
+for name, expression in [("sum", "+[0.01,0,0,0,0,0]"), ("product", "*2")]:
+    with open(f"{name}.script", "w") as f:
+        f.write(f"def p():\n  movej([0.1,-0.4,0.3,0.2,-0.5,0.7]{expression})\nend\n")
+    case(f"correct:URScript target in a {name}", C + ["--urscript", f"{name}.script", "-o", "o8.script"],
+         rf"{name}\.script:2:36: movej's target goes on past its literal")
 case("correct:--seed of 3", C + ["--poses", "poses.csv", "--seed", "0,0,0"], r"--seed has 3 readings, the model 6 joints")
 case("correct:-o - is standard output", C + ["--joints", "targets.csv", "-o", "-"], r"q1,q2,q3,q4,q5,q6,outcome", rc_ok=True)
 
