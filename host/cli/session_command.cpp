@@ -40,6 +40,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <iostream>
 #include <limits>
 #include <memory>
@@ -60,17 +61,20 @@
 #include "host/cli/model_option.hpp"
 #include "host/cli/number_options.hpp"
 #include "host/demo/simulated_rig.hpp"
+#include "host/files/input_file.hpp"
 #include "host/files/output_file.hpp"
 #include "host/identify/discover.hpp"
 #include "host/identify/plausibility.hpp"
 #include "host/model/isometry.hpp"
 #include "host/model/model_file.hpp"
+#include "host/model/number_text.hpp"
 #include "host/report/report.hpp"
 #include "host/session/board_sensor.hpp"
 #include "host/session/online_correction.hpp"
 #include "host/session/session.hpp"
 #include "host/session/session_report.hpp"
 #include "host/session/stereo_sensor.hpp"
+#include "shared/crc32.hpp"
 
 namespace kincal::cli {
 
@@ -133,6 +137,29 @@ model::RobotModel unknown_arm(const SessionArgs& a) {
 }
 
 // The middle of each joint's limits (0 without limits): the sweeps' default home.
+// What a session's identity holds of an input: the CRC-32 of what the session uses, not the path
+// it came by, so that `--model ./m.yaml` resumes a session of `--model m.yaml` and an edited file
+// is another session (a journal took 7 poses measured with one model and 8 with another).
+std::string crc_text(std::string_view bytes) {
+  char hex[16];
+  std::snprintf(hex, sizeof hex, "%08x", static_cast<unsigned>(shared::crc32(bytes)));
+  return std::string("crc32:") + hex;
+}
+std::string file_crc(const std::string& path, const files::InputKind& kind) {
+  return path.empty() ? std::string("none") : crc_text(files::read_text(path, kind));
+}
+std::string plan_crc(const session::SessionPlan& plan) {
+  std::string text;
+  for (const session::Configurations* part : {&plan.calibration, &plan.validation}) {
+    for (const std::vector<double>& q : *part) {
+      for (double v : q) text += model::shortest_number_text(v) + ',';
+      text += '\n';
+    }
+    text += "--\n";
+  }
+  return crc_text(text);
+}
+
 std::vector<double> mid_range(const model::RobotModel& m) {
   std::vector<double> q;
   for (const model::Joint& j : m.joints)
@@ -472,20 +499,30 @@ int run(const SessionArgs& a) {
   options.journal_path = a.journal;
   options.resume = a.resume;
   options.progress_terminal = ::isatty(STDERR_FILENO) != 0;
-  std::ostringstream identity;
-  identity << "model=" << a.model.path << " rig=" << a.rig << " robot=" << (simulated ? "sim" : "real")
-           << " seed=" << a.seed << " plan=" << (a.plan.empty() ? "generated" : a.plan) << " sweeps=" << a.sweeps
-           << " home=" << a.home
-           << " validation=" << (a.validation_plan.empty() ? std::to_string(a.validation) : a.validation_plan);
-  if (real_stereo) identity << " stereo=" << a.stereo << " colour-table=" << a.colour_table;
-  if (!a.platform_camera.empty()) identity << " platform-camera=" << a.platform_camera;
-  if (camera_rig) identity << " board=" << a.board << " mount=" << a.mount << " camera=" << a.camera;
-  if (unknown) {
-    identity << " discover joints=" << a.joints << " sweep-deg=" << a.sweep_deg << " sweep-m=" << a.sweep_m
-             << " prismatic=";
-    for (const int p : a.prismatic) identity << p << ' ';
+  std::map<std::string, std::string>& identity = options.identity;
+  identity = {{"model", a.model.path.empty() ? std::string("none") : crc_text(model::write_model(file))},
+              {"rig", a.rig},
+              {"robot", simulated ? "sim" : "real"},
+              {"seed", std::to_string(a.seed)},
+              {"plan", plan_crc(plan)},
+              {"sweeps", std::to_string(a.sweeps)},
+              {"home", a.home}};
+  if (real_stereo) {
+    identity["stereo"] = file_crc(a.stereo, files::kSettingsFile);
+    identity["colour-table"] = file_crc(a.colour_table, files::kColourTableFile);
   }
-  options.identity = identity.str();
+  if (!a.platform_camera.empty()) identity["platform-camera"] = file_crc(a.platform_camera, files::kSettingsFile);
+  if (camera_rig) {
+    identity["board"] = a.board;
+    identity["mount"] = a.mount;
+    identity["camera"] = file_crc(a.camera, files::kSettingsFile);
+  }
+  if (unknown) {
+    std::string prismatic;
+    for (const int p : a.prismatic) prismatic += std::to_string(p) + ' ';
+    identity["discover"] = "joints=" + std::to_string(a.joints) + " sweep-deg=" + model::shortest_number_text(a.sweep_deg) +
+                           " sweep-m=" + model::shortest_number_text(a.sweep_m) + " prismatic=" + prismatic;
+  }
   const session::SessionData data =
       session::run_session(unknown ? *unknown : nominal, plan, robot, measure, options, std::cerr);
   if (!a.dataset.empty()) {

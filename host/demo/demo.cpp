@@ -224,7 +224,7 @@ RigRun run_rig(RigKind kind, const DemoOptions& options, std::ostream& out) {
 
   SessionOptions session;
   session.journal_path = (dir / (name + ".journal")).string();
-  session.identity = "kincal demo " + name + " seed " + std::to_string(options.seed);
+  session.identity = {{"demo", name}, {"seed", std::to_string(options.seed)}};
   std::filesystem::remove(session.journal_path);
   const SessionData data = run_session(rig->nominal(), plan, rig->driver(), rig->sensor(), session, out);
 

@@ -31,7 +31,7 @@ SessionData run_session(const model::RobotModel& nominal, const SessionPlan& pla
   identity.orientation = sensor.gives_orientation();
   identity.covariance = sensor.gives_covariance();
   identity.pose_covariance = sensor.gives_pose_covariance();
-  identity.items["session"] = options.identity;
+  identity.items = options.identity;
   identity.items["poses"] = std::to_string(plan.total());
   std::optional<Journal> journal;
   if (options.resume) {

@@ -17,6 +17,7 @@
 #pragma once
 
 #include <iosfwd>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -37,7 +38,9 @@ struct SessionPlan {
 struct SessionOptions {
   std::string journal_path;
   bool resume = false;
-  std::string identity;            // what makes two sessions the same one (model, plan, options)
+  // What makes two sessions the same one (model, plan, options): KEY -> VALUE items of the
+  // journal's header (journal.hpp: keys of [A-Za-z0-9_.-]), each named when it differs on resume.
+  std::map<std::string, std::string> identity;
   bool progress_terminal = false;  // redraw the progress line in place
 };
 

@@ -179,7 +179,7 @@ TEST_CASE("platform pose sensor: a session's dataset row holds the report's 6x6 
   plan.calibration = {{0.0}};
   session::SessionOptions options;
   options.journal_path = (std::filesystem::temp_directory_path() / "kincal-platform-pose-covariance.journal").string();
-  options.identity = "test";
+  options.identity = {{"session", "test"}};
   std::filesystem::remove(options.journal_path);
   StillDriver driver;
   std::ostringstream log;

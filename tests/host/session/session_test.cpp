@@ -236,7 +236,7 @@ TEST_CASE("session: measures every pose once, resumes after a failure, identifie
   ExactDriver driver(sensor);
   session::SessionOptions options;
   options.journal_path = temp_path("journal");
-  options.identity = "test";
+  options.identity = {{"session", "test"}};
   std::filesystem::remove(options.journal_path);
   std::ostringstream log;
 
@@ -254,7 +254,7 @@ TEST_CASE("session: measures every pose once, resumes after a failure, identifie
   CHECK(data.calibration.rows.size() == 24);
   CHECK(data.validation.rows.size() == 6);
 
-  options.identity = "another";
+  options.identity = {{"session", "another"}};
   CHECK_THROWS_AS(session::run_session(nominal, plan, driver, sensor, options, log), model::InputError);
 
   identify::IdentifyOptions io;
