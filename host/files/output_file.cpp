@@ -51,27 +51,6 @@ std::string not_replaceable(mode_t mode) {
   return why.empty() || S_ISDIR(mode) ? why : why + ": refusing to replace it";
 }
 
-// An output that cannot be written where it is named: refused before any work.
-void check_output(const NamedPath& p) {
-  if (p.path.empty()) return;
-  if (p.path == "-") {
-    if (!p.standard_output)
-      throw OutputError(describe(p) +
-                        ": this command does not write to standard output (name a file; ./- for a "
-                        "file named '-')");
-    return;
-  }
-  struct stat st {};
-  if (::stat(p.path.c_str(), &st) == 0) {
-    if (const std::string why = not_replaceable(st.st_mode); !why.empty()) throw OutputError(describe(p) + ": " + why);
-    return;
-  }
-  const fs::path dir = fs::path(p.path).parent_path();
-  std::error_code ec;
-  if (!dir.empty() && !fs::is_directory(dir, ec))
-    throw OutputError(describe(p) + ": the directory " + dir.string() + " does not exist");
-}
-
 [[noreturn]] void fail(const std::string& path, const std::string& what) {
   throw OutputError(path + ": " + what + " (" + std::strerror(errno) + ")");
 }
@@ -105,6 +84,43 @@ class Temporary {
   int fd_ = -1;
   bool renamed_ = false;
 };
+
+// The temporary file write_file_atomically() writes `path` through, in the same directory.
+std::string temporary_pattern(const std::string& path) {
+  const fs::path target(path);
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  return (dir / ("." + target.filename().string() + ".kincal-XXXXXX")).string();
+}
+
+// An output that cannot be written where it is named: refused before any work. Whether its
+// directory takes the temporary file is tried (and the file removed), not judged by access(),
+// which says yes to root on a read-only /sys.
+void check_output(const NamedPath& p) {
+  if (p.path.empty()) return;
+  if (p.path == "-") {
+    if (!p.standard_output)
+      throw OutputError(describe(p) +
+                        ": this command does not write to standard output (name a file; ./- for a "
+                        "file named '-')");
+    return;
+  }
+  struct stat st {};
+  if (::stat(p.path.c_str(), &st) == 0) {
+    if (const std::string why = not_replaceable(st.st_mode); !why.empty()) throw OutputError(describe(p) + ": " + why);
+  } else {
+    const fs::path dir = fs::path(p.path).parent_path();
+    std::error_code ec;
+    if (!dir.empty() && !fs::is_directory(dir, ec))
+      throw OutputError(describe(p) + ": the directory " + dir.string() + " does not exist");
+  }
+  const Temporary probe(temporary_pattern(p.path));
+  if (probe.fd() < 0) {
+    const int error = errno;
+    const fs::path dir = fs::path(p.path).parent_path();
+    throw OutputError(describe(p) + ": cannot create a file in the directory " + (dir.empty() ? "." : dir.string()) +
+                      " (" + std::strerror(error) + ")");
+  }
+}
 
 }  // namespace
 
@@ -140,7 +156,7 @@ void write_file_atomically(const std::string& path, std::string_view content) {
     ::umask(mask);
     mode = 0666 & ~mask;
   }
-  Temporary tmp((dir / ("." + target.filename().string() + ".kincal-XXXXXX")).string());
+  Temporary tmp(temporary_pattern(path));
   if (tmp.fd() < 0) fail(path, "cannot create a temporary file beside it");
   if (::fchmod(tmp.fd(), mode) != 0) fail(path, "cannot set the permissions of its temporary file");
 

@@ -150,6 +150,11 @@ case("plan:progress on stderr", ["plan", "--model", puma, "-n", "40", "--pool", 
 case("plan:count 0", ["plan", "--model", puma, "-n", "0"], r"-n|count")
 case("urdf:out=model", ["urdf", "--model", puma, "-o", puma], r"same file as --model", protect=[puma])
 case("urdf:out is a directory", ["urdf", "--model", puma, "-o", "sub"], r"sub")
+# an output directory that takes no file: refused before the work (identify ran its whole solve first)
+case("identify:out in /proc", ["identify", "--model", puma, "--data", "d.csv", "--out", "/proc/o.yaml"],
+     r"--out /proc/o\.yaml: cannot create a file in the directory /proc")
+case("camera:out in /proc", ["camera", "calibrate", "--board", "chessboard:9x6:0.025", "sub", "-o", "/proc/c.yaml"],
+     r"-o /proc/c\.yaml: cannot create a file in the directory /proc")
 
 # --- session: the journal is never destroyed
 run(["session", "--model", os.path.join(robots, "arid_prrr.yaml"), "--poses", "12", "--validation", "3", "--journal", "s.journal"])

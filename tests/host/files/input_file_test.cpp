@@ -141,4 +141,21 @@ TEST_CASE("outputs: special files refused by name and never replaced; '-' only w
   CHECK_THROWS_WITH_AS(files::refuse_overwriting({{"--out", s.path("nodir/o.yaml")}}, {}),
                        doctest::Contains("does not exist"), files::OutputError);
   CHECK_NOTHROW(files::refuse_overwriting({{"--out", s.path("o.yaml")}}, {}));
+  for (const fs::directory_entry& e : fs::directory_iterator(s.dir))  // the check's trial file is gone again
+    CHECK(e.path().filename().string().find(".kincal-") == std::string::npos);
+  // A directory that takes no new file is refused before any work, not when the output is written:
+  // procfs (for root too, whom access() would let write), and a read-only directory for anyone else.
+  CHECK_THROWS_WITH_AS(files::refuse_overwriting({{"-o", "/proc/o.csv"}}, {}),
+                       "-o /proc/o.csv: cannot create a file in the directory /proc (No such file or directory)",
+                       files::OutputError);
+  std::filesystem::create_directory(s.path("read_only"));
+  std::ofstream(s.path("read_only/o.csv")) << "old\n";
+  std::filesystem::permissions(s.path("read_only"), std::filesystem::perms::owner_read | std::filesystem::perms::owner_exec);
+  if (::geteuid() != 0) {
+    CHECK_THROWS_WITH_AS(files::refuse_overwriting({{"-o", s.path("read_only/o.csv")}}, {}),
+                         doctest::Contains("cannot create a file in the directory"), files::OutputError);
+    CHECK_THROWS_WITH_AS(files::refuse_overwriting({{"-o", s.path("read_only/new.csv")}}, {}),
+                         doctest::Contains("(Permission denied)"), files::OutputError);
+  }
+  std::filesystem::permissions(s.path("read_only"), std::filesystem::perms::owner_all);
 }
