@@ -255,8 +255,9 @@ std::vector<model::RobotModel> models_in_play(const IdentifyArgs& a, const model
   return models;
 }
 
-// A --prior for a parameter none of those models has was silently ignored (scale1 for a model
-// whose joints declare no scale, tool_rx for a point tool): refused, naming it. A parameter the
+// A prior for a parameter none of `models` has was silently ignored (scale1 for a model whose
+// joints declare no scale, tool_rx for a point tool): refused, naming it (`priors`: how each was
+// given -- "--prior 'scale1=0.01'" -- and the parameter's name). A parameter the
 // solve has but holds fixed or cannot identify may take a prior. The models as identify
 // parameterizes them (a link promoted to Doty's convention has a beta); with a CPA start or
 // method, the start model's conventions come from the data, so beta<i> is taken for every link.
@@ -271,10 +272,10 @@ void refuse_priors_of_absent_parameters(const std::vector<std::pair<std::string,
   if (options.method == identify::Method::cpa || options.start == identify::Start::cpa)
     for (int i = 0; i < models.front().joint_count(); ++i)
       present.push_back(model::parameter_name({core::ParameterKind::link_beta, static_cast<std::uint8_t>(i)}));
-  for (const auto& [entry, name] : priors)
+  for (const auto& [given, name] : priors)
     if (std::find(present.begin(), present.end(), name) == present.end())
-      throw model::InputError("--prior '" + entry + "': the model '" + models.front().name + "' has no parameter " +
-                              name + (models.size() > 1 ? " (nor has any candidate of --model-select)" : "") +
+      throw model::InputError(given + ": the model '" + models.front().name + "' has no parameter " + name +
+                              (models.size() > 1 ? " (nor has any candidate of --model-select)" : "") +
                               ", so the prior would be ignored");
 }
 
@@ -301,7 +302,17 @@ int run_identify(const IdentifyArgs& a) {
     // Priors: the model file's (a YAML model), then --prior's, which win; each parameter at most
     // once on the command line.
     if (!model::is_urdf_path(a.model.path)) options.prior.sigma = model::load_model_priors(a.model.path);
-    std::vector<std::pair<std::string, std::string>> prior_entries;  // (entry, parameter name)
+    // A model file's priors hold for every run of the model: checked against every candidate model
+    // (geometry+scales has a scale1 whether or not this run's data choose it).
+    std::vector<std::pair<std::string, std::string>> file_priors;  // (how given, parameter name)
+    for (const auto& [name, sigma] : options.prior.sigma)
+      file_priors.emplace_back(a.model.path + ": priors: " + name, name);
+    if (!file_priors.empty()) {
+      std::vector<model::RobotModel> models = {nominal};
+      for (const identify::Candidate& c : identify::candidate_models(nominal, options)) models.push_back(c.model);
+      refuse_priors_of_absent_parameters(file_priors, models, options);
+    }
+    std::vector<std::pair<std::string, std::string>> prior_entries;  // (--prior 'entry', parameter name)
     for (const std::string& entry : a.prior) {
       options.prior.sigma.push_back(identify::parse_prior_entry(entry));
       core::ParameterId id{};
@@ -313,9 +324,9 @@ int run_identify(const IdentifyArgs& a) {
       const std::string name = model::parameter_name(id);
       for (const auto& [earlier, earlier_name] : prior_entries)
         if (earlier_name == name)
-          throw model::InputError("--prior '" + earlier + "' and --prior '" + entry + "' both give the prior of " +
-                                  name + ": give it once");
-      prior_entries.emplace_back(entry, name);
+          throw model::InputError(earlier + " and --prior '" + entry + "' both give the prior of " + name +
+                                  ": give it once");
+      prior_entries.emplace_back("--prior '" + entry + "'", name);
       check_prior_entry(entry, options.prior.sigma.back(), nominal, id);
     }
     if (a.no_prior) options.prior.strength = 0.0;

@@ -39,7 +39,8 @@
 //   priors:                      # optional: identify's prior sigma of a parameter's deviation from
 //     a5: 0.0005                 # this model (identify/prior.hpp): lengths m, angles in the file's
 //     theta5: 0.2                # unit, scale<i> a ratio; names as identify prints them. Not
-//                                # written back (a calibrated model's deviations start anew)
+//                                # written back (a calibrated model's deviations start anew);
+//                                # `identify` refuses one no candidate model has (tool_rx of a point tool)
 //
 // Reading is strict: unknown keys, a key given twice in one mapping or a second YAML document
 // (yaml_text.hpp), missing parameters, wrong types, an unknown convention or
