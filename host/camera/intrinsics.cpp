@@ -1,6 +1,7 @@
 #include "host/camera/intrinsics.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -28,6 +29,78 @@ double same_corners_rms_px(const BoardDetection& a, const BoardDetection& b) {
     sum += static_cast<double>(d.dot(d));
   }
   return std::sqrt(sum / static_cast<double>(a.image_px.size()));
+}
+
+// Where a view puts the board, from the homography of the board's plane to its corners: the
+// board centre's image position (per image width and height), the log of its scale (px per m)
+// and its tilt (the homography's perspective row times the board's extent). What the views of a
+// calibration should spread over; nullopt when no homography fits.
+std::optional<std::array<double, 5>> view_place(const BoardDetection& d) {
+  std::vector<cv::Point2f> plane;
+  cv::Point2f board_mean(0, 0), image_mean(0, 0);
+  for (const cv::Point3f& p : d.board_m) plane.emplace_back(p.x, p.y);
+  for (std::size_t i = 0; i < plane.size(); ++i) {
+    board_mean += plane[i];
+    image_mean += d.image_px[i];
+  }
+  const float n = static_cast<float>(plane.size());
+  board_mean /= n;
+  image_mean /= n;
+  double board_spread = 0.0, image_spread = 0.0;
+  for (std::size_t i = 0; i < plane.size(); ++i) {
+    board_spread += static_cast<double>((plane[i] - board_mean).dot(plane[i] - board_mean));
+    image_spread += static_cast<double>((d.image_px[i] - image_mean).dot(d.image_px[i] - image_mean));
+  }
+  const cv::Mat h = plane.size() >= 4 ? cv::findHomography(plane, d.image_px) : cv::Mat();
+  if (h.empty() || board_spread <= 0.0 || image_spread <= 0.0 || std::abs(h.at<double>(2, 2)) < 1e-12)
+    return std::nullopt;
+  const double extent = std::sqrt(board_spread / static_cast<double>(n));
+  return std::array<double, 5>{static_cast<double>(image_mean.x) / d.image_size.width,
+                               static_cast<double>(image_mean.y) / d.image_size.height,
+                               0.5 * std::log(image_spread / board_spread),
+                               h.at<double>(2, 0) / h.at<double>(2, 2) * extent,
+                               h.at<double>(2, 1) / h.at<double>(2, 2) * extent};
+}
+
+// At most `count` of `views` (indices into detections), the most spread over view_place's
+// dimensions (each scaled by its standard deviation over the views): farthest-point sampling
+// from the view farthest from the mean, in the order chosen. Views without a place come last.
+std::vector<std::size_t> spread_views(const std::vector<BoardDetection>& detections,
+                                      const std::vector<std::size_t>& views, std::size_t count) {
+  std::vector<std::size_t> placed, unplaced;
+  std::vector<std::array<double, 5>> place;
+  for (std::size_t v : views) {
+    const std::optional<std::array<double, 5>> p = view_place(detections[v]);
+    (p ? placed : unplaced).push_back(v);
+    if (p) place.push_back(*p);
+  }
+  std::array<double, 5> mean{}, scale{};
+  for (const auto& p : place)
+    for (std::size_t k = 0; k < 5; ++k) mean[k] += p[k] / static_cast<double>(place.size());
+  for (const auto& p : place)
+    for (std::size_t k = 0; k < 5; ++k) scale[k] += (p[k] - mean[k]) * (p[k] - mean[k]);
+  for (double& s : scale) s = std::max(std::sqrt(s / static_cast<double>(std::max<std::size_t>(place.size(), 1))), 1e-9);
+  const auto distance = [&](const std::array<double, 5>& a, const std::array<double, 5>& b) {
+    double sum = 0.0;
+    for (std::size_t k = 0; k < 5; ++k) sum += (a[k] - b[k]) * (a[k] - b[k]) / (scale[k] * scale[k]);
+    return sum;
+  };
+  std::vector<double> nearest(place.size());
+  for (std::size_t i = 0; i < place.size(); ++i) nearest[i] = distance(place[i], mean);
+  std::vector<std::size_t> chosen;
+  std::vector<bool> taken(place.size(), false);
+  while (chosen.size() < count && chosen.size() < place.size()) {
+    std::size_t best = 0;
+    double far = -1.0;
+    for (std::size_t i = 0; i < place.size(); ++i)
+      if (!taken[i] && nearest[i] > far) far = nearest[best = i];
+    taken[best] = true;
+    chosen.push_back(placed[best]);
+    for (std::size_t i = 0; i < place.size(); ++i) nearest[i] = std::min(nearest[i], distance(place[i], place[best]));
+  }
+  for (std::size_t v : unplaced)
+    if (chosen.size() < count) chosen.push_back(v);
+  return chosen;
 }
 
 }  // namespace
@@ -124,6 +197,20 @@ IntrinsicCalibration calibrate_intrinsics(const std::vector<BoardDetection>& det
       used.push_back(result.views.size());
     }
     result.views.push_back(std::move(v));
+  }
+  if (used.size() > static_cast<std::size_t>(options.max_views)) {
+    // The solve's cost grows with the cube of the views (a video gives thousands): the most spread.
+    const std::size_t found = used.size();
+    std::vector<std::size_t> spread = spread_views(detections, used, static_cast<std::size_t>(options.max_views));
+    std::sort(spread.begin(), spread.end());
+    for (std::size_t u : used)
+      if (!std::binary_search(spread.begin(), spread.end(), u)) {
+        result.views[u].used = false;
+        result.views[u].rejection = "not needed: " + std::to_string(found) + " views passed, and the " +
+                                    std::to_string(options.max_views) +
+                                    " most spread over the image, distances and tilts are solved on";
+      }
+    used = spread;
   }
   const auto refuse_if_too_few = [&] {
     result.views_used = static_cast<int>(used.size());

@@ -1,5 +1,6 @@
 #include "host/cli/camera_command.hpp"
 
+#include <algorithm>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -44,12 +45,22 @@ void refuse_overwriting_inputs(const CameraArgs& a) {
   files::refuse_overwriting({{"-o", a.out}, {"--report", a.report}}, inputs);
 }
 
+// Every 100 frames a line on standard error: a video of thousands of frames is read for minutes.
+void report_progress(const std::vector<camera::BoardDetection>& detections, const char* what) {
+  if (detections.size() % 100 != 0) return;
+  const auto found = std::count_if(detections.begin(), detections.end(),
+                                   [](const camera::BoardDetection& d) { return d.found; });
+  std::cerr << "kincal camera: " << detections.size() << ' ' << what << " read, the board found in " << found
+            << std::endl;
+}
+
 std::vector<camera::BoardDetection> detect_all(const camera::Board& board, const std::vector<std::string>& inputs,
                                                int min_corners) {
   std::unique_ptr<capture::FrameSource> source = capture::open_source(inputs);
   std::vector<camera::BoardDetection> detections;
   while (std::optional<capture::Frame> f = source->next()) {
     detections.push_back(camera::detect_board(board, f->image, f->origin, min_corners));
+    report_progress(detections, "frames");
   }
   return detections;
 }
@@ -78,6 +89,7 @@ int run_stereo(const CameraArgs& a) {
   while (std::optional<capture::StereoFrame> p = frames.next()) {
     left.push_back(camera::detect_board(board, p->left.image, p->left.origin, a.min_corners));
     right.push_back(camera::detect_board(board, p->right.image, p->right.origin, a.min_corners));
+    report_progress(left, "left frames of pairs");
   }
   for (const capture::UnpairedFrame& u : frames.unpaired()) {
     std::cout << "unpaired " << (u.side == capture::Side::kLeft ? "left" : "right") << " frame: " << u.origin << " ("

@@ -190,6 +190,35 @@ TEST_CASE("intrinsic calibration warns on poor coverage and refuses too few view
   CHECK(contains(message, "blank.png: pattern not found"));
 }
 
+TEST_CASE("beyond max_views views (a video), the most spread over the image, distances and tilts are solved on") {
+  const Board board = parse_board(scenes::chessboard_text());
+  const CameraModel truth = model_of(scenes::test_camera());
+  cv::RNG rng(11);
+  // 10 views spread as a calibration wants, then 60 of a board held nearly still in the middle
+  // (moved a few millimetres each: more than a near-duplicate), as a video gives them.
+  std::vector<BoardDetection> detections;
+  const std::vector<Eigen::Isometry3d> spread = scenes::board_views(board, 10);
+  for (std::size_t i = 0; i < spread.size(); ++i)
+    detections.push_back(projected(board, truth, spread[i], "spread" + std::to_string(i), rng));
+  for (int i = 0; i < 60; ++i) {
+    Eigen::Isometry3d still = Eigen::Isometry3d::Identity();
+    still.translation() = Eigen::Vector3d(-0.12 + 0.003 * (i % 8), -0.075 + 0.003 * (i / 8), 0.6);
+    detections.push_back(projected(board, truth, still, "still" + std::to_string(i), rng));
+  }
+  IntrinsicOptions options;
+  options.max_views = 16;
+  const IntrinsicCalibration c = calibrate_intrinsics(detections, options);
+  CHECK(c.views_used == 16);
+  for (int i = 0; i < 10; ++i) CHECK(c.views[static_cast<std::size_t>(i)].used);
+  int not_needed = 0;
+  for (const ViewReport& v : c.views)
+    not_needed += contains(v.rejection, "not needed: 70 views passed, and the 16 most spread over the image") ? 1 : 0;
+  CHECK(not_needed == 54);
+  CHECK(std::abs(c.camera.camera_matrix(0, 0) - truth.camera_matrix(0, 0)) < 0.01 * truth.camera_matrix(0, 0));
+  options.max_views = 100;  // the default: all 70 solved on
+  CHECK(calibrate_intrinsics(detections, options).views_used == 70);
+}
+
 TEST_CASE("ChArUco boards drawn by OpenCV are detected with ids and calibrate the camera") {
   const Board board = parse_board(scenes::charuco_text());
   const sim::CameraSpec truth = scenes::test_camera();
