@@ -182,6 +182,10 @@ model::RobotModel choose_model(const IdentifyArgs& a, const model::RobotModel& n
     std::cout << "model selection: off: " << how << '\n';
     return nominal;
   }
+  // It fits every candidate once a fold: minutes on thousands of rows (20,000 took 10 min), so it says so first.
+  std::cerr << "kincal identify: choosing the model: " << identify::candidate_models(nominal, options).size()
+            << " candidates, each fitted " << identify::SelectionOptions{}.folds + 1 << " times on " << data.rows.size()
+            << " rows" << std::endl;
   selection = identify::select_model(nominal, data, options);
   std::cout << identify::format_selection(*selection);
   options = selection->chosen.options;
