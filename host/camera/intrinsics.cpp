@@ -51,7 +51,8 @@ std::optional<std::array<double, 5>> view_place(const BoardDetection& d) {
     board_spread += static_cast<double>((plane[i] - board_mean).dot(plane[i] - board_mean));
     image_spread += static_cast<double>((d.image_px[i] - image_mean).dot(d.image_px[i] - image_mean));
   }
-  const cv::Mat h = plane.size() >= 4 ? cv::findHomography(plane, d.image_px) : cv::Mat();
+  const cv::Mat h =
+      plane.size() >= 4 && d.image_size.area() > 0 ? cv::findHomography(plane, d.image_px) : cv::Mat();
   if (h.empty() || board_spread <= 0.0 || image_spread <= 0.0 || std::abs(h.at<double>(2, 2)) < 1e-12)
     return std::nullopt;
   const double extent = std::sqrt(board_spread / static_cast<double>(n));

@@ -43,6 +43,7 @@
 #include <cstdio>
 #include <iostream>
 #include <limits>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <random>
@@ -136,7 +137,6 @@ model::RobotModel unknown_arm(const SessionArgs& a) {
   return m;
 }
 
-// The middle of each joint's limits (0 without limits): the sweeps' default home.
 // What a session's identity holds of an input: the CRC-32 of what the session uses, not the path
 // it came by, so that `--model ./m.yaml` resumes a session of `--model m.yaml` and an edited file
 // is another session (a journal took 7 poses measured with one model and 8 with another).
@@ -160,6 +160,7 @@ std::string plan_crc(const session::SessionPlan& plan) {
   return crc_text(text);
 }
 
+// The middle of each joint's limits (0 without limits): the sweeps' default home.
 std::vector<double> mid_range(const model::RobotModel& m) {
   std::vector<double> q;
   for (const model::Joint& j : m.joints)
