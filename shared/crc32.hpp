@@ -10,7 +10,6 @@
 
 #include <cstdint>
 #include <span>
-#include <string_view>
 
 namespace kincal::shared {
 
@@ -20,10 +19,6 @@ std::uint32_t crc32_update(std::uint32_t state, std::span<const std::uint8_t> by
 constexpr std::uint32_t crc32_finish(std::uint32_t state) { return state ^ 0xFFFFFFFFu; }
 inline std::uint32_t crc32(std::span<const std::uint8_t> bytes) {
   return crc32_finish(crc32_update(kCrc32Init, bytes));
-}
-// The CRC of a text's bytes.
-inline std::uint32_t crc32(std::string_view text) {
-  return crc32(std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()));
 }
 
 }  // namespace kincal::shared

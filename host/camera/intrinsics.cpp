@@ -51,16 +51,14 @@ std::optional<std::array<double, 5>> view_place(const BoardDetection& d) {
     board_spread += static_cast<double>((plane[i] - board_mean).dot(plane[i] - board_mean));
     image_spread += static_cast<double>((d.image_px[i] - image_mean).dot(d.image_px[i] - image_mean));
   }
-  const cv::Mat h =
-      plane.size() >= 4 && d.image_size.area() > 0 ? cv::findHomography(plane, d.image_px) : cv::Mat();
+  const cv::Mat h = plane.size() >= 4 && d.image_size.area() > 0 ? cv::findHomography(plane, d.image_px) : cv::Mat();
   if (h.empty() || board_spread <= 0.0 || image_spread <= 0.0 || std::abs(h.at<double>(2, 2)) < 1e-12)
     return std::nullopt;
   const double extent = std::sqrt(board_spread / static_cast<double>(n));
-  return std::array<double, 5>{static_cast<double>(image_mean.x) / d.image_size.width,
-                               static_cast<double>(image_mean.y) / d.image_size.height,
-                               0.5 * std::log(image_spread / board_spread),
-                               h.at<double>(2, 0) / h.at<double>(2, 2) * extent,
-                               h.at<double>(2, 1) / h.at<double>(2, 2) * extent};
+  return std::array<double, 5>{
+      static_cast<double>(image_mean.x) / d.image_size.width, static_cast<double>(image_mean.y) / d.image_size.height,
+      0.5 * std::log(image_spread / board_spread), h.at<double>(2, 0) / h.at<double>(2, 2) * extent,
+      h.at<double>(2, 1) / h.at<double>(2, 2) * extent};
 }
 
 // At most `count` of `views` (indices into detections), the most spread over view_place's
@@ -80,7 +78,8 @@ std::vector<std::size_t> spread_views(const std::vector<BoardDetection>& detecti
     for (std::size_t k = 0; k < 5; ++k) mean[k] += p[k] / static_cast<double>(place.size());
   for (const auto& p : place)
     for (std::size_t k = 0; k < 5; ++k) scale[k] += (p[k] - mean[k]) * (p[k] - mean[k]);
-  for (double& s : scale) s = std::max(std::sqrt(s / static_cast<double>(std::max<std::size_t>(place.size(), 1))), 1e-9);
+  for (double& s : scale)
+    s = std::max(std::sqrt(s / static_cast<double>(std::max<std::size_t>(place.size(), 1))), 1e-9);
   const auto distance = [&](const std::array<double, 5>& a, const std::array<double, 5>& b) {
     double sum = 0.0;
     for (std::size_t k = 0; k < 5; ++k) sum += (a[k] - b[k]) * (a[k] - b[k]) / (scale[k] * scale[k]);

@@ -48,8 +48,8 @@ void refuse_overwriting_inputs(const CameraArgs& a) {
 // Every 100 frames a line on standard error: a video of thousands of frames is read for minutes.
 void report_progress(const std::vector<camera::BoardDetection>& detections, const char* what) {
   if (detections.size() % 100 != 0) return;
-  const auto found = std::count_if(detections.begin(), detections.end(),
-                                   [](const camera::BoardDetection& d) { return d.found; });
+  const auto found =
+      std::count_if(detections.begin(), detections.end(), [](const camera::BoardDetection& d) { return d.found; });
   std::cerr << "kincal camera: " << detections.size() << ' ' << what << " read, the board found in " << found
             << std::endl;
 }

@@ -142,7 +142,9 @@ model::RobotModel unknown_arm(const SessionArgs& a) {
 // is another session (a journal took 7 poses measured with one model and 8 with another).
 std::string crc_text(std::string_view bytes) {
   char hex[16];
-  std::snprintf(hex, sizeof hex, "%08x", static_cast<unsigned>(shared::crc32(bytes)));
+  std::snprintf(hex, sizeof hex, "%08x",
+                static_cast<unsigned>(
+                    shared::crc32(std::span(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()))));
   return std::string("crc32:") + hex;
 }
 std::string file_crc(const std::string& path, const files::InputKind& kind) {
@@ -521,7 +523,8 @@ int run(const SessionArgs& a) {
   if (unknown) {
     std::string prismatic;
     for (const int p : a.prismatic) prismatic += std::to_string(p) + ' ';
-    identity["discover"] = "joints=" + std::to_string(a.joints) + " sweep-deg=" + model::shortest_number_text(a.sweep_deg) +
+    identity["discover"] = "joints=" + std::to_string(a.joints) +
+                           " sweep-deg=" + model::shortest_number_text(a.sweep_deg) +
                            " sweep-m=" + model::shortest_number_text(a.sweep_m) + " prismatic=" + prismatic;
   }
   const session::SessionData data =

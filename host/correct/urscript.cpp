@@ -115,16 +115,19 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
       std::size_t at = skip_blanks(code_text, call.open);
       const bool pose = at < code_text.size() && code_text[at] == 'p';
       if (pose) at = skip_blanks(code_text, at + 1);
-      const std::string not_literal = "its value is not known before the program runs, so kincal cannot correct it "
-                                      "(write the target out)";
+      const std::string not_literal =
+          "its value is not known before the program runs, so kincal cannot correct it "
+          "(write the target out)";
       if (at >= code_text.size() || code_text[at] != '[')
         fail(at, call.name + "'s target is not a literal [...] or p[...]: " + not_literal);
       const std::size_t close = code_text.find(']', at);
       if (close == std::string_view::npos) fail(at, call.name + ": no ']' closes the target on this line");
       const std::size_t after = skip_blanks(code_text, close + 1);
       if (after >= code_text.size() || (code_text[after] != ',' && code_text[after] != ')'))
-        fail(after, call.name + "'s target goes on past its literal (an expression such as [...] + [...], or a call "
-                                "continued on the next line): " + not_literal);
+        fail(after, call.name +
+                        "'s target goes on past its literal (an expression such as [...] + [...], or a call "
+                        "continued on the next line): " +
+                        not_literal);
       if (program.motions.size() == max_motions)
         fail(call.at, "more than " + std::to_string(max_motions) + " motions, the most kincal correct takes");
       UrMotion m;

@@ -30,9 +30,9 @@
 // bookkeeping to us.
 //
 // Errors (InputError "FILE:LINE: what", ending "(id TEXT)" on a row with an id): missing/unknown/
-// duplicate columns, more than kMaxRows data rows, a row with the wrong number of fields, a quote that is not closed, a field
-// that is not a finite number, an empty id, a quaternion whose norm is not 1 within 1e-3, a
-// covariance that is not positive definite, sigma <= 0.
+// duplicate columns, more than kMaxRows data rows, a row with the wrong number of fields, a quote that is not closed, a
+// field that is not a finite number, an empty id, a quaternion whose norm is not 1 within 1e-3, a covariance that is
+// not positive definite, sigma <= 0.
 #pragma once
 
 #include <iosfwd>

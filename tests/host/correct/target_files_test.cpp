@@ -108,11 +108,13 @@ TEST_CASE("URScript: refused targets name file:line:column") {
   REQUIRE(after_string.motions.size() == 1);
   CHECK(after_string.motions[0].begin == 27);
   CHECK(refused("textmsg(\"movej(" + q6 + "))\n") == "p.script:1:9: a string is not closed on its line");
-  CHECK(refused("movej(" + q6 + ", a=1) # don't\nx = 'it''s'\ny = 'a\\'\n") == "p.script:3:5: a string is not closed on its line");
+  CHECK(refused("movej(" + q6 + ", a=1) # don't\nx = 'it''s'\ny = 'a\\'\n") ==
+        "p.script:3:5: a string is not closed on its line");
   // A target that goes on past its literal is an expression: refused, not corrected as the literal.
   for (const std::string rest : {" + [0.01, 0, 0, 0, 0, 0])", "*2)", "[0])", " ", ""})
-    CHECK(refused("movej(" + q6 + rest + "\n").find("p.script:1:" + std::to_string(39 + (rest[0] == ' ')) +
-                                                   ": movej's target goes on past its literal") == 0);
+    CHECK(refused("movej(" + q6 + rest + "\n")
+              .find("p.script:1:" + std::to_string(39 + (rest[0] == ' ')) +
+                    ": movej's target goes on past its literal") == 0);
   CHECK(refused("movel(p" + q6 + " , a=1)\nmovej(" + q6 + ")\nservoj( " + q6 + "\t)\n") == "accepted");
   // A rotation vector beyond a turn: degrees given as radians, or one whose norm overflows.
   CHECK(refused("movel(p[0.5, 0, 0.5, 0, 180, 0])\n")

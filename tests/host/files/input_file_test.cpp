@@ -150,7 +150,8 @@ TEST_CASE("outputs: special files refused by name and never replaced; '-' only w
                        files::OutputError);
   std::filesystem::create_directory(s.path("read_only"));
   std::ofstream(s.path("read_only/o.csv")) << "old\n";
-  std::filesystem::permissions(s.path("read_only"), std::filesystem::perms::owner_read | std::filesystem::perms::owner_exec);
+  std::filesystem::permissions(s.path("read_only"),
+                               std::filesystem::perms::owner_read | std::filesystem::perms::owner_exec);
   if (::geteuid() != 0) {
     CHECK_THROWS_WITH_AS(files::refuse_overwriting({{"-o", s.path("read_only/o.csv")}}, {}),
                          doctest::Contains("cannot create a file in the directory"), files::OutputError);
