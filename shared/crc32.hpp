@@ -20,5 +20,9 @@ constexpr std::uint32_t crc32_finish(std::uint32_t state) { return state ^ 0xFFF
 inline std::uint32_t crc32(std::span<const std::uint8_t> bytes) {
   return crc32_finish(crc32_update(kCrc32Init, bytes));
 }
+// The CRC of text: the bytes of a std::string or std::string_view as they are.
+inline std::uint32_t crc32_text(std::span<const char> text) {
+  return crc32(std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()));
+}
 
 }  // namespace kincal::shared

@@ -142,9 +142,7 @@ model::RobotModel unknown_arm(const SessionArgs& a) {
 // is another session (a journal took 7 poses measured with one model and 8 with another).
 std::string crc_text(std::string_view bytes) {
   char hex[16];
-  std::snprintf(hex, sizeof hex, "%08x",
-                static_cast<unsigned>(
-                    shared::crc32(std::span(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()))));
+  std::snprintf(hex, sizeof hex, "%08x", static_cast<unsigned>(shared::crc32_text(bytes)));
   return std::string("crc32:") + hex;
 }
 std::string file_crc(const std::string& path, const files::InputKind& kind) {

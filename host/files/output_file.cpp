@@ -104,11 +104,11 @@ void check_output(const NamedPath& p) {
                         "file named '-')");
     return;
   }
+  const fs::path dir = fs::path(p.path).parent_path();
   struct stat st {};
   if (::stat(p.path.c_str(), &st) == 0) {
     if (const std::string why = not_replaceable(st.st_mode); !why.empty()) throw OutputError(describe(p) + ": " + why);
   } else {
-    const fs::path dir = fs::path(p.path).parent_path();
     std::error_code ec;
     if (!dir.empty() && !fs::is_directory(dir, ec))
       throw OutputError(describe(p) + ": the directory " + dir.string() + " does not exist");
@@ -116,7 +116,6 @@ void check_output(const NamedPath& p) {
   const Temporary probe(temporary_pattern(p.path));
   if (probe.fd() < 0) {
     const int error = errno;
-    const fs::path dir = fs::path(p.path).parent_path();
     throw OutputError(describe(p) + ": cannot create a file in the directory " + (dir.empty() ? "." : dir.string()) +
                       " (" + std::strerror(error) + ")");
   }

@@ -45,13 +45,9 @@ constexpr std::array<int, 15> kRestCol{3, 4, 5, 3, 4, 5, 3, 4, 5, 3, 4, 5, 4, 5,
   fail(path, 0, what + ": " + std::strerror(errno));
 }
 
-std::uint32_t line_crc(std::string_view text) {
-  return shared::crc32(std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()));
-}
-
 std::string with_crc(const std::string& payload) {
   char hex[9];
-  std::snprintf(hex, sizeof hex, "%08x", static_cast<unsigned>(line_crc(payload)));
+  std::snprintf(hex, sizeof hex, "%08x", static_cast<unsigned>(shared::crc32_text(payload)));
   return payload + std::string(kCrcKey) + hex + "\n";
 }
 
@@ -125,7 +121,7 @@ std::optional<std::string> split_checked(std::string_view line, Fields& fields) 
   const auto [end, ec] = std::from_chars(hex.data(), hex.data() + hex.size(), stored, 16);
   if (hex.size() != 8 || ec != std::errc() || end != hex.data() + hex.size()) return "crc= is not 8 hex digits";
   const std::string_view payload = line.substr(0, at);
-  if (line_crc(payload) != stored) return "CRC mismatch (the line is damaged)";
+  if (shared::crc32_text(payload) != stored) return "CRC mismatch (the line is damaged)";
   std::size_t start = 0;
   while (start <= payload.size()) {
     const std::size_t space = std::min(payload.find(' ', start), payload.size());

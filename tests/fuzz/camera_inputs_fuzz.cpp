@@ -93,7 +93,7 @@ void settings_file(const std::string& text, int which) {
 
 void colour_table(std::string text) {
   if (text.size() == core::kColourTableBlockBytes) {  // CRC-32 of all but the last 4 bytes, little-endian
-    const std::uint32_t crc = shared::crc32({reinterpret_cast<const std::uint8_t*>(text.data()), text.size() - 4});
+    const std::uint32_t crc = shared::crc32_text(std::span(text).first(text.size() - 4));
     for (std::size_t k = 0; k < 4; ++k) text[text.size() - 4 + k] = static_cast<char>(crc >> (8 * k));
   }
   const std::span<const std::uint8_t> block(reinterpret_cast<const std::uint8_t*>(text.data()), text.size());

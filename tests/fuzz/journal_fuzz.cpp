@@ -38,9 +38,7 @@ std::string signed_lines(const std::string& text) {
     const std::size_t end = std::min(text.find('\n', start), text.size());
     const std::string line = text.substr(start, end - start);
     char crc[16];
-    std::snprintf(
-        crc, sizeof crc, "%08x",
-        static_cast<unsigned>(shared::crc32({reinterpret_cast<const std::uint8_t*>(line.data()), line.size()})));
+    std::snprintf(crc, sizeof crc, "%08x", static_cast<unsigned>(shared::crc32_text(line)));
     out += line + " crc=" + crc + (end < text.size() ? "\n" : "");
     start = end + 1;
   }

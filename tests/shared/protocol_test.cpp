@@ -44,6 +44,7 @@ TEST_CASE("crc32 matches the IEEE 802.3 / zlib check value") {
   // Incremental use gives the same result.
   CHECK(crc32_finish(crc32_update(crc32_update(kCrc32Init, bytes.first(4)), bytes.subspan(4))) == 0xCBF43926u);
   CHECK(crc32(std::span<const std::uint8_t>()) == 0u);
+  CHECK(crc32_text(std::span(text, 9)) == 0xCBF43926u);  // text: its bytes as they are
 }
 
 TEST_CASE("bit fields: Intel order, sign extension, bounds") {
