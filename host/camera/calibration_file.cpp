@@ -1,6 +1,7 @@
 #include "host/camera/calibration_file.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -93,11 +94,69 @@ cv::Size read_size(const cv::FileStorage& fs, const std::string& path) {
   return checked_size(path, read_number(fs, path, "image_width"), read_number(fs, path, "image_height"));
 }
 
-CameraModel camera_from(const cv::Mat& k, const cv::Mat& d, cv::Size size) {
+// Distortion as other tools write it. kincal's camera is plumb_bob's (k1 k2 p1 p2 k3); a file may
+// give a row or a column (OpenCV's calibration sample writes 5x1) of 4 (k3 = 0), 5, 8 (k4 k5 k6:
+// OpenCV's rational model, ROS's rational_polynomial), 12 (s1..s4) or 14 (tx ty) coefficients. It is
+// the same lens when every term beyond k3 is 0; a term that is not is refused by name, as is a
+// distortion_model other than plumb_bob or rational_polynomial (none given: plumb_bob, as ROS's
+// camera_calibration_parsers read it).
+constexpr std::array<const char*, 14> kDistortionNames = {"k1", "k2", "p1", "p2", "k3", "k4", "k5",
+                                                          "k6", "s1", "s2", "s3", "s4", "tx", "ty"};
+
+bool is_distortion_shape(int rows, int cols) {
+  const int n = rows * cols;
+  return std::min(rows, cols) == 1 && (n == 4 || n == 5 || n == 8 || n == 12 || n == 14);
+}
+
+CalibrationError distortion_shape_error(const std::string& path, const std::string& key) {
+  return CalibrationError(path + ": key '" + key + "' missing or not 4, 5, 8, 12 or 14 coefficients (1xN or Nx1)");
+}
+
+std::array<double, 5> plumb_bob_of(const cv::Mat& d, const std::string& model, const std::string& path,
+                                   const std::string& key) {
+  if (!model.empty() && model != "plumb_bob" && model != "rational_polynomial")
+    throw CalibrationError(path + ": distortion_model '" + files::excerpt(model) +
+                           "': kincal's camera is plumb_bob (k1 k2 p1 p2 k3); files of plumb_bob and of "
+                           "rational_polynomial (its k4 k5 k6 0) are read");
+  const int n = static_cast<int>(d.total());
+  for (int i = 5; i < n; ++i)
+    if (d.at<double>(i) != 0)
+      throw CalibrationError(path + ": key '" + key + "': " + kDistortionNames[static_cast<std::size_t>(i)] + " = " +
+                             model::shortest_number_text(d.at<double>(i)) +
+                             ", not 0: kincal's camera is plumb_bob (k1 k2 p1 p2 k3), so a lens with the rational, "
+                             "thin-prism or tilt terms is not read (calibrate it with kincal camera calibrate)");
+  std::array<double, 5> out{};
+  for (int i = 0; i < std::min(n, 5); ++i) out[static_cast<std::size_t>(i)] = d.at<double>(i);
+  return out;
+}
+
+// The distortion of an OpenCV file (the key, and the file's distortion_model when it has one).
+std::array<double, 5> read_distortion(const cv::FileStorage& fs, const std::string& path, const std::string& key) {
+  const cv::FileNode node = fs[key];
+  // The shape is checked before OpenCV reads the matrix, as read_matrix does.
+  const bool shaped =
+      node.isMap() && node["rows"].isInt() && node["cols"].isInt() &&
+      is_distortion_shape(static_cast<int>(node["rows"]), static_cast<int>(node["cols"])) && node["data"].isSeq() &&
+      node["data"].size() == static_cast<std::size_t>(static_cast<int>(node["rows"]) * static_cast<int>(node["cols"]));
+  cv::Mat d;
+  try {
+    if (shaped) node >> d;
+  } catch (const std::exception&) {  // cv::Exception, and the std exceptions OpenCV's parser lets out
+    d.release();
+  }
+  if (d.empty() || !is_distortion_shape(d.rows, d.cols)) throw distortion_shape_error(path, key);
+  d.convertTo(d, CV_64F);
+  const cv::FileNode model = fs["distortion_model"];
+  if (!model.empty() && !model.isString())
+    throw CalibrationError(path + ": key 'distortion_model' is not a name (plumb_bob)");
+  return plumb_bob_of(d, model.empty() ? "" : static_cast<std::string>(model), path, key);
+}
+
+CameraModel camera_from(const cv::Mat& k, const std::array<double, 5>& distortion, cv::Size size) {
   CameraModel c;
   c.image_size = size;
   c.camera_matrix = cv::Matx33d(k);
-  for (int i = 0; i < 5; ++i) c.distortion[static_cast<std::size_t>(i)] = d.at<double>(i);
+  c.distortion = distortion;
   return c;
 }
 
@@ -272,16 +331,29 @@ cv::Mat ros_matrix(const YAML::Node& root, const std::string& path, const std::s
   return cv::Mat(data, true).reshape(1, rows);
 }
 
+// The distortion of a ROS file: {rows, cols, data} of a shape is_distortion_shape takes.
+cv::Mat ros_distortion(const YAML::Node& root, const std::string& path) {
+  const YAML::Node m = root["distortion_coefficients"];
+  std::vector<double> data;
+  int rows = 0, cols = 0;
+  if (m && m.IsMap() && m["rows"] && m["cols"] && m["data"]) {
+    rows = m["rows"].as<int>();
+    cols = m["cols"].as<int>();
+    if (is_distortion_shape(rows, cols)) data = m["data"].as<std::vector<double>>();
+  }
+  if (data.empty() || data.size() != static_cast<std::size_t>(rows * cols))
+    throw distortion_shape_error(path, "distortion_coefficients");
+  return cv::Mat(data, true);
+}
+
 CameraModel load_ros_camera(const std::string& path, const std::string& text) {
   const YAML::Node root = parse_ros(path, text);
   try {
-    const auto matrix = [&](const char* key, int rows, int cols) { return ros_matrix(root, path, key, rows, cols); };
     const std::string model = root["distortion_model"] ? root["distortion_model"].as<std::string>() : "";
-    if (model != "plumb_bob")
-      throw CalibrationError(path + ": distortion_model '" + model + "': only plumb_bob (k1 k2 p1 p2 k3) is supported");
     if (!root["image_width"] || !root["image_height"])
       throw CalibrationError(path + ": image_width and image_height must be given");
-    return camera_from(matrix("camera_matrix", 3, 3), matrix("distortion_coefficients", 1, 5),
+    return camera_from(ros_matrix(root, path, "camera_matrix", 3, 3),
+                       plumb_bob_of(ros_distortion(root, path), model, path, "distortion_coefficients"),
                        checked_size(path, root["image_width"].as<double>(), root["image_height"].as<double>()));
   } catch (const YAML::Exception& e) {
     throw CalibrationError(path + ": " + e.what());
@@ -290,11 +362,15 @@ CameraModel load_ros_camera(const std::string& path, const std::string& text) {
 
 CameraModel load_camera(const std::string& path) {
   const std::string text = read_camera_text(path);
+  const std::size_t start = text.find_first_not_of(" \t\r\n");
+  if (text.compare(start, 5, "<?xml") == 0 || text.compare(start, 15, "<opencv_storage") == 0)
+    throw CalibrationError(path +
+                           ": an OpenCV XML file; kincal reads camera files in YAML, OpenCV's or ROS's "
+                           "(cv::FileStorage writes YAML to a file named .yml or .yaml)");
   if (text.rfind("%YAML:", 0) != 0) return load_ros_camera(path, text);
   cv::FileStorage fs = open_for_reading(path, text);
   const cv::Mat k = read_matrix(fs, path, "camera_matrix", 3, 3);
-  const cv::Mat d = read_matrix(fs, path, "distortion_coefficients", 1, 5);
-  return camera_from(k, d, read_size(fs, path));
+  return camera_from(k, read_distortion(fs, path, "distortion_coefficients"), read_size(fs, path));
 }
 
 std::optional<IntrinsicsCovariance> load_camera_uncertainty(const std::string& path) {
@@ -353,10 +429,8 @@ StereoCalibration load_stereo(const std::string& path) {
   cv::FileStorage fs = open_for_reading(path, read_camera_text(path));
   const cv::Size size = read_size(fs, path);
   StereoCalibration c;
-  const cv::Mat m1 = read_matrix(fs, path, "M1", 3, 3), d1 = read_matrix(fs, path, "D1", 1, 5);
-  const cv::Mat m2 = read_matrix(fs, path, "M2", 3, 3), d2 = read_matrix(fs, path, "D2", 1, 5);
-  c.left = camera_from(m1, d1, size);
-  c.right = camera_from(m2, d2, size);
+  c.left = camera_from(read_matrix(fs, path, "M1", 3, 3), read_distortion(fs, path, "D1"), size);
+  c.right = camera_from(read_matrix(fs, path, "M2", 3, 3), read_distortion(fs, path, "D2"), size);
   c.right_R_left = cv::Matx33d(read_matrix(fs, path, "R", 3, 3));
   c.right_t_left_m = cv::Vec3d(read_matrix(fs, path, "T", 3, 1));
   c.essential = cv::Matx33d(read_matrix(fs, path, "E", 3, 3));

@@ -33,9 +33,16 @@
 // matrices; camera_calibration_parsers reads the keys it knows by name and skips the rest). The
 // views, when given, follow as YAML comments ("# view IMAGE: N corners, RMS X px, DETECTOR"),
 // which ROS's parser skips. load_camera reads both (a file not starting with OpenCV's
-// "%YAML:1.0" is read as ROS's, with yaml-cpp); both first pass files::check_yaml_text: at most
-// kMaxYamlNodes nodes, no key given twice, one document. A ROS file's distortion_model must be
-// plumb_bob.
+// "%YAML:1.0" is read as ROS's, with yaml-cpp, so OpenCV's keys without that line and OpenCV's
+// JSON read too); both first pass files::check_yaml_text: at most kMaxYamlNodes nodes, no key
+// given twice, one document. OpenCV XML is refused by name.
+//
+// Distortion, as other tools write it: kincal's camera is plumb_bob's (k1 k2 p1 p2 k3). A row or a
+// column (OpenCV's calibration sample writes 5x1) of 4 (k3 = 0), 5, 8 (k4 k5 k6: OpenCV's rational
+// model, ROS's rational_polynomial), 12 (s1..s4) or 14 (tx ty) coefficients is read when every term
+// beyond k3 is 0; one that is not is refused naming it. A distortion_model key (either format) must
+// be plumb_bob or rational_polynomial (equidistant, a fisheye, is refused); without one, plumb_bob,
+// as ROS's camera_calibration_parsers read it. The same for a stereo file's D1 and D2.
 //
 // to_platform converts a camera to the firmware's camera block (shared::CameraIntrinsics, float
 // and u16, as the platform stores it), so a host calibration loads into the platform as it is.

@@ -14,6 +14,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "host/camera/board.hpp"
+#include "host/camera/calibration_file.hpp"
 #include "host/camera/intrinsics.hpp"
 #include "host/camera/stereo.hpp"
 #include "tests/host/camera/error_text.hpp"
@@ -68,6 +69,22 @@ TEST_CASE("OpenCV's 13 sample views calibrate at least as well as OpenCV's own r
   CHECK(c.views_used == 13);  // every view passes the outlier gate
   CHECK(c.rms_px <= recipe_px);
   for (const ViewReport& v : c.views) CHECK(contains(v.detector, "+ cornerSubPix"));
+}
+
+// A camera file nobody here wrote: OpenCV's calibration sample's output for these views
+// (opencv-doc's left_intrinsics.yml: its distortion a 5x1 column, with OpenCV's own extra keys)
+// reads as OpenCV's FileStorage reads it.
+TEST_CASE("OpenCV's own camera file of the sample views reads as OpenCV reads it") {
+  const std::string path = std::string(KINCAL_OPENCV_SAMPLES) + "/left_intrinsics.yml";
+  const CameraModel loaded = load_camera(path);
+  cv::FileStorage fs(path, cv::FileStorage::READ);
+  cv::Mat k, d;
+  fs["camera_matrix"] >> k;
+  fs["distortion_coefficients"] >> d;
+  REQUIRE(d.total() == 5);
+  CHECK(loaded.image_size == cv::Size(static_cast<int>(fs["image_width"]), static_cast<int>(fs["image_height"])));
+  CHECK(cv::norm(cv::Mat(loaded.camera_matrix), k) == 0.0);
+  for (int i = 0; i < 5; ++i) CHECK(loaded.distortion[static_cast<std::size_t>(i)] == d.at<double>(i));
 }
 
 TEST_CASE("the intrinsics' standard deviations agree with OpenCV's stdDeviationsIntrinsics on the 13 views") {

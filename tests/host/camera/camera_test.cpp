@@ -744,7 +744,109 @@ TEST_CASE("a camera in ROS camera_info YAML: the keys ROS reads, read back exact
          "distortion_model: equidistant\ndistortion_coefficients: {rows: 1, cols: 4, data: [0, 0, 0, 0]}\n";
   CHECK(error_of([&] { (void)load_camera(dir.file("equidistant.yaml")); }) ==
         dir.file("equidistant.yaml") +
-            ": distortion_model 'equidistant': only plumb_bob (k1 k2 p1 p2 k3) is supported");
+            ": distortion_model 'equidistant': kincal's camera is plumb_bob (k1 k2 p1 p2 k3); files of plumb_bob "
+            "and of rational_polynomial (its k4 k5 k6 0) are read");
+}
+
+TEST_CASE("camera files as other tools write them: a distortion column, 4 to 14 terms, ROS's models, JSON") {
+  TempDir dir;
+  CameraModel truth = model_of(scenes::test_camera());
+  truth.distortion = {-0.21, 0.08, 0.0012, -0.0007, -0.013};
+  const cv::Mat row = truth.distortion_mat(), zeros = cv::Mat::zeros(1, 9, CV_64F);
+  // OpenCV's own writer, as its calibration sample writes a camera (the distortion as given).
+  const auto opencv_file = [&](const std::string& name, const cv::Mat& d, const std::string& model = "") {
+    cv::FileStorage fs(dir.file(name), cv::FileStorage::WRITE);
+    fs << "image_width" << 640 << "image_height" << 480 << "camera_matrix" << cv::Mat(truth.camera_matrix)
+       << "distortion_coefficients" << d;
+    if (!model.empty()) fs << "distortion_model" << model;
+    fs.release();
+    return dir.file(name);
+  };
+  const auto same_camera = [&](const std::string& path, double k3) {
+    CAPTURE(path);
+    const CameraModel loaded = load_camera(path);
+    CHECK(loaded.image_size == truth.image_size);
+    CHECK(loaded.camera_matrix == truth.camera_matrix);
+    for (std::size_t i = 0; i < 4; ++i) CHECK(loaded.distortion[i] == truth.distortion[i]);
+    CHECK(loaded.distortion[4] == k3);
+  };
+  const double k3 = truth.distortion[4];
+  // A column of five (OpenCV's calibration sample); rows and columns of 8, 12 and 14 with the
+  // rational, thin-prism and tilt terms 0; four (k1 k2 p1 p2): k3 is 0.
+  same_camera(opencv_file("column.yaml", row.t()), k3);
+  cv::Mat eight, twelve, fourteen;
+  cv::hconcat(row, zeros.colRange(0, 3), eight);
+  cv::hconcat(row, zeros.colRange(0, 7), twelve);
+  cv::hconcat(row, zeros, fourteen);
+  same_camera(opencv_file("eight.yaml", eight, "rational_polynomial"), k3);
+  same_camera(opencv_file("twelve.yaml", twelve.t()), k3);
+  same_camera(opencv_file("fourteen.yaml", fourteen), k3);
+  same_camera(opencv_file("four.yaml", row.colRange(0, 4).clone()), 0.0);
+  same_camera(opencv_file("four_column.yaml", cv::Mat(row.colRange(0, 4).t())), 0.0);
+  // A lens with any term beyond k3 is another model: refused naming the term.
+  eight.at<double>(5) = 0.02;
+  CHECK(contains(error_of([&] { (void)load_camera(opencv_file("k4.yaml", eight)); }),
+                 ": key 'distortion_coefficients': k4 = 0.02, not 0: kincal's camera is plumb_bob"));
+  fourteen.at<double>(13) = -0.001;
+  CHECK(contains(error_of([&] { (void)load_camera(opencv_file("tilt.yaml", fourteen.t())); }),
+                 "'distortion_coefficients': ty = -0.001, not 0"));
+  // Other counts and shapes, and a fisheye by name, are refused.
+  for (const cv::Mat& d : {cv::Mat(cv::Mat::zeros(1, 6, CV_64F)), cv::Mat(cv::Mat::zeros(2, 5, CV_64F)),
+                           cv::Mat(cv::Mat::zeros(1, 3, CV_64F))})
+    CHECK(error_of([&] { (void)load_camera(opencv_file("shape.yaml", d)); }) ==
+          dir.file("shape.yaml") +
+              ": key 'distortion_coefficients' missing or not 4, 5, 8, 12 or 14 coefficients (1xN or Nx1)");
+  CHECK(contains(
+      error_of([&] { (void)load_camera(opencv_file("fisheye.yaml", row.colRange(0, 4).clone(), "equidistant")); }),
+      ": distortion_model 'equidistant': kincal's camera is plumb_bob"));
+  // OpenCV's JSON is read (through the YAML reader, JSON being YAML); its XML is refused by name.
+  {
+    cv::FileStorage fs(dir.file("camera.json"), cv::FileStorage::WRITE);
+    fs << "image_width" << 640 << "image_height" << 480 << "camera_matrix" << cv::Mat(truth.camera_matrix)
+       << "distortion_coefficients" << row.t();
+  }
+  same_camera(dir.file("camera.json"), k3);
+  {
+    cv::FileStorage fs(dir.file("camera.xml"), cv::FileStorage::WRITE);
+    fs << "image_width" << 640 << "camera_matrix" << cv::Mat(truth.camera_matrix);
+  }
+  CHECK(error_of([&] { (void)load_camera(dir.file("camera.xml")); }) ==
+        dir.file("camera.xml") +
+            ": an OpenCV XML file; kincal reads camera files in YAML, OpenCV's or ROS's (cv::FileStorage writes "
+            "YAML to a file named .yml or .yaml)");
+  // OpenCV's keys without OpenCV's "%YAML:1.0" line, as people copy them into READMEs.
+  {
+    std::ifstream in(dir.file("column.yaml"));
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::ofstream(dir.file("no_header.yaml")) << text.substr(text.find("image_width"));
+  }
+  same_camera(dir.file("no_header.yaml"), k3);
+
+  // ROS camera_info: rational_polynomial of 8 (camera_calibration writes it) or of 5 (drivers
+  // write it), no distortion_model (ROS's parser reads plumb_bob); a non-zero k5 is refused.
+  const auto ros_file = [&](const std::string& name, const std::string& model, const std::string& data, int n) {
+    const cv::Matx33d& k = truth.camera_matrix;
+    std::ofstream(dir.file(name)) << "image_width: 640\nimage_height: 480\ncamera_name: c\ncamera_matrix:\n  rows: 3\n"
+                                     "  cols: 3\n  data: ["
+                                  << kincal::model::shortest_number_text(k(0, 0)) << ", 0, "
+                                  << kincal::model::shortest_number_text(k(0, 2)) << ", 0, "
+                                  << kincal::model::shortest_number_text(k(1, 1)) << ", "
+                                  << kincal::model::shortest_number_text(k(1, 2)) << ", 0, 0, 1]\n"
+                                  << model << "distortion_coefficients:\n  rows: 1\n  cols: " << n << "\n  data: ["
+                                  << data << "]\n";
+    return dir.file(name);
+  };
+  const std::string five = "-0.21, 0.08, 0.0012, -0.0007, -0.013";
+  same_camera(ros_file("rational8.yaml", "distortion_model: rational_polynomial\n", five + ", 0, 0, 0", 8), k3);
+  same_camera(ros_file("rational5.yaml", "distortion_model: rational_polynomial\n", five, 5), k3);
+  same_camera(ros_file("no_model.yaml", "", five, 5), k3);
+  CHECK(contains(error_of([&] {
+                   (void)load_camera(
+                       ros_file("k5.yaml", "distortion_model: rational_polynomial\n", five + ", 0, 0.5, 0", 8));
+                 }),
+                 "'distortion_coefficients': k5 = 0.5, not 0"));
+  CHECK(contains(error_of([&] { (void)load_camera(ros_file("seven.yaml", "", five + ", 0, 0", 7)); }),
+                 "not 4, 5, 8, 12 or 14 coefficients"));
 }
 
 TEST_CASE("camera files carry the intrinsics' covariance and projection sigma; files without them still read") {
