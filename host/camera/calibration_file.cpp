@@ -348,6 +348,10 @@ cv::Mat ros_distortion(const YAML::Node& root, const std::string& path) {
 
 CameraModel load_ros_camera(const std::string& path, const std::string& text) {
   const YAML::Node root = parse_ros(path, text);
+  if (root["cam0"] && root["cam0"].IsMap() && root["cam0"]["intrinsics"])
+    throw CalibrationError(path +
+                           ": a Kalibr camera chain (cam0: intrinsics, distortion_coeffs); kincal reads "
+                           "camera files in OpenCV's or ROS's YAML (camera_matrix, distortion_coefficients)");
   try {
     const std::string model = root["distortion_model"] ? root["distortion_model"].as<std::string>() : "";
     if (!root["image_width"] || !root["image_height"])
@@ -369,6 +373,10 @@ CameraModel load_camera(const std::string& path) {
                            "(cv::FileStorage writes YAML to a file named .yml or .yaml)");
   if (text.rfind("%YAML:", 0) != 0) return load_ros_camera(path, text);
   cv::FileStorage fs = open_for_reading(path, text);
+  if (fs["camera_matrix"].empty() && !fs["M1"].empty())
+    throw CalibrationError(path +
+                           ": a stereo pair's file (M1 D1 M2 D2, as OpenCV's stereo_calib writes them), "
+                           "not one camera's: give the camera's own file (kincal camera calibrate writes one)");
   const cv::Mat k = read_matrix(fs, path, "camera_matrix", 3, 3);
   return camera_from(k, read_distortion(fs, path, "distortion_coefficients"), read_size(fs, path));
 }

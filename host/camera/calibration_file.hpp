@@ -35,7 +35,7 @@
 // which ROS's parser skips. load_camera reads both (a file not starting with OpenCV's
 // "%YAML:1.0" is read as ROS's, with yaml-cpp, so OpenCV's keys without that line and OpenCV's
 // JSON read too); both first pass files::check_yaml_text: at most kMaxYamlNodes nodes, no key
-// given twice, one document. OpenCV XML is refused by name.
+// given twice, one document. OpenCV XML and Kalibr's camera chains are refused by name.
 //
 // Distortion, as other tools write it: kincal's camera is plumb_bob's (k1 k2 p1 p2 k3). A row or a
 // column (OpenCV's calibration sample writes 5x1) of 4 (k3 = 0), 5, 8 (k4 k5 k6: OpenCV's rational

@@ -85,6 +85,12 @@ TEST_CASE("OpenCV's own camera file of the sample views reads as OpenCV reads it
   CHECK(loaded.image_size == cv::Size(static_cast<int>(fs["image_width"]), static_cast<int>(fs["image_height"])));
   CHECK(cv::norm(cv::Mat(loaded.camera_matrix), k) == 0.0);
   for (int i = 0; i < 5; ++i) CHECK(loaded.distortion[static_cast<std::size_t>(i)] == d.at<double>(i));
+  // The stereo sample's intrinsics file beside it holds two cameras: named as such.
+  const std::string pair = std::string(KINCAL_OPENCV_SAMPLES) + "/intrinsics.yml";
+  CHECK(error_of([&] { (void)load_camera(pair); }) ==
+        pair +
+            ": a stereo pair's file (M1 D1 M2 D2, as OpenCV's stereo_calib writes them), not one camera's: give "
+            "the camera's own file (kincal camera calibrate writes one)");
 }
 
 TEST_CASE("the intrinsics' standard deviations agree with OpenCV's stdDeviationsIntrinsics on the 13 views") {

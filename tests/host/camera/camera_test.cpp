@@ -814,6 +814,12 @@ TEST_CASE("camera files as other tools write them: a distortion column, 4 to 14 
         dir.file("camera.xml") +
             ": an OpenCV XML file; kincal reads camera files in YAML, OpenCV's or ROS's (cv::FileStorage writes "
             "YAML to a file named .yml or .yaml)");
+  // Kalibr's camera chain is another format, named.
+  std::ofstream(dir.file("camchain.yaml"))
+      << "cam0:\n  camera_model: pinhole\n  intrinsics: [458.9, 457.6, 367.0, 249.3]\n  distortion_model: radtan\n"
+         "  distortion_coeffs: [-0.288, 0.078, 0.0002, -0.0001]\n  resolution: [752, 480]\n";
+  CHECK(contains(error_of([&] { (void)load_camera(dir.file("camchain.yaml")); }),
+                 "camchain.yaml: a Kalibr camera chain (cam0: intrinsics, distortion_coeffs)"));
   // OpenCV's keys without OpenCV's "%YAML:1.0" line, as people copy them into READMEs.
   {
     std::ifstream in(dir.file("column.yaml"));
