@@ -104,8 +104,9 @@ constexpr std::array<const char*, 14> kDistortionNames = {"k1", "k2", "p1", "p2"
                                                           "k6", "s1", "s2", "s3", "s4", "tx", "ty"};
 
 bool is_distortion_shape(int rows, int cols) {
-  const int n = rows * cols;
-  return std::min(rows, cols) == 1 && (n == 4 || n == 5 || n == 8 || n == 12 || n == 14);
+  if (std::min(rows, cols) != 1) return false;  // before any product: a file's numbers may be any int
+  const int n = std::max(rows, cols);
+  return n == 4 || n == 5 || n == 8 || n == 12 || n == 14;
 }
 
 CalibrationError distortion_shape_error(const std::string& path, const std::string& key) {
@@ -346,13 +347,51 @@ cv::Mat ros_distortion(const YAML::Node& root, const std::string& path) {
   return cv::Mat(data, true);
 }
 
+// A Kalibr camera chain of one camera (kalibr_calibrate_cameras' camchain.yaml): cam0's pinhole
+// intrinsics [fu, fv, pu, pv], resolution [w, h] and radtan distortion [k1, k2, r1, r2] (OpenCV's k1
+// k2 p1 p2) or none. A chain of several cameras names them (which is meant is not the file's to
+// say); another camera or distortion model is refused by name.
+CameraModel load_kalibr_camera(const std::string& path, const YAML::Node& root) {
+  int cameras = 0;  // keys cam0, cam1, ...
+  for (const auto& entry : root) {
+    const std::string key = entry.first.as<std::string>();
+    if (key.size() > 3 && key.rfind("cam", 0) == 0 && key.find_first_not_of("0123456789", 3) == std::string::npos)
+      ++cameras;
+  }
+  if (cameras != 1)
+    throw CalibrationError(path + ": a Kalibr camera chain of " + std::to_string(cameras) +
+                           " cameras; give one camera's file (OpenCV's or ROS's YAML, or a chain of cam0 alone)");
+  const YAML::Node cam = root["cam0"];
+  const std::string model = cam["camera_model"] ? cam["camera_model"].as<std::string>() : "";
+  if (model != "pinhole")
+    throw CalibrationError(path + ": cam0: camera_model '" + files::excerpt(model) +
+                           "': kincal's camera is a pinhole (with plumb_bob distortion)");
+  const std::string distortion = cam["distortion_model"] ? cam["distortion_model"].as<std::string>() : "";
+  if (distortion != "radtan" && distortion != "none")
+    throw CalibrationError(path + ": cam0: distortion_model '" + files::excerpt(distortion) +
+                           "': kincal's distortion is plumb_bob (Kalibr's radtan)");
+  const auto numbers = [&](const char* key, std::size_t n) {
+    std::vector<double> v;
+    if (cam[key] && cam[key].IsSequence() && cam[key].size() == n) v = cam[key].as<std::vector<double>>();
+    if (v.size() != n)
+      throw CalibrationError(path + ": cam0: key '" + key + "' missing or not " + std::to_string(n) + " numbers");
+    return v;
+  };
+  const std::vector<double> k = numbers("intrinsics", 4), size = numbers("resolution", 2);
+  CameraModel c;
+  c.image_size = checked_size(path, size[0], size[1]);
+  c.camera_matrix = cv::Matx33d(k[0], 0, k[2], 0, k[1], k[3], 0, 0, 1);
+  if (distortion == "radtan") {
+    const std::vector<double> d = numbers("distortion_coeffs", 4);
+    c.distortion = {d[0], d[1], d[2], d[3], 0.0};
+  }
+  return c;
+}
+
 CameraModel load_ros_camera(const std::string& path, const std::string& text) {
   const YAML::Node root = parse_ros(path, text);
-  if (root["cam0"] && root["cam0"].IsMap() && root["cam0"]["intrinsics"])
-    throw CalibrationError(path +
-                           ": a Kalibr camera chain (cam0: intrinsics, distortion_coeffs); kincal reads "
-                           "camera files in OpenCV's or ROS's YAML (camera_matrix, distortion_coefficients)");
   try {
+    if (root["cam0"] && root["cam0"].IsMap()) return load_kalibr_camera(path, root);
     const std::string model = root["distortion_model"] ? root["distortion_model"].as<std::string>() : "";
     if (!root["image_width"] || !root["image_height"])
       throw CalibrationError(path + ": image_width and image_height must be given");

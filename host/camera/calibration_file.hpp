@@ -33,9 +33,10 @@
 // matrices; camera_calibration_parsers reads the keys it knows by name and skips the rest). The
 // views, when given, follow as YAML comments ("# view IMAGE: N corners, RMS X px, DETECTOR"),
 // which ROS's parser skips. load_camera reads both (a file not starting with OpenCV's
-// "%YAML:1.0" is read as ROS's, with yaml-cpp, so OpenCV's keys without that line and OpenCV's
-// JSON read too); both first pass files::check_yaml_text: at most kMaxYamlNodes nodes, no key
-// given twice, one document. OpenCV XML and Kalibr's camera chains are refused by name.
+// "%YAML:1.0" is read with yaml-cpp, so OpenCV's keys without that line and OpenCV's JSON read
+// too), and a Kalibr camera chain of one camera (cam0: pinhole, radtan or none; a chain of several
+// is refused, naming how many). Every file first passes files::check_yaml_text: at most
+// kMaxYamlNodes nodes, no key given twice, one document. OpenCV XML is refused by name.
 //
 // Distortion, as other tools write it: kincal's camera is plumb_bob's (k1 k2 p1 p2 k3). A row or a
 // column (OpenCV's calibration sample writes 5x1) of 4 (k3 = 0), 5, 8 (k4 k5 k6: OpenCV's rational

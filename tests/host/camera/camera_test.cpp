@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -814,12 +815,30 @@ TEST_CASE("camera files as other tools write them: a distortion column, 4 to 14 
         dir.file("camera.xml") +
             ": an OpenCV XML file; kincal reads camera files in YAML, OpenCV's or ROS's (cv::FileStorage writes "
             "YAML to a file named .yml or .yaml)");
-  // Kalibr's camera chain is another format, named.
-  std::ofstream(dir.file("camchain.yaml"))
-      << "cam0:\n  camera_model: pinhole\n  intrinsics: [458.9, 457.6, 367.0, 249.3]\n  distortion_model: radtan\n"
-         "  distortion_coeffs: [-0.288, 0.078, 0.0002, -0.0001]\n  resolution: [752, 480]\n";
-  CHECK(contains(error_of([&] { (void)load_camera(dir.file("camchain.yaml")); }),
-                 "camchain.yaml: a Kalibr camera chain (cam0: intrinsics, distortion_coeffs)"));
+  // Kalibr's camera chain of one camera, as kalibr_calibrate_cameras writes it (its README's
+  // example); of two cameras, or a fisheye, refused by name.
+  const std::string cam0 =
+      "cam0:\n  cam_overlaps: []\n  camera_model: pinhole\n  distortion_coeffs: [-0.2879529995338575, "
+      "0.0781311194952221, 0.00021265916642721963, -0.0001221450347654466]\n  distortion_model: radtan\n  "
+      "intrinsics: [458.9432286546919, 457.5637533402653, 367.0272509347057, 249.3128033381081]\n  resolution: "
+      "[752, 480]\n  rostopic: /cam0/image_raw\n";
+  std::ofstream(dir.file("camchain.yaml")) << cam0;
+  const CameraModel kalibr = load_camera(dir.file("camchain.yaml"));
+  CHECK(kalibr.image_size == cv::Size(752, 480));
+  CHECK(kalibr.camera_matrix ==
+        cv::Matx33d(458.9432286546919, 0, 367.0272509347057, 0, 457.5637533402653, 249.3128033381081, 0, 0, 1));
+  CHECK(kalibr.distortion == std::array<double, 5>{-0.2879529995338575, 0.0781311194952221, 0.00021265916642721963,
+                                                   -0.0001221450347654466, 0.0});
+  std::ofstream(dir.file("camchain2.yaml")) << cam0 << "cam1:\n  camera_model: pinhole\n";
+  CHECK(error_of([&] { (void)load_camera(dir.file("camchain2.yaml")); }) ==
+        dir.file("camchain2.yaml") +
+            ": a Kalibr camera chain of 2 cameras; give one camera's file (OpenCV's or ROS's YAML, or a chain of cam0 "
+            "alone)");
+  std::string fisheye = cam0;
+  fisheye.replace(fisheye.find("radtan"), 6, "equidistant");
+  std::ofstream(dir.file("camchain_fisheye.yaml")) << fisheye;
+  CHECK(contains(error_of([&] { (void)load_camera(dir.file("camchain_fisheye.yaml")); }),
+                 "cam0: distortion_model 'equidistant': kincal's distortion is plumb_bob (Kalibr's radtan)"));
   // OpenCV's keys without OpenCV's "%YAML:1.0" line, as people copy them into READMEs.
   {
     std::ifstream in(dir.file("column.yaml"));
@@ -853,6 +872,11 @@ TEST_CASE("camera files as other tools write them: a distortion column, 4 to 14 
                  "'distortion_coefficients': k5 = 0.5, not 0"));
   CHECK(contains(error_of([&] { (void)load_camera(ros_file("seven.yaml", "", five + ", 0, 0", 7)); }),
                  "not 4, 5, 8, 12 or 14 coefficients"));
+  // A shape whose product overflows an int is refused before any product is taken (UBSan watches).
+  std::ofstream(dir.file("huge.yaml")) << "image_width: 640\nimage_height: 480\ncamera_matrix: {rows: 3, cols: 3, "
+                                          "data: [1, 0, 0, 0, 1, 0, 0, 0, 1]}\ndistortion_coefficients: {rows: "
+                                          "2000000000, cols: 2000000000, data: [0, 0, 0, 0, 0]}\n";
+  CHECK(contains(error_of([&] { (void)load_camera(dir.file("huge.yaml")); }), "not 4, 5, 8, 12 or 14 coefficients"));
 }
 
 TEST_CASE("camera files carry the intrinsics' covariance and projection sigma; files without them still read") {
