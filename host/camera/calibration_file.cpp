@@ -50,26 +50,32 @@ cv::FileStorage open_for_reading(const std::string& path, const std::string& tex
   return fs;
 }
 
-cv::Mat read_matrix(const cv::FileStorage& fs, const std::string& path, const std::string& key, int rows, int cols) {
-  cv::Mat m;
-  const cv::FileNode node = fs[key];
-  // The shape is checked before OpenCV reads the matrix: it allocates rows x cols as the file
-  // says (a damaged "cols:" became 2^31 and 64 GiB, found by fuzz.camera_inputs).
+// The node as a rows x cols matrix (CV_64F), or an empty one when it is not one. The shape is
+// checked before OpenCV reads the matrix: it allocates rows x cols as the file says (a damaged
+// "cols:" became 2^31 and 64 GiB, found by fuzz.camera_inputs).
+cv::Mat matrix_of_shape(const cv::FileNode& node, int rows, int cols) {
   const auto is = [&](const char* field, int value) {
     return node[field].isInt() && static_cast<int>(node[field]) == value;
   };
   const bool shaped = node.isMap() && is("rows", rows) && is("cols", cols) && node["data"].isSeq() &&
                       node["data"].size() == static_cast<std::size_t>(rows * cols);
+  cv::Mat m;
   try {
     if (shaped) node >> m;
   } catch (const std::exception&) {  // cv::Exception, and the std exceptions OpenCV's parser lets out
     m.release();
   }
-  if (m.rows != rows || m.cols != cols) {
+  if (m.rows != rows || m.cols != cols) return {};
+  m.convertTo(m, CV_64F);
+  return m;
+}
+
+cv::Mat read_matrix(const cv::FileStorage& fs, const std::string& path, const std::string& key, int rows, int cols) {
+  cv::Mat m = matrix_of_shape(fs[key], rows, cols);
+  if (m.empty()) {
     throw CalibrationError(path + ": key '" + key + "' missing or not a " + std::to_string(rows) + "x" +
                            std::to_string(cols) + " matrix");
   }
-  m.convertTo(m, CV_64F);
   return m;
 }
 
@@ -134,19 +140,11 @@ std::array<double, 5> plumb_bob_of(const cv::Mat& d, const std::string& model, c
 // The distortion of an OpenCV file (the key, and the file's distortion_model when it has one).
 std::array<double, 5> read_distortion(const cv::FileStorage& fs, const std::string& path, const std::string& key) {
   const cv::FileNode node = fs[key];
-  // The shape is checked before OpenCV reads the matrix, as read_matrix does.
-  const bool shaped =
-      node.isMap() && node["rows"].isInt() && node["cols"].isInt() &&
-      is_distortion_shape(static_cast<int>(node["rows"]), static_cast<int>(node["cols"])) && node["data"].isSeq() &&
-      node["data"].size() == static_cast<std::size_t>(static_cast<int>(node["rows"]) * static_cast<int>(node["cols"]));
-  cv::Mat d;
-  try {
-    if (shaped) node >> d;
-  } catch (const std::exception&) {  // cv::Exception, and the std exceptions OpenCV's parser lets out
-    d.release();
-  }
-  if (d.empty() || !is_distortion_shape(d.rows, d.cols)) throw distortion_shape_error(path, key);
-  d.convertTo(d, CV_64F);
+  // node[field] asserts (cv::Exception) on a node that is not a map.
+  const int rows = node.isMap() && node["rows"].isInt() ? static_cast<int>(node["rows"]) : 0;
+  const int cols = node.isMap() && node["cols"].isInt() ? static_cast<int>(node["cols"]) : 0;
+  const cv::Mat d = is_distortion_shape(rows, cols) ? matrix_of_shape(node, rows, cols) : cv::Mat();
+  if (d.empty()) throw distortion_shape_error(path, key);
   const cv::FileNode model = fs["distortion_model"];
   if (!model.empty() && !model.isString())
     throw CalibrationError(path + ": key 'distortion_model' is not a name (plumb_bob)");
@@ -320,13 +318,20 @@ YAML::Node parse_ros(const std::string& path, const std::string& text) {
   return root;
 }
 
-// A {rows, cols, data} matrix of a ROS file (CV_64F); throws YAML::Exception for a bad scalar.
-cv::Mat ros_matrix(const YAML::Node& root, const std::string& path, const std::string& key, int rows, int cols) {
-  const YAML::Node m = root[key];
+// The data of a {rows, cols, data} node of that shape, or none; throws YAML::Exception for a bad
+// scalar.
+std::vector<double> ros_data(const YAML::Node& m, int rows, int cols) {
   std::vector<double> data;
   if (m && m["rows"] && m["cols"] && m["data"] && m["rows"].as<int>() == rows && m["cols"].as<int>() == cols)
     data = m["data"].as<std::vector<double>>();
-  if (data.size() != static_cast<std::size_t>(rows * cols))
+  if (data.size() != static_cast<std::size_t>(rows * cols)) data.clear();
+  return data;
+}
+
+// A {rows, cols, data} matrix of a ROS file (CV_64F); throws YAML::Exception for a bad scalar.
+cv::Mat ros_matrix(const YAML::Node& root, const std::string& path, const std::string& key, int rows, int cols) {
+  const std::vector<double> data = ros_data(root[key], rows, cols);
+  if (data.empty())
     throw CalibrationError(path + ": key '" + key + "' missing or not a " + std::to_string(rows) + "x" +
                            std::to_string(cols) + " matrix");
   return cv::Mat(data, true).reshape(1, rows);
@@ -335,15 +340,13 @@ cv::Mat ros_matrix(const YAML::Node& root, const std::string& path, const std::s
 // The distortion of a ROS file: {rows, cols, data} of a shape is_distortion_shape takes.
 cv::Mat ros_distortion(const YAML::Node& root, const std::string& path) {
   const YAML::Node m = root["distortion_coefficients"];
-  std::vector<double> data;
   int rows = 0, cols = 0;
   if (m && m.IsMap() && m["rows"] && m["cols"] && m["data"]) {
     rows = m["rows"].as<int>();
     cols = m["cols"].as<int>();
-    if (is_distortion_shape(rows, cols)) data = m["data"].as<std::vector<double>>();
   }
-  if (data.empty() || data.size() != static_cast<std::size_t>(rows * cols))
-    throw distortion_shape_error(path, "distortion_coefficients");
+  const std::vector<double> data = is_distortion_shape(rows, cols) ? ros_data(m, rows, cols) : std::vector<double>();
+  if (data.empty()) throw distortion_shape_error(path, "distortion_coefficients");
   return cv::Mat(data, true);
 }
 
