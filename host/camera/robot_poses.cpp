@@ -90,8 +90,13 @@ struct Line {
 };
 
 std::vector<RobotPose> parse_csv(const std::vector<Line>& lines, const std::string& source, RotationColumns rotation) {
-  const std::string separator = lines.front().text.find(',') != std::string::npos ? "," : ";";
-  const std::vector<std::string> header = fields_of(lines.front().text, separator, true);
+  const std::string& first = lines.front().text;
+  // ',' or ';' between fields, or else spaces and tabs (a whitespace-separated table).
+  const bool blank_separated = first.find_first_of(",;") == std::string::npos;
+  const std::string separator = first.find(',') != std::string::npos ? "," : blank_separated ? " \t" : ";";
+  std::vector<std::string> header = fields_of(first, separator, !blank_separated);
+  for (std::string& name : header)
+    std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return std::tolower(c); });
   const int header_line = lines.front().number;
   std::map<std::string, std::size_t> column;
   for (std::size_t i = 0; i < header.size(); ++i) {
@@ -102,7 +107,11 @@ std::vector<RobotPose> parse_csv(const std::vector<Line>& lines, const std::stri
   const auto has = [&](std::initializer_list<const char*> names) {
     return std::all_of(names.begin(), names.end(), [&](const char* n) { return column.count(n) > 0; });
   };
-  if (!has({"x", "y", "z"})) bad_pose(source, header_line, "the header has no x,y,z columns");
+  if (!has({"x", "y", "z"})) {
+    std::string names;
+    for (const std::string& name : header) names += (names.empty() ? "" : ",") + files::excerpt(name);
+    bad_pose(source, header_line, "the header has no x,y,z columns (it names " + names + ")");
+  }
   const bool quaternion = has({"qw", "qx", "qy", "qz"});
   if (!quaternion && !has({"rx", "ry", "rz"}))
     bad_pose(source, header_line, "the header has no rotation columns: qw,qx,qy,qz or rx,ry,rz");
@@ -116,7 +125,7 @@ std::vector<RobotPose> parse_csv(const std::vector<Line>& lines, const std::stri
              "rx,ry,rz can mean a rotation vector or roll-pitch-yaw angles: name which (rotvec, rpy or rpy-deg)");
   std::vector<RobotPose> poses;
   for (std::size_t k = 1; k < lines.size(); ++k) {
-    const std::vector<std::string> f = fields_of(lines[k].text, separator, true);
+    const std::vector<std::string> f = fields_of(lines[k].text, separator, !blank_separated);
     const auto value = [&](const char* name) {
       const std::size_t i = column.at(name);
       if (i >= f.size()) bad_pose(source, lines[k].number, "no field for column " + std::string(name));
@@ -145,12 +154,20 @@ std::vector<RobotPose> parse_matrices(const std::vector<Line>& lines, const std:
   int first_line = 0;
   for (const Line& l : lines) {
     const std::vector<std::string> f = fields_of(l.text, " \t,", false);
-    if (f.size() != 16 && f.size() != 4)
+    if (f.size() == 7 || f.size() == 8)
       bad_pose(source, l.number,
-               std::to_string(f.size()) + " numbers: a line holds a 4x4 matrix (16 numbers) or one of its rows (4)");
-    if (f.size() == 16 && !m.empty()) bad_pose(source, l.number, "a whole matrix inside an unfinished one");
+               std::to_string(f.size()) +
+                   " numbers and no header: a trajectory row (TUM's is t x y z qx qy qz qw)? Name the columns in a "
+                   "first line, e.g. t x y z qx qy qz qw");
+    if (f.size() != 16 && f.size() != 12 && f.size() != 4)
+      bad_pose(source, l.number,
+               std::to_string(f.size()) +
+                   " numbers: a line holds a 4x4 matrix (16 numbers), its top 3x4 (12, as KITTI's poses) or one of "
+                   "a 4x4's rows (4)");
+    if (f.size() != 4 && !m.empty()) bad_pose(source, l.number, "a whole matrix inside an unfinished one");
     if (m.empty()) first_line = l.number;
     for (const std::string& s : f) m.push_back(number_of(s, source, l.number));
+    if (f.size() == 12) m.insert(m.end(), {0, 0, 0, 1});
     if (m.size() < 16) continue;
     const Eigen::Matrix4d t = Eigen::Map<const Eigen::Matrix<double, 4, 4, Eigen::RowMajor>>(m.data());
     const Eigen::Matrix3d r = t.topLeftCorner<3, 3>();

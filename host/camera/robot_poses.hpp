@@ -4,18 +4,20 @@
 //
 // Two file forms, told apart by the first line that is not blank and not a '#' comment:
 //  - CSV with a header row (it holds a letter): columns named x,y,z and either qw,qx,qy,qz (a
-//    unit quaternion, within 1e-3; normalized) or rx,ry,rz, whose meaning must be named by
-//    `rotation`:
+//    unit quaternion, within 1e-3; normalized; in any order, so ROS's x,y,z,w order too) or
+//    rx,ry,rz, whose meaning must be named by `rotation` (names in any case):
 //      kRotationVector  rx,ry,rz is the rotation vector (axis times angle, radians; Universal
 //                       Robots' pose format)
 //      kRpy, kRpyDeg    roll, pitch, yaw about the fixed x, y, z axes, R = Rz(rz) Ry(ry) Rx(rx),
 //                       in radians or degrees (also KUKA's A,B,C as rz,ry,rx and Fanuc's W,P,R)
 //    Other columns (joints q1..qN, time stamps, a kincal dataset's columns) are ignored, so a
 //    kincal dataset CSV is also a poses file. Fields are separated by ',' or, if the header has
-//    no ',', by ';'.
-//  - 4x4 matrices, row-major: each line holds 16 numbers (one pose) or 4 numbers (one row; four
-//    such lines make a pose), separated by spaces, tabs or commas. The last row must be
-//    0 0 0 1 and the rotation orthonormal with determinant +1, within 1e-3.
+//    no ',', by ';', or, if it has neither, by spaces and tabs.
+//  - 4x4 matrices, row-major: each line holds 16 numbers (one pose), 12 (its top three rows, as
+//    KITTI's poses files) or 4 numbers (one row; four such lines make a pose), separated by
+//    spaces, tabs or commas. The last row must be 0 0 0 1 and the rotation orthonormal with
+//    determinant +1, within 1e-3. Lines of 7 or 8 numbers without a header (a trajectory's rows,
+//    as TUM's t x y z qx qy qz qw) are refused, asking for a header that names the columns.
 // read_robot_poses reads through files::read_text (kDatasetFile: a regular file of at most
 // 256 MiB, UTF-8 with an optional byte-order mark, CRLF accepted; directories, devices, FIFOs,
 // UTF-16/Latin-1 refused by name).

@@ -62,6 +62,9 @@ double epipolar_rms_px(const CameraModel& left, const CameraModel& right, const 
   return std::sqrt(sum2 / (2.0 * static_cast<double>(l.size())));
 }
 
+// How many pairs of the pair-consistency gate's largest agreeing group its message names.
+constexpr std::size_t kNamedGroupPairs = 4;
+
 double median_of(std::vector<double> v) {
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
   return v[v.size() / 2];
@@ -94,42 +97,59 @@ std::vector<std::optional<PairPose>> refuse_disagreeing_pairs(StereoCalibration&
                     cv::norm(a.right_t_left_m - b.right_t_left_m) /
                         (options.max_pair_translation_fraction * cv::norm(b.right_t_left_m)));
   };
-  std::size_t medoid = 0;
-  double best = std::numeric_limits<double>::infinity();
+  // The consensus: the pose most others agree with (within distance 1), the smallest median
+  // distance among equals.
+  std::size_t consensus_index = 0;
+  std::ptrdiff_t most_agreeing = 0;
+  double best_median = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < poses.size(); ++i) {
     std::vector<double> d;
     for (const PairPose& other : poses) d.push_back(distance(other, poses[i]));
-    if (const double m = median_of(d); m < best) {
-      best = m;
-      medoid = i;
+    const std::ptrdiff_t agreeing = std::count_if(d.begin(), d.end(), [](double x) { return x <= 1; });
+    const double m = median_of(d);
+    if (agreeing > most_agreeing || (agreeing == most_agreeing && m < best_median)) {
+      most_agreeing = agreeing;
+      best_median = m;
+      consensus_index = i;
     }
   }
+  const PairPose& consensus = poses[consensus_index];
   // No baseline to measure the pairs' translations against (the same images left and right, or
   // one camera twice): the baseline check after the solve refuses it, saying so.
-  if (cv::norm(poses[medoid].right_t_left_m) < kMinBaselineOverBoardDistance * poses[medoid].board_distance_m)
-    return own;
-  std::vector<std::size_t> bad;
+  if (cv::norm(consensus.right_t_left_m) < kMinBaselineOverBoardDistance * consensus.board_distance_m) return own;
+  std::vector<std::size_t> bad, group;
   for (std::size_t i = 0; i < poses.size(); ++i) {
-    const double d = distance(poses[i], poses[medoid]);
+    const double d = distance(poses[i], consensus);
     result.pairs[used[posed[i]]].consensus_distance = d;
-    if (d > 1) bad.push_back(i);
+    (d > 1 ? bad : group).push_back(i);
   }
   if (bad.empty()) return own;
+  const auto pair_name = [&](std::size_t i) {
+    const StereoPairReport& p = result.pairs[used[posed[i]]];
+    return p.left_view + " / " + p.right_view;
+  };
   const PairPose& first = poses[bad.front()];
-  const PairPose& consensus = poses[medoid];
-  const StereoPairReport& p = result.pairs[used[posed[bad.front()]]];
-  const StereoPairReport& c = result.pairs[used[posed[medoid]]];
-  throw CalibrationError("stereo calibration: pair " + p.left_view + " / " + p.right_view +
-                         " disagrees with the others: its right_T_left " +
-                         "(from its own board poses) differs from the consensus (pair " + c.left_view + " / " +
-                         c.right_view + ") by " +
-                         fixed(angle_between_rad(first.right_R_left, consensus.right_R_left) * 180 / CV_PI, 2) +
-                         " degrees and " + fixed(cv::norm(first.right_t_left_m - consensus.right_t_left_m), 4) +
-                         " m (at most " + fixed(options.max_pair_rotation_rad * 180 / CV_PI, 1) + " degrees and " +
-                         fixed(100 * options.max_pair_translation_fraction, 0) + " % of the baseline " +
-                         fixed(cv::norm(consensus.right_t_left_m), 4) + " m); " + std::to_string(bad.size()) + " of " +
-                         std::to_string(poses.size()) +
-                         " pairs disagree: the left and right lists are shifted or mismatched, or the cameras moved");
+  std::string message = "stereo calibration: pair " + pair_name(bad.front()) +
+                        " disagrees with the others: its right_T_left " + "(from its own board poses) differs from " +
+                        (2 * group.size() > poses.size() ? "the consensus (pair " : "that of pair ") +
+                        pair_name(consensus_index) + ") by " +
+                        fixed(angle_between_rad(first.right_R_left, consensus.right_R_left) * 180 / CV_PI, 2) +
+                        " degrees and " + fixed(cv::norm(first.right_t_left_m - consensus.right_t_left_m), 4) +
+                        " m (at most " + fixed(options.max_pair_rotation_rad * 180 / CV_PI, 1) + " degrees and " +
+                        fixed(100 * options.max_pair_translation_fraction, 0) + " % of the baseline " +
+                        fixed(cv::norm(consensus.right_t_left_m), 4) + " m); " + std::to_string(bad.size()) + " of " +
+                        std::to_string(poses.size()) + " pairs disagree";
+  // Without a majority the consensus is only the largest group: say which pairs it holds, so a
+  // list shifted part-way shows where the pairs still agree.
+  if (group.size() == 1) {
+    message += ", no two pairs agree";
+  } else if (2 * group.size() <= poses.size()) {
+    message += ", no majority agrees: the largest group that does is " + std::to_string(group.size()) + " pairs (";
+    for (std::size_t k = 0; k < group.size() && k < kNamedGroupPairs; ++k)
+      message += (k > 0 ? ", " : "") + pair_name(group[k]);
+    message += group.size() > kNamedGroupPairs ? ", ...)" : ")";
+  }
+  throw CalibrationError(message + ": the left and right lists are shifted or mismatched, or the cameras moved");
 }
 
 }  // namespace
@@ -286,6 +306,13 @@ std::string describe(const StereoCalibration& c) {
   out << "baseline: " << fixed(c.baseline_m, 6) << " m\n";
   out << "right_t_left: " << fixed(c.right_t_left_m[0], 6) << " " << fixed(c.right_t_left_m[1], 6) << " "
       << fixed(c.right_t_left_m[2], 6) << " m\n";
+  // The right camera's centre in the left camera's frame: left of it (x < 0, mostly along x) is
+  // a valid rig, but more often the two lists given the wrong way round.
+  const cv::Vec3d right_centre = -(c.right_R_left.t() * c.right_t_left_m);
+  if (right_centre[0] < 0 && std::abs(right_centre[0]) > std::max(std::abs(right_centre[1]), std::abs(right_centre[2])))
+    out << "note: the right camera's centre is " << fixed(-right_centre[0], 4)
+        << " m to the left of the left camera's (x right in its image): if so mounted, fine; otherwise the left "
+           "and right images are swapped\n";
   cv::Vec3d rotation;
   cv::Rodrigues(c.right_R_left, rotation);
   out << "right_R_left: " << fixed(cv::norm(rotation) * 180 / CV_PI, 4) << " degrees\n";

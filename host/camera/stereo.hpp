@@ -16,11 +16,13 @@
 // Gates (exit 0 must mean a result a user can trust): every pair sees the same rigid rig, so
 //  - pair consistency, before the solve: each usable pair's own right_T_left (the board's pose
 //    in each camera by cv::solvePnP with the cameras given, right_T_board * left_T_board^-1) is
-//    compared with the consensus, the pair whose pose has the smallest median distance to all
-//    others (distance: the larger of rotation / max_pair_rotation_rad and translation /
-//    (max_pair_translation_fraction * baseline)); a pair beyond distance 1 is refused, the
-//    first in list order named with its numbers. A right list shifted by one frame makes every
-//    pair disagree (tens of degrees; OpenCV's 13 sample pairs agree within 0.4 degrees and
+//    compared with the consensus, the pair whose pose most others agree with, the smallest
+//    median distance among equals (distance: the larger of rotation / max_pair_rotation_rad and
+//    translation / (max_pair_translation_fraction * baseline); agreeing: distance at most 1); a
+//    pair beyond distance 1 is refused, the first in list order named with its numbers, and
+//    when the consensus has no majority the message says so and names its group (a list
+//    shifted part-way: the pairs before the shift). A right list shifted by one frame makes
+//    every pair disagree (tens of degrees; OpenCV's 13 sample pairs agree within 0.4 degrees and
 //    2.5 mm of their 83 mm baseline);
 //  - epipolar residuals, after the solve: a pair whose RMS exceeds both outlier_over_median
 //    times the median pair's and outlier_floor_px is refused, named;

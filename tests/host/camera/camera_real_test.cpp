@@ -179,7 +179,7 @@ TEST_CASE("every larger size is found in no view, and the size the views show is
   CHECK_MESSAGE(contains(edge.reason, "has no squares beyond its first column"), edge.reason);
 }
 
-TEST_CASE("a right list shifted by one is refused, naming the first pair") {
+TEST_CASE("a right list shifted by one, or out of order any other way, is refused, naming the first pair") {
   const Board board = parse_board("chessboard:9x6:0.025");
   const std::vector<BoardDetection> left = detect_samples(board, "left"), right = detect_samples(board, "right");
   const CameraModel left_camera = calibrate_intrinsics(left).camera, right_camera = calibrate_intrinsics(right).camera;
@@ -192,4 +192,44 @@ TEST_CASE("a right list shifted by one is refused, naming the first pair") {
       error_of([&] { (void)calibrate_stereo(left_first, right_shifted, left_camera, right_camera); });
   CHECK(contains(message, "pair " + sample("left", 1) + " / " + sample("right", 2) + " disagrees with the others"));
   CHECK(contains(message, "shifted or mismatched"));
+  CHECK(contains(message, "no two pairs agree"));
+
+  // The class, not the example: every way a list can lose its order is refused, naming the first
+  // pair out of step. Sample views are 1..9, 11..14 (index 4 is view 5).
+  const auto refused = [&](const std::vector<BoardDetection>& l, const std::vector<BoardDetection>& r) {
+    return error_of([&] { (void)calibrate_stereo(l, r, left_camera, right_camera); });
+  };
+  const auto without = [](std::vector<BoardDetection> v, std::size_t i) {
+    v.erase(v.begin() + static_cast<std::ptrdiff_t>(i));
+    return v;
+  };
+  {  // the left list misses view 5 part-way: the first four pairs still agree, and are named
+    const std::vector<BoardDetection> l = without(left, 4), r(right.begin(), right.end() - 1);
+    const std::string m = refused(l, r);
+    CHECK_MESSAGE(contains(m, "pair " + sample("left", 6) + " / " + sample("right", 5) + " disagrees"), m);
+    CHECK_MESSAGE(contains(m, "no majority agrees: the largest group that does is 4 pairs (" + sample("left", 1) +
+                                  " / " + sample("right", 1)),
+                  m);
+  }
+  {  // shifted by two
+    const std::string m = refused({left.begin(), left.end() - 2}, {right.begin() + 2, right.end()});
+    CHECK_MESSAGE(contains(m, "pair " + sample("left", 1) + " / " + sample("right", 3) + " disagrees"), m);
+  }
+  {  // two pairs swapped in the right list: the others agree, the two are named first
+    std::vector<BoardDetection> r = right;
+    std::swap(r[1], r[2]);
+    const std::string m = refused(left, r);
+    CHECK_MESSAGE(contains(m, "pair " + sample("left", 2) + " / " + sample("right", 3) + " disagrees"), m);
+    CHECK_MESSAGE(contains(m, "2 of 13 pairs disagree: the left"), m);
+  }
+  {  // the right list reversed
+    const std::string m = refused(left, {right.rbegin(), right.rend()});
+    CHECK_MESSAGE(contains(m, "disagrees with the others"), m);
+  }
+  // Left and right given the wrong way round make a valid rig the other way round: calibrated,
+  // and the printout says the right camera is on the left.
+  const StereoCalibration swapped = calibrate_stereo(right, left, right_camera, left_camera);
+  CHECK(swapped.baseline_m == doctest::Approx(s.baseline_m).epsilon(0.01));
+  CHECK(contains(describe(swapped), "to the left of the left camera"));
+  CHECK_FALSE(contains(describe(s), "to the left of the left camera"));
 }

@@ -986,7 +986,9 @@ TEST_CASE("a host calibration converts to the platform's camera block and back")
   CHECK(contains(error_of([&] { (void)to_platform(broken); }), "camera parameter k3 = nan"));
 }
 
-TEST_CASE("robot poses as controllers give them: x,y,z + quaternion without joints, rx,ry,rz, 4x4 rows") {
+TEST_CASE(
+    "robot poses as controllers and other tools give them: x,y,z + quaternion without joints, rx,ry,rz, 4x4 and 3x4 "
+    "rows") {
   const Eigen::Isometry3d expected = [] {
     Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
     t.linear() = Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
@@ -1057,6 +1059,26 @@ TEST_CASE("robot poses as controllers give them: x,y,z + quaternion without join
   CHECK(contains(refused(rows16.str(), RotationColumns::kRotationVector), "p.csv:1: the poses are 4x4 matrices, yet"));
   std::istringstream twice_ignored("t,t,x,y,z,qw,qx,qy,qz\n1,2,0.4,0,0.6,1,0,0,0\n");  // columns not read may repeat
   CHECK(parse_robot_poses(twice_ignored, "t.csv", RotationColumns::kUnnamed).size() == 1);
+
+  // The same poses as other tools write them: ROS's x,y,z,w quaternion order with upper-case
+  // names in a whitespace-separated table, KITTI's 3x4 rows (12 numbers a line).
+  std::ostringstream ros, kitti;
+  ros.precision(17);
+  kitti.precision(17);
+  ros << "T X Y Z QX QY QZ QW\n1.5\t0.4  -0.1 0.6 " << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w() << "\n";
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) kitti << expected.matrix()(r, c) << (r < 2 || c < 3 ? " " : "\n");
+  std::istringstream in_ros(ros.str()), in_kitti(kitti.str());
+  same(parse_robot_poses(in_ros, "ros.txt", RotationColumns::kUnnamed));
+  same(parse_robot_poses(in_kitti, "kitti.txt", RotationColumns::kUnnamed));
+  // A trajectory's rows without a header (TUM's t x y z qx qy qz qw) could be read many ways:
+  // refused, asking for the columns' names; a header without x,y,z says what it does name.
+  CHECK(contains(refused("# timestamp tx ty tz qx qy qz qw\n1 0.4 0 0.6 0 0 0 1\n", RotationColumns::kUnnamed),
+                 "p.csv:2: 8 numbers and no header: a trajectory row"));
+  CHECK(contains(refused("timestamp tx ty tz qx qy qz qw\n1 0.4 0 0.6 0 0 0 1\n", RotationColumns::kUnnamed),
+                 "p.csv:1: the header has no x,y,z columns (it names timestamp,tx,ty,tz,qx,qy,qz,qw)"));
+  CHECK(contains(refused("1 0 0 0 0 1 0 0 0 0 1 0\n0 0 0 1\n", RotationColumns::kUnnamed),
+                 "p.csv:2: an unfinished 4x4 matrix (4 numbers)"));
 }
 
 TEST_CASE("a 17x28 board in a rendered 4K view: the primary detector, a window sized to its squares") {
