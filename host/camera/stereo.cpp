@@ -130,10 +130,10 @@ std::vector<std::optional<PairPose>> refuse_disagreeing_pairs(StereoCalibration&
   };
   const PairPose& first = poses[bad.front()];
   std::string message = "stereo calibration: pair " + pair_name(bad.front()) +
-                        " disagrees with the others: its right_T_left " + "(from its own board poses) differs from " +
-                        (2 * group.size() > poses.size() ? "the consensus (pair " : "that of pair ") +
-                        pair_name(consensus_index) + ") by " +
-                        fixed(angle_between_rad(first.right_R_left, consensus.right_R_left) * 180 / CV_PI, 2) +
+                        " disagrees with the others: its right_T_left (from its own board poses) differs from " +
+                        (2 * group.size() > poses.size() ? "the consensus (pair " + pair_name(consensus_index) + ")"
+                                                         : "that of pair " + pair_name(consensus_index)) +
+                        " by " + fixed(angle_between_rad(first.right_R_left, consensus.right_R_left) * 180 / CV_PI, 2) +
                         " degrees and " + fixed(cv::norm(first.right_t_left_m - consensus.right_t_left_m), 4) +
                         " m (at most " + fixed(options.max_pair_rotation_rad * 180 / CV_PI, 1) + " degrees and " +
                         fixed(100 * options.max_pair_translation_fraction, 0) + " % of the baseline " +

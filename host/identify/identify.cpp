@@ -810,8 +810,12 @@ IdentifyResult gated(const RobotModel& nominal, const model::Dataset& data, cons
   if (!options.rejection_gate || result.rejections.empty()) return result;
   IdentifyOptions without = options;
   without.robust = false;
-  const CrossValidation with_cv = with_rule != nullptr ? *with_rule : cross_validate(nominal, data, options);
-  const CrossValidation without_cv = cross_validate(nominal, data, without);
+  // Both cross-validations side by side when the caller has neither.
+  std::vector<Candidate> to_validate{Candidate{"without", "", nominal, without}};
+  if (with_rule == nullptr) to_validate.push_back(Candidate{"with", "", nominal, options});
+  std::vector<CrossValidation> validated = cross_validate(to_validate, data);
+  const CrossValidation without_cv = std::move(validated.front());
+  const CrossValidation with_cv = with_rule != nullptr ? *with_rule : std::move(validated.back());
   if (with_cv.kfold_rms_m < 0.0 || without_cv.kfold_rms_m < 0.0) {
     result.notes.push_back("rejection gate: cross-validation cannot judge the rejections (" +
                            (with_cv.why.empty() ? without_cv.why : with_cv.why) + "); they stand");

@@ -1,10 +1,16 @@
 #include "host/identify/model_selection.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <exception>
+#include <functional>
+#include <mutex>
 #include <random>
 #include <sstream>
+#include <system_error>
+#include <thread>
 
 namespace kincal::identify {
 
@@ -42,6 +48,34 @@ bool predict(const model::Dataset& data, const RobotModel& model, const Identify
     why = e.what();
     return false;
   }
+}
+
+// task(0) .. task(n - 1) on up to the machine's hardware threads (the calling one among them);
+// the first exception a task throws is rethrown once every task has stopped.
+void for_each_in_parallel(std::size_t n, const std::function<void(std::size_t)>& task) {
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
+  const auto work = [&] {
+    for (std::size_t i = next++; i < n; i = next++) {
+      try {
+        task(i);
+      } catch (...) {
+        const std::lock_guard<std::mutex> lock(failure_mutex);
+        if (!failure) failure = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  const std::size_t workers = std::min<std::size_t>(n, std::max(1U, std::thread::hardware_concurrency()));
+  try {
+    while (threads.size() + 1 < workers) threads.emplace_back(work);
+  } catch (const std::system_error&) {
+    // No more threads to be had: the ones started and this one do the work.
+  }
+  work();
+  for (std::thread& t : threads) t.join();
+  if (failure) std::rethrow_exception(failure);
 }
 
 double root_mean(const std::vector<double>& v) {
@@ -146,35 +180,72 @@ RowSplit out_of_range_fold(const model::Dataset& data, const SelectionOptions& o
   }
 }
 
-CrossValidation cross_validate(const RobotModel& model, const model::Dataset& data, const IdentifyOptions& options,
-                               const SelectionOptions& selection) {
-  IdentifyOptions o = options;
-  o.rejection_gate = false;
+std::vector<CrossValidation> cross_validate(const std::vector<Candidate>& models, const model::Dataset& data,
+                                            const SelectionOptions& selection) {
+  // The folds: K of the shuffled rows, then the out-of-range fold when it has rows on both sides.
   const int n = static_cast<int>(data.rows.size());
   std::vector<int> order(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) order[static_cast<std::size_t>(i)] = i;
   std::mt19937_64 rng(23);
   std::shuffle(order.begin(), order.end(), rng);
-  CrossValidation cv;
-  bool ok = true;
-  for (int k = 0; k < selection.folds && ok; ++k) {
+  struct Fold {
     std::vector<int> train, test;
-    for (int i = 0; i < n; ++i) (i % selection.folds == k ? test : train).push_back(order[static_cast<std::size_t>(i)]);
-    ok = predict(data, model, o, train, test, cv.kfold_error2, k == 0 ? &cv.parameters : nullptr, cv.why);
+  };
+  std::vector<Fold> folds(static_cast<std::size_t>(selection.folds));
+  for (int k = 0; k < selection.folds; ++k) {
+    Fold& f = folds[static_cast<std::size_t>(k)];
+    for (int i = 0; i < n; ++i)
+      (i % selection.folds == k ? f.test : f.train).push_back(order[static_cast<std::size_t>(i)]);
   }
-  if (!ok) {
-    cv.kfold_error2.clear();
-    return cv;
-  }
-  cv.kfold_rms_m = root_mean(cv.kfold_error2);
   const RowSplit range = out_of_range_fold(data, selection);
-  if (range.inside.empty() || range.outside.empty()) return cv;
-  std::string why;
-  if (predict(data, model, o, range.inside, range.outside, cv.out_of_range_error2, nullptr, why))
-    cv.out_of_range_rms_m = root_mean(cv.out_of_range_error2);
-  else
-    cv.why = "out-of-range fold: " + why;
-  return cv;
+  const bool range_fold = !range.inside.empty() && !range.outside.empty();
+  if (range_fold) folds.push_back({range.inside, range.outside});
+
+  // Every model's every fold is one solve, independent of the others: all in parallel.
+  struct Fit {
+    bool ok = false;
+    std::vector<double> error2;
+    int parameters = 0;
+    std::string why;
+  };
+  std::vector<Fit> fits(models.size() * folds.size());
+  for_each_in_parallel(fits.size(), [&](std::size_t t) {
+    const Candidate& c = models[t / folds.size()];
+    const Fold& fold = folds[t % folds.size()];
+    IdentifyOptions o = c.options;
+    o.rejection_gate = false;
+    Fit& fit = fits[t];
+    fit.ok = predict(data, c.model, o, fold.train, fold.test, fit.error2, &fit.parameters, fit.why);
+  });
+
+  std::vector<CrossValidation> out(models.size());
+  for (std::size_t m = 0; m < models.size(); ++m) {
+    CrossValidation& cv = out[m];
+    const Fit* fit = &fits[m * folds.size()];
+    if (fit[0].ok) cv.parameters = fit[0].parameters;
+    const auto k = static_cast<std::size_t>(selection.folds);
+    const auto failed = std::find_if(fit, fit + k, [](const Fit& f) { return !f.ok; });
+    if (failed != fit + k) {
+      cv.why = failed->why;
+      continue;
+    }
+    for (std::size_t f = 0; f < k; ++f)
+      cv.kfold_error2.insert(cv.kfold_error2.end(), fit[f].error2.begin(), fit[f].error2.end());
+    cv.kfold_rms_m = root_mean(cv.kfold_error2);
+    if (!range_fold) continue;
+    if (fit[k].ok) {
+      cv.out_of_range_error2 = fit[k].error2;
+      cv.out_of_range_rms_m = root_mean(cv.out_of_range_error2);
+    } else {
+      cv.why = "out-of-range fold: " + fit[k].why;
+    }
+  }
+  return out;
+}
+
+CrossValidation cross_validate(const RobotModel& model, const model::Dataset& data, const IdentifyOptions& options,
+                               const SelectionOptions& selection) {
+  return cross_validate({Candidate{"", "", model, options}}, data, selection).front();
 }
 
 Selection select_model(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& base,
@@ -186,11 +257,10 @@ Selection select_model(const RobotModel& nominal, const model::Dataset& data, co
   s.out_of_range_test_rows = static_cast<int>(range.outside.size());
   const std::vector<Candidate> candidates = candidate_models(nominal, base);
   int best = -1;
-  std::vector<CrossValidation> validations;
-  for (const Candidate& candidate : candidates) {
-    validations.push_back(cross_validate(candidate.model, data, candidate.options, options));
-    const CrossValidation& cv = validations.back();
-    s.scores.push_back({candidate.name, cv.parameters, cv.kfold_rms_m, cv.out_of_range_rms_m, -1.0, cv.why});
+  std::vector<CrossValidation> validations = cross_validate(candidates, data, options);
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    const CrossValidation& cv = validations[c];
+    s.scores.push_back({candidates[c].name, cv.parameters, cv.kfold_rms_m, cv.out_of_range_rms_m, -1.0, cv.why});
   }
   // The out-of-range fold counts when every candidate the K folds could judge was identified on
   // its in-range rows: a fold that only the small models can be fitted to would favour them.

@@ -108,6 +108,11 @@ struct CrossValidation {
 };
 CrossValidation cross_validate(const RobotModel& model, const model::Dataset& data, const IdentifyOptions& options,
                                const SelectionOptions& selection = {});
+// The same for several models (each candidate's model and options; names unused), in their order:
+// every model's K + 1 solves run side by side on the machine's hardware threads, with the same
+// results as one call each (the 8 candidates' 48 solves on 15,000 UR10 rows: minutes on one core).
+std::vector<CrossValidation> cross_validate(const std::vector<Candidate>& models, const model::Dataset& data,
+                                            const SelectionOptions& selection = {});
 
 struct CandidateScore {
   std::string name;

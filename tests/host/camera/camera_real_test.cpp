@@ -206,7 +206,10 @@ TEST_CASE("a right list shifted by one, or out of order any other way, is refuse
   {  // the left list misses view 5 part-way: the first four pairs still agree, and are named
     const std::vector<BoardDetection> l = without(left, 4), r(right.begin(), right.end() - 1);
     const std::string m = refused(l, r);
-    CHECK_MESSAGE(contains(m, "pair " + sample("left", 6) + " / " + sample("right", 5) + " disagrees"), m);
+    CHECK_MESSAGE(contains(m, "pair " + sample("left", 6) + " / " + sample("right", 5) +
+                                  " disagrees with the others: its right_T_left (from its own board poses) differs "
+                                  "from that of pair "),
+                  m);
     CHECK_MESSAGE(contains(m, "no majority agrees: the largest group that does is 4 pairs (" + sample("left", 1) +
                                   " / " + sample("right", 1)),
                   m);

@@ -280,6 +280,11 @@ TEST_CASE("model selection: the out-of-range split, the candidates, and the choi
   CHECK(again.kfold_error2 == selection.chosen_cross_validation.kfold_error2);
   CHECK(again.out_of_range_error2 == selection.chosen_cross_validation.out_of_range_error2);
   CHECK(again.kfold_error2.size() == train.rows.size());
+  // All candidates' solves ran side by side: each candidate's scores are what it gets alone.
+  const std::vector<identify::Candidate> candidates = identify::candidate_models(ur10, {});
+  const identify::CrossValidation alone = identify::cross_validate(candidates[1].model, train, candidates[1].options);
+  CHECK(alone.kfold_rms_m == selection.scores[1].kfold_rms_m);
+  CHECK(alone.out_of_range_rms_m == selection.scores[1].out_of_range_rms_m);
   const std::string table = identify::format_selection(selection);
   CHECK(has(table, selection.chosen.name + ": the lowest mean of the K-fold and out-of-range RMS"));
   CHECK(has(table, "<- chosen"));
