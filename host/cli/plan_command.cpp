@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
-#include <map>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -121,12 +120,9 @@ int run_plan(const PlanArgs& a) {
       if (table.cartesian)
         throw model::InputError(a.candidates + ": the candidates are Cartesian targets; give joint readings q1..q" +
                                 std::to_string(m.joint_count()));
-      std::map<std::vector<double>, int> first_line;  // the plan holds distinct configurations
       for (const correct::TargetRow& row : table.rows) {
-        if (const auto [at, first] = first_line.emplace(row.q, row.line); !first)
-          throw model::InputError(a.candidates + ":" + std::to_string(row.line) + ": the same configuration as line " +
-                                  std::to_string(at->second) + " (a plan holds distinct configurations)");
         options.candidates.push_back(row.q);
+        options.candidate_names.push_back(a.candidates + ":" + std::to_string(row.line));
         candidate_lines.push_back(row.line);
       }
     }

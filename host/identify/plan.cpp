@@ -104,15 +104,17 @@ PlanResult plan_configurations(const model::RobotModel& m, const PlanOptions& op
     throw InputError("plan: " + std::to_string(held) + " candidate configurations, more than the " +
                      std::to_string(kMaxCandidates) + " a plan holds");
   if (!options.candidates.empty()) {
+    const auto name = [&](std::size_t k) {
+      return k < options.candidate_names.size() ? options.candidate_names[k] : "candidate " + std::to_string(k + 1);
+    };
     std::map<std::vector<double>, std::size_t> first;
     for (std::size_t k = 0; k < options.candidates.size(); ++k) {
       if (options.candidates[k].size() != static_cast<std::size_t>(n))
-        throw InputError("plan: candidate " + std::to_string(k + 1) + " has " +
-                         std::to_string(options.candidates[k].size()) + " joint values, the model " +
-                         std::to_string(n));
+        throw InputError("plan: " + name(k) + " has " + std::to_string(options.candidates[k].size()) +
+                         " joint values, the model " + std::to_string(n));
       if (const auto [at, inserted] = first.emplace(options.candidates[k], k); !inserted)
-        throw InputError("plan: candidate " + std::to_string(k + 1) + " is the same configuration as candidate " +
-                         std::to_string(at->second + 1) + " (a plan holds distinct configurations)");
+        throw InputError("plan: " + name(k) + " is the same configuration as " + name(at->second) +
+                         " (a plan holds distinct configurations)");
       consider(options.candidates[k], k);
     }
   } else {

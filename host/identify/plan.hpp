@@ -6,7 +6,7 @@
 // options.constraints' joint ranges. Either way a candidate that violates a constraint
 // (plan_constraints.hpp, the model's joint limits included) is left out before the exchange, so
 // no planned configuration violates one; the plan holds N distinct candidates (a candidate given
-// twice, the same joint values, is refused: InputError naming both). A random pool
+// twice, the same joint values, is refused: InputError naming both by candidate_names). A random pool
 // draws up to 100 x pool configurations to find `pool` that pass. Fewer passing candidates than
 // N: InputError naming each constraint that no candidate meets, or the rejections of each.
 // Which constraints bind the plan: a constraint is active when a candidate that violates it alone
@@ -36,6 +36,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "host/identify/identifiability.hpp"
@@ -51,6 +52,8 @@ struct PlanOptions {
   bool orientation = false;  // pose measurements (the tool must be a frame)
   std::uint64_t seed = 1;
   std::vector<std::vector<double>> candidates;  // non-empty: choose from these (pool unused)
+  // How messages name candidates[k] (`plan --candidates`: "FILE:LINE"); empty: "candidate k+1".
+  std::vector<std::string> candidate_names;
   PlanConstraints constraints;
   // (sweep from 1, configurations visited in this sweep, N): progress of the exchange.
   std::function<void(int, std::size_t, std::size_t)> progress;

@@ -846,7 +846,7 @@ candidate_rows = [l for l in open("plan_candidates.csv").read().splitlines() if 
 with open("plan_dup.csv", "w") as f:  # a row twice: 100 copies of one made a plan of 12 copies, exit 0
     f.write("\n".join(candidate_rows + [candidate_rows[1]]) + "\n")
 case("plan:a candidate twice", P + ["--candidates", "plan_dup.csv", "-o", "p10.csv"],
-     rf"plan_dup\.csv:{len(candidate_rows) + 1}: the same configuration as line 2 \(a plan holds distinct configurations\)")
+     rf"plan: plan_dup\.csv:{len(candidate_rows) + 1} is the same configuration as plan_dup\.csv:2 \(a plan holds distinct configurations\)")
 write_csv("plan_many.csv", [f"q{j}" for j in range(1, 7)], [[0.0] * 6] * 100001)  # 10^6 took 3.7 GB
 case("plan:constraints key given twice", P + ["--constraints", "plan_twice.yaml", "-o", "p4.csv"],
      r"plan_twice\.yaml:4:3: 'normal' given twice in this mapping \(first at 3:3\)")
