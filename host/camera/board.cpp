@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <memory>
 #include <new>
@@ -13,6 +14,7 @@
 
 #include <opencv2/aruco.hpp>
 #include <opencv2/calib3d.hpp>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <apriltag/apriltag.h>
@@ -761,6 +763,26 @@ cv::Mat draw_aprilgrid(const Board& board, int px_per_bit) {
   for (int r = 0; r <= board.rows; ++r)
     for (int c = 0; c <= board.cols; ++c) sheet(cv::Rect(c * pitch, r * pitch, gap, gap)).setTo(0);
   return sheet;
+}
+
+std::vector<BoardDetection> detect_boards(const Board& board, const std::vector<cv::Mat>& images,
+                                          const std::vector<std::string>& views, int min_corners) {
+  if (images.size() != views.size()) throw std::invalid_argument("detect_boards: one view name per image");
+  std::vector<BoardDetection> out(images.size());
+  std::vector<std::exception_ptr> failure(images.size());
+  cv::parallel_for_(cv::Range(0, static_cast<int>(images.size())), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      try {
+        out[k] = detect_board(board, images[k], views[k], min_corners);
+      } catch (...) {
+        failure[k] = std::current_exception();
+      }
+    }
+  });
+  for (const std::exception_ptr& f : failure)
+    if (f) std::rethrow_exception(f);
+  return out;
 }
 
 BoardDetection detect_board(const Board& board, const cv::Mat& image, const std::string& view, int min_corners) {

@@ -233,4 +233,10 @@ struct BoardDetection {
 // nothing; ChArUco boards and AprilGrids are often seen in part). Colour images are converted to grey.
 BoardDetection detect_board(const Board& board, const cv::Mat& image, const std::string& view, int min_corners = 6);
 
+// detect_board on images[i], named views[i], for every i, side by side on OpenCV's threads (a view
+// of a large board takes a second or more), the results in the images' order; the first
+// exception one throws is rethrown once all have stopped.
+std::vector<BoardDetection> detect_boards(const Board& board, const std::vector<cv::Mat>& images,
+                                          const std::vector<std::string>& views, int min_corners = 6);
+
 }  // namespace kincal::camera

@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <iostream>
-#include <memory>
 #include <numbers>
 #include <optional>
 #include <sstream>
@@ -13,7 +12,7 @@
 #include "host/camera/board_pose.hpp"
 #include "host/camera/calibration_file.hpp"
 #include "host/camera/intrinsics.hpp"
-#include "host/capture/frame_source.hpp"
+#include "host/cli/board_frames.hpp"
 #include "host/cli/number_options.hpp"
 #include "host/files/input_limits.hpp"
 #include "host/files/output_file.hpp"
@@ -46,10 +45,7 @@ int run_board_poses(const BoardPosesArgs& a) {
   const std::optional<camera::IntrinsicsCovariance> intrinsics = camera::load_camera_uncertainty(a.camera);
   const std::vector<std::vector<double>> joints = model::read_joints(a.joints);
 
-  std::vector<camera::BoardDetection> detections;
-  std::unique_ptr<capture::FrameSource> source = capture::open_source(a.images);
-  while (std::optional<capture::Frame> f = source->next())
-    detections.push_back(camera::detect_board(board, f->image, f->origin, a.min_corners));
+  const std::vector<camera::BoardDetection> detections = detect_in_frames(board, a.images, a.min_corners);
   if (detections.size() != joints.size())
     throw camera::CalibrationError(a.joints + ": " + std::to_string(joints.size()) + " joint rows but " +
                                    std::to_string(detections.size()) + " images");

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <iostream>
-#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -15,6 +14,7 @@
 #include "host/camera/stereo.hpp"
 #include "host/capture/frame_source.hpp"
 #include "host/capture/stereo_source.hpp"
+#include "host/cli/board_frames.hpp"
 #include "host/cli/camera_report.hpp"
 #include "host/cli/number_options.hpp"
 #include "host/files/input_limits.hpp"
@@ -45,29 +45,9 @@ void refuse_overwriting_inputs(const CameraArgs& a) {
   files::refuse_overwriting({{"-o", a.out}, {"--report", a.report}}, inputs);
 }
 
-// Every 100 frames a line on standard error: a video of thousands of frames is read for minutes.
-void report_progress(const std::vector<camera::BoardDetection>& detections, const char* what) {
-  if (detections.size() % 100 != 0) return;
-  const auto found =
-      std::count_if(detections.begin(), detections.end(), [](const camera::BoardDetection& d) { return d.found; });
-  std::cerr << "kincal camera: " << detections.size() << ' ' << what << " read, the board found in " << found
-            << std::endl;
-}
-
-std::vector<camera::BoardDetection> detect_all(const camera::Board& board, const std::vector<std::string>& inputs,
-                                               int min_corners) {
-  std::unique_ptr<capture::FrameSource> source = capture::open_source(inputs);
-  std::vector<camera::BoardDetection> detections;
-  while (std::optional<capture::Frame> f = source->next()) {
-    detections.push_back(camera::detect_board(board, f->image, f->origin, min_corners));
-    report_progress(detections, "frames");
-  }
-  return detections;
-}
-
 int run_calibrate(const CameraArgs& a) {
   const camera::Board board = camera::parse_board(a.board);
-  const std::vector<camera::BoardDetection> detections = detect_all(board, a.images, a.min_corners);
+  const std::vector<camera::BoardDetection> detections = detect_in_frames(board, a.images, a.min_corners);
   const camera::IntrinsicCalibration c = camera::calibrate_intrinsics(detections);
   std::cout << camera::describe(c);
   if (a.format == "ros")
@@ -85,12 +65,13 @@ int run_calibrate(const CameraArgs& a) {
 int run_stereo(const CameraArgs& a) {
   const camera::Board board = camera::parse_board(a.board);
   capture::StereoSource frames(capture::open_source(a.left), capture::open_source(a.right), a.tolerance_s);
-  std::vector<camera::BoardDetection> left, right;
+  BoardFrames pairs(board, a.min_corners);  // left, right, left, right, ...
   while (std::optional<capture::StereoFrame> p = frames.next()) {
-    left.push_back(camera::detect_board(board, p->left.image, p->left.origin, a.min_corners));
-    right.push_back(camera::detect_board(board, p->right.image, p->right.origin, a.min_corners));
-    report_progress(left, "left frames of pairs");
+    pairs.add(std::move(p->left));
+    pairs.add(std::move(p->right));
   }
+  std::vector<camera::BoardDetection> left, right;
+  for (camera::BoardDetection& d : pairs.finish()) (left.size() == right.size() ? left : right).push_back(std::move(d));
   for (const capture::UnpairedFrame& u : frames.unpaired()) {
     std::cout << "unpaired " << (u.side == capture::Side::kLeft ? "left" : "right") << " frame: " << u.origin << " ("
               << u.timestamp_s << " s)\n";
@@ -143,7 +124,7 @@ int run_hand_eye(const CameraArgs& a) {
   const camera::CameraModel cam = camera::load_camera(a.camera);
   const std::vector<camera::RobotPose> poses = camera::read_robot_poses(
       a.poses, a.rotation.empty() ? camera::RotationColumns::kUnnamed : camera::rotation_columns(a.rotation));
-  const std::vector<camera::BoardDetection> detections = detect_all(board, a.images, a.min_corners);
+  const std::vector<camera::BoardDetection> detections = detect_in_frames(board, a.images, a.min_corners);
   if (detections.size() != poses.size()) {
     throw camera::CalibrationError(a.poses + ": " + std::to_string(poses.size()) + " poses but " +
                                    std::to_string(detections.size()) + " images");
