@@ -99,6 +99,8 @@ std::optional<Frame> CameraSource::next() {
   if (!capture_.read(f.image) || f.image.empty()) {
     throw CaptureError(name_ + ": frame grab failed after " + std::to_string(index_) + " frames");
   }
+  // A backend may hand out its own buffer, which the next grab overwrites: the frame is a copy.
+  f.image = f.image.clone();
   const double device_ms = capture_.get(cv::CAP_PROP_POS_MSEC);
   f.timestamp_s = device_ms > 0 ? device_ms * 1e-3 : steady_seconds();
   f.index = index_++;
@@ -133,6 +135,7 @@ VideoFileSource::VideoFileSource(const std::string& path, double fps_override) :
 std::optional<Frame> VideoFileSource::next() {
   Frame f;
   if (!capture_.read(f.image) || f.image.empty()) return std::nullopt;
+  f.image = f.image.clone();  // as a camera's frame (above)
   f.index = index_++;
   f.timestamp_s = static_cast<double>(f.index) / fps_;
   f.origin = name_ + " frame " + std::to_string(f.index);

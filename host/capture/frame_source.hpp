@@ -37,7 +37,7 @@ class CaptureError : public std::runtime_error {
 };
 
 struct Frame {
-  cv::Mat image;  // 8-bit, grey or BGR as the source delivers it
+  cv::Mat image;  // 8-bit, grey or BGR as the source delivers it; its own pixels, which no later frame overwrites
   double timestamp_s = 0;
   std::int64_t index = 0;
   std::string origin;  // the file, or "SOURCE frame N"
