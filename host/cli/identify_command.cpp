@@ -10,7 +10,6 @@
 #include <optional>
 #include <sstream>
 #include <string>
-#include <thread>
 #include <utility>
 #include <vector>
 
@@ -187,7 +186,7 @@ model::RobotModel choose_model(const IdentifyArgs& a, const model::RobotModel& n
   // 90 s on two cores), so it says so first.
   std::cerr << "kincal identify: choosing the model: " << identify::candidate_models(nominal, options).size()
             << " candidates, each fitted " << identify::SelectionOptions{}.folds + 1 << " times on " << data.rows.size()
-            << " rows (" << std::max(1U, std::thread::hardware_concurrency()) << " at a time)" << std::endl;
+            << " rows (" << identify::parallel_solves() << " at a time)" << std::endl;
   selection = identify::select_model(nominal, data, options);
   std::cout << identify::format_selection(*selection);
   options = selection->chosen.options;

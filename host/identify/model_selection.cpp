@@ -50,7 +50,7 @@ bool predict(const model::Dataset& data, const RobotModel& model, const Identify
   }
 }
 
-// task(0) .. task(n - 1) on up to the machine's hardware threads (the calling one among them);
+// task(0) .. task(n - 1) on up to parallel_solves() threads (the calling one among them);
 // the first exception a task throws is rethrown once every task has stopped.
 void for_each_in_parallel(std::size_t n, const std::function<void(std::size_t)>& task) {
   std::atomic<std::size_t> next{0};
@@ -67,7 +67,7 @@ void for_each_in_parallel(std::size_t n, const std::function<void(std::size_t)>&
     }
   };
   std::vector<std::thread> threads;
-  const std::size_t workers = std::min<std::size_t>(n, std::max(1U, std::thread::hardware_concurrency()));
+  const std::size_t workers = std::min<std::size_t>(n, parallel_solves());
   try {
     while (threads.size() + 1 < workers) threads.emplace_back(work);
   } catch (const std::system_error&) {
@@ -179,6 +179,8 @@ RowSplit out_of_range_fold(const model::Dataset& data, const SelectionOptions& o
       return s;
   }
 }
+
+unsigned parallel_solves() { return std::max(1U, std::thread::hardware_concurrency()); }
 
 std::vector<CrossValidation> cross_validate(const std::vector<Candidate>& models, const model::Dataset& data,
                                             const SelectionOptions& selection) {

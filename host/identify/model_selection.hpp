@@ -108,6 +108,8 @@ struct CrossValidation {
 };
 CrossValidation cross_validate(const RobotModel& model, const model::Dataset& data, const IdentifyOptions& options,
                                const SelectionOptions& selection = {});
+// How many of cross-validation's solves run at a time: the machine's hardware threads (at least 1).
+unsigned parallel_solves();
 // The same for several models (each candidate's model and options; names unused), in their order:
 // every model's K + 1 solves run side by side on the machine's hardware threads, with the same
 // results as one call each (the 8 candidates' 48 solves on 15,000 UR10 rows: minutes on one core).
