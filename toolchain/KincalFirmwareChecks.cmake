@@ -13,12 +13,18 @@ list(TRANSFORM KINCAL_NO_HEAP_WRAPS PREPEND "-Wl,--wrap=" OUTPUT_VARIABLE KINCAL
 
 # The .ci call graphs GCC writes beside a target's objects: one per C/C++ source. Named from
 # the target's sources (not globbed), so a stale file of an earlier build cannot leak in.
+# A source outside the target's folder gets CMake's object path: relative, each ".." as "__".
 function(kincal_callgraph_files target out)
   get_target_property(dir ${target} BINARY_DIR)
+  get_target_property(source_dir ${target} SOURCE_DIR)
   get_target_property(sources ${target} SOURCES)
   set(files)
   foreach(source ${sources})
     if(source MATCHES "\\.(c|cc|cpp)$")
+      if(IS_ABSOLUTE ${source})
+        file(RELATIVE_PATH source ${source_dir} ${source})
+      endif()
+      string(REPLACE "../" "__/" source ${source})
       list(APPEND files ${dir}/CMakeFiles/${target}.dir/${source}.ci)
     endif()
   endforeach()
@@ -47,9 +53,13 @@ endfunction()
 
 # A firmware image: linked with the no-heap wraps; its flash and RAM within budget; the
 # worst stack of each STACK_ENTRIES symbol (through LIBRARIES' code too) within STACK_BUDGET.
+# WRAPS: symbols the image's own code replaces at link time (--wrap: calls to S go to __wrap_S,
+# which reaches the original as __real_S); the stack check follows the calls the same way.
 function(kincal_firmware_image target)
-  cmake_parse_arguments(ARG "" "FLASH_BUDGET;RAM_BUDGET;STACK_BUDGET" "STACK_ENTRIES;LIBRARIES" ${ARGN})
-  target_link_options(${target} PRIVATE ${KINCAL_NO_HEAP_LINK_OPTIONS}
+  cmake_parse_arguments(ARG "" "FLASH_BUDGET;RAM_BUDGET;STACK_BUDGET" "STACK_ENTRIES;LIBRARIES;WRAPS" ${ARGN})
+  list(TRANSFORM ARG_WRAPS PREPEND "-Wl,--wrap=" OUTPUT_VARIABLE wrap_link_options)
+  list(TRANSFORM ARG_WRAPS PREPEND "--wrap=" OUTPUT_VARIABLE wrap_stack_options)
+  target_link_options(${target} PRIVATE ${KINCAL_NO_HEAP_LINK_OPTIONS} ${wrap_link_options}
     -Wl,-Map=$<TARGET_FILE:${target}>.map)
   target_link_libraries(${target} PRIVATE ${ARG_LIBRARIES})
   # Intel hex, not a flat .bin: a .bin would span gaps in the image (the STM32F407's parameter
@@ -73,6 +83,6 @@ function(kincal_firmware_image target)
             --flash-budget ${ARG_FLASH_BUDGET} --ram-budget ${ARG_RAM_BUDGET} $<TARGET_FILE:${target}>)
   add_test(NAME m4.${target}.stack
     COMMAND ${Python3_EXECUTABLE} ${PROJECT_SOURCE_DIR}/toolchain/check_stack.py --name ${target}
-            --budget ${ARG_STACK_BUDGET} ${entries} ${ci_files})
+            --budget ${ARG_STACK_BUDGET} ${entries} ${wrap_stack_options} ${ci_files})
   set_tests_properties(m4.${target}.no_heap m4.${target}.size m4.${target}.stack PROPERTIES LABELS "m4;checks")
 endfunction()

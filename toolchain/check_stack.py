@@ -1,12 +1,15 @@
 #!/usr/bin/env python3
 """Worst-case stack of firmware entry points, from GCC's call graphs (-fcallgraph-info=su).
 
-  check_stack.py --budget BYTES [--entry SYMBOL]... [--entries-from ARCHIVE --nm NM] CI...
+  check_stack.py --budget BYTES [--entry SYMBOL]... [--entries-from ARCHIVE --nm NM]
+                 [--wrap SYMBOL]... CI...
 
 Reads the CI files (one per object file: functions, their own frame size, and their calls), then prints for each entry point the deepest path's total and fails when it
 is over the budget, or when it cannot be bounded: recursion, an indirect call, a dynamic frame
 (alloca, VLA) or a call to a function with no known frame. Entry points are the SYMBOLs given,
-plus every global function that ARCHIVE defines (the public functions of a library).
+plus every global function that ARCHIVE defines (the public functions of a library). --wrap
+follows the linker's option of that name: a call to SYMBOL reaches __wrap_SYMBOL, a call to
+__real_SYMBOL reaches SYMBOL.
 """
 import argparse
 import pathlib
@@ -34,6 +37,17 @@ class Graph:
         self.label = {}
         self.calls = {}   # symbol -> set of callees
         self.comdat = {}  # plain symbol -> titles "FILE:SYMBOL" of its copies
+
+    def wrap(self, symbol):
+        """Redirects the calls as the linker's --wrap=symbol does."""
+        real, wrapper = "__real_" + symbol, "__wrap_" + symbol
+        for callees in self.calls.values():
+            if symbol in callees:
+                callees.discard(symbol)
+                callees.add(wrapper)
+            if real in callees:
+                callees.discard(real)
+                callees.add(symbol)
 
     def read(self, path):
         for line in path.read_text(encoding="utf-8", errors="replace").splitlines():
@@ -96,6 +110,7 @@ def main():
     ap.add_argument("--entries-from", help="a static library whose global functions are entry points")
     ap.add_argument("--nm", default="arm-none-eabi-nm")
     ap.add_argument("--name", default="", help="what the report is about")
+    ap.add_argument("--wrap", action="append", default=[], help="a symbol the link --wrap's")
     ap.add_argument("callgraphs", nargs="+", type=pathlib.Path, help=".ci files")
     args = ap.parse_args()
 
@@ -104,6 +119,8 @@ def main():
         if not p.is_file():
             sys.exit(f"check_stack: missing call graph {p} (is -fcallgraph-info=su on for its target?)")
         graph.read(p)
+    for symbol in args.wrap:
+        graph.wrap(symbol)
     entries = list(args.entry)
     if args.entries_from:
         entries += archive_globals(args.nm, args.entries_from)

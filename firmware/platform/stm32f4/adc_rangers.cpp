@@ -24,9 +24,6 @@ constexpr std::uint32_t kCcrAdcpreDiv4 = 1u << 16;
 constexpr std::uint32_t kSample480Cycles = 7;
 constexpr std::uint32_t kAdcMaxHz = 36000000;
 
-// One conversion takes 492 ADC cycles (23 us at 21 MHz, 123 us at the 4 MHz of the fall-back
-// clock); 100,000 polls of the status register are >= 1 ms.
-constexpr std::uint32_t kConversionWaitLimit = 100000;
 // After ADON the ADC needs tSTAB = 3 us before converting: 2,000 APB2 reads are more than that.
 constexpr std::uint32_t kStabilisationReads = 2000;
 
@@ -62,9 +59,7 @@ app::RangerStatus AdcRangers::read(std::array<std::uint32_t, shared::kRangers>& 
     reg(kSqr3) = kRangerAdcChannels[beam];
     reg(kSr) = ~(kSrEoc | kSrOvr);  // the flags clear by writing 0
     mmio::set_bits(kCr2, kCr2Swstart);
-    bool converted = false;
-    for (std::uint32_t i = 0; i < kConversionWaitLimit && !converted; ++i) converted = (reg(kSr) & kSrEoc) != 0;
-    if (!converted) return app::RangerStatus::kFailed;
+    if (!wait_adc_end_of_conversion()) return app::RangerStatus::kFailed;
     ranges_um[beam] = range_um_from_counts(reg(kDr) & 0xFFFu);  // reading DR clears EOC
   }
   time_us = systick::now_us();

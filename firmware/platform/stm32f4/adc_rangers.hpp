@@ -63,4 +63,10 @@ class AdcRangers {
 
 static_assert(app::RangerPort<AdcRangers>);
 
+// Waits for the end of ADC1's conversion (SR.EOC), at least 1 ms; false when it did not end.
+// Its own translation unit (adc_end_of_conversion.cpp), called by read(): QEMU's STM32F4 model
+// never sets EOC (its data register yields a value on the read itself), so the boot test's image
+// for that model replaces this one function at link time (--wrap, tests/target/stm32f4_boot).
+[[nodiscard]] bool wait_adc_end_of_conversion();
+
 }  // namespace kincal::stm32f4

@@ -29,10 +29,12 @@
 // accepted, or not at all if the LSI is dead. kNotStarted from set_timeout() before start() (the
 // application loads its parameters before the watchdog runs).
 //
-// Proven only by compilation (no board here): the register addresses, keys and the update
-// sequence (RM0090 21.3-21.4), the LSI start on the IWDG's start key, the debug freeze, and that
-// no main-loop pass or guarded flash operation outlasts its timeout on real hardware. The
-// arithmetic of the timeouts is checked at compile time.
+// Proven by execution (tests/target/stm32f4_boot, QEMU's STM32F405 model, which has no IWDG and
+// logs the writes): start() writes the start key and the normal timeout, and the main loop
+// reloads once per pass. Proven only by compilation (no board here): that the IWDG accepts the
+// update sequence (RM0090 21.3-21.4), the LSI start on the start key, the debug freeze, the reset
+// itself, and that no main-loop pass or guarded flash operation outlasts its timeout on real
+// hardware. The arithmetic of the timeouts is checked at compile time.
 #pragma once
 
 #include <cstdint>
