@@ -7,7 +7,8 @@
   shared/        includes only shared/ and those standard headers;
   host/session   never includes host/sim/ or host/demo/: a session is what a calibration of a
                  real robot runs; the simulator implements its interfaces from host/demo/.
-  host/correct   the same: the correction of a real robot's targets (issue #24).
+  host/correct   the same: the correction of a real robot's targets (issue #24); and it never
+                 includes host/session: the correction block lives in host/correct, below both.
 
   layering_check.py REPO_ROOT     prints each violation as FILE:LINE and exits 1 if any
 """
@@ -27,6 +28,8 @@ SOURCES = ("*.hpp", "*.h", "*.cpp", "*.cc", "*.c")
 def allowed(rel, target):
     if rel.startswith(("host/session/", "host/correct/")) and target.startswith(("host/sim/", "host/demo/")):
         return f"{'/'.join(rel.split('/')[:2])} must not include the simulator (host/sim, host/demo)"
+    if rel.startswith("host/correct/") and target.startswith("host/session/"):
+        return "host/correct must not include host/session (the correction block is host/correct's)"
     if rel.startswith("firmware/") and target.startswith("host/"):
         return "firmware must not include host code"
     if rel.startswith("firmware/core/") or rel.startswith("shared/"):

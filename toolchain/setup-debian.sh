@@ -17,7 +17,7 @@ test="
   python3-canmatrix can-utils busybox-static cpio qemu-system-x86 linux-image-amd64
   openocd chromium liburdfdom-dev liburdfdom-tools
 "
-bench="doctest-dev opencv-doc"
+bench="doctest-dev opencv-doc liburdfdom-dev"
 
 case "${1:-main}" in
   main) packages=$main ;;

@@ -144,26 +144,41 @@ double smallest_spacing_px(const std::vector<cv::Point2f>& corners, int cols, in
 int parity(int a, int b) { return ((a + b) % 2 + 2) % 2; }
 
 // The contrast of a set of squares: mean grey level of the parity-0 squares minus that of the
-// parity-1 squares, each sampled in a window of radius_px around centre_px.
+// parity-1 squares, each sampled in a window of radius_px around centre_px; and the fraction of
+// the squares sampled that lie on their parity's side of the midpoint between the two means
+// (1 for squares that alternate throughout, about a half for clutter that does so on average).
 // Squares whose window leaves the image are skipped; nullopt when fewer than two of either
-// parity remain.
+// parity remain, or fewer than min_inside of all the squares (a ring mostly beyond the image
+// edge is not seen clearly enough to judge: a few squares of clutter alternate by chance).
 struct SquareSample {
   cv::Point2f centre_px;
   float radius_px;
   int parity;
 };
-std::optional<double> contrast(const cv::Mat& grey, const std::vector<SquareSample>& squares) {
+struct Contrast {
+  double value = 0, agreeing = 0;
+};
+std::optional<Contrast> contrast(const cv::Mat& grey, const std::vector<SquareSample>& squares, double min_inside = 0) {
   std::array<double, 2> sum{}, count{};
+  std::vector<std::pair<int, double>> sampled;
   for (const SquareSample& s : squares) {
     const int r = std::max(1, static_cast<int>(s.radius_px));
     const cv::Rect window(static_cast<int>(std::lround(s.centre_px.x)) - r,
                           static_cast<int>(std::lround(s.centre_px.y)) - r, 2 * r + 1, 2 * r + 1);
     if ((window & cv::Rect(0, 0, grey.cols, grey.rows)) != window) continue;
-    sum[static_cast<std::size_t>(s.parity)] += cv::mean(grey(window))[0];
+    const double mean = cv::mean(grey(window))[0];
+    sampled.emplace_back(s.parity, mean);
+    sum[static_cast<std::size_t>(s.parity)] += mean;
     count[static_cast<std::size_t>(s.parity)] += 1;
   }
   if (count[0] < 2 || count[1] < 2) return std::nullopt;
-  return sum[0] / count[0] - sum[1] / count[1];
+  if (count[0] + count[1] < min_inside * static_cast<double>(squares.size())) return std::nullopt;
+  const double m0 = sum[0] / count[0], m1 = sum[1] / count[1], mid = 0.5 * (m0 + m1);
+  const double agreeing = static_cast<double>(std::count_if(
+                              sampled.begin(), sampled.end(),
+                              [&](const auto& p) { return (p.second > mid) == ((p.first == 0) == (m0 > m1)); })) /
+                          static_cast<double>(sampled.size());
+  return Contrast{m0 - m1, agreeing};
 }
 
 // How the would-be squares of ring `ring` (1: the board's outer squares, 2: those beyond them)
@@ -172,8 +187,14 @@ std::optional<double> contrast(const cv::Mat& grey, const std::vector<SquareSamp
 // or background; nullopt when that cannot be told (out of the image). The ring is placed by a
 // homography fitted to the three lines of corners nearest that side, which follows the lens's
 // distortion locally.
-std::optional<double> ring_contrast_ratio(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, int cols,
-                                          int rows, int side, int ring, double interior_contrast) {
+struct RingContrast {
+  double ratio = 0;     // the ring's parity contrast over the interior's
+  double agreeing = 0;  // Contrast::agreeing
+  // Whether the ring's squares alternate like the board's own, square by square.
+  bool alternates(double min_ratio) const { return ratio >= min_ratio && agreeing >= kSquaresAgreeing; }
+};
+std::optional<RingContrast> ring_contrast_ratio(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, int cols,
+                                                int rows, int side, int ring, double interior_contrast) {
   // side: 0 left (u < 0), 1 right (u > cols - 1), 2 top (v < 0), 3 bottom (v > rows - 1).
   const bool along_u = side < 2;
   const int lines = along_u ? cols : rows, across = along_u ? rows : cols;
@@ -206,9 +227,9 @@ std::optional<double> ring_contrast_ratio(const cv::Mat& grey, const std::vector
                                                       cv::norm(project(u, v + 0.5f) - project(u, v - 0.5f))));
     squares.push_back({centre, 0.125f * side_px, parity(along_u ? a : b, along_u ? b : a)});
   }
-  const std::optional<double> c = contrast(grey, squares);
+  const std::optional<Contrast> c = contrast(grey, squares, kRingInsideFraction);
   if (!c) return std::nullopt;
-  return *c / interior_contrast;
+  return RingContrast{c->value / interior_contrast, c->agreeing};
 }
 
 // The parity contrast of the detected grid's own squares; nullopt when it is too weak to judge
@@ -225,9 +246,9 @@ std::optional<double> interior_contrast(const cv::Mat& grey, const std::vector<c
       interior.push_back({centre, 0.25f * side_px, parity(a, b)});
     }
   }
-  const std::optional<double> c = contrast(grey, interior);
-  if (!c || std::abs(*c) < 1.0) return std::nullopt;
-  return c;
+  const std::optional<Contrast> c = contrast(grey, interior);
+  if (!c || std::abs(c->value) < 1.0) return std::nullopt;
+  return c->value;
 }
 
 // The grid's sides, as the messages name them (side indices as in ring_contrast_ratio).
@@ -242,20 +263,22 @@ std::optional<int> side_without_squares(const cv::Mat& grey, const std::vector<c
   const std::optional<double> c = interior_contrast(grey, corners, cols, rows);
   if (!c) return std::nullopt;
   for (int side = 0; side < 4; ++side) {
-    const std::optional<double> ratio = ring_contrast_ratio(grey, corners, cols, rows, side, 1, *c);
-    if (ratio && *ratio < kOuterSquaresContrastRatio) return side;
+    const std::optional<RingContrast> ring = ring_contrast_ratio(grey, corners, cols, rows, side, 1, *c);
+    if (ring && ring->ratio < kOuterSquaresContrastRatio) return side;
   }
   return std::nullopt;
 }
 
-// Whether the detected grid's squares continue beyond any side of it (the board given is part of
-// a larger one): ring 2 alternates there.
-bool board_continues(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, int cols, int rows) {
+// Whether the detected grid's squares may continue beyond a side of it (the board given is part
+// of a larger one): ring 2 alternates there, seen clearly (kRingInsideFraction of it inside the
+// image). Only a reason to measure the board (larger_chessboard): clutter beside the board
+// alternates by chance.
+bool board_may_continue(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, int cols, int rows) {
   const std::optional<double> c = interior_contrast(grey, corners, cols, rows);
   if (!c) return false;
   for (int side = 0; side < 4; ++side) {
-    const std::optional<double> ratio = ring_contrast_ratio(grey, corners, cols, rows, side, 2, *c);
-    if (ratio && *ratio >= kExtensionContrastRatio) return true;
+    const std::optional<RingContrast> ring = ring_contrast_ratio(grey, corners, cols, rows, side, 2, *c);
+    if (ring && ring->alternates(kExtensionContrastRatio)) return true;
   }
   return false;
 }
@@ -275,24 +298,58 @@ cv::Size whole_chessboard(cv::Size found, cv::Size pattern) {
   return holds(first) ? first : holds(second) ? second : pattern;
 }
 
+// Whether a grid of cols x rows corners is a whole board, seen clearly: beyond each of its four
+// sides ring 1 alternates (the board's outer squares: its outer corners are the board's) and
+// ring 2 does not (margin), every ring inside the image.
+bool shows_whole_board(const cv::Mat& grey, const std::vector<cv::Point2f>& corners, int cols, int rows) {
+  if (cols < 2 || rows < 2 || corners.size() != static_cast<std::size_t>(cols * rows)) return false;
+  const std::optional<double> c = interior_contrast(grey, corners, cols, rows);
+  if (!c) return false;
+  for (int side = 0; side < 4; ++side) {
+    const std::optional<RingContrast> outer = ring_contrast_ratio(grey, corners, cols, rows, side, 1, *c);
+    const std::optional<RingContrast> beyond = ring_contrast_ratio(grey, corners, cols, rows, side, 2, *c);
+    if (!outer || !beyond || !outer->alternates(kOuterSquaresContrastRatio) || beyond->ratio >= kExtensionContrastRatio)
+      return false;
+  }
+  return true;
+}
+
+// A grid cv::findChessboardCornersSB grew (CALIB_CB_LARGER) to cols x rows: its size turned like
+// `pattern` (whole_chessboard) when it is a whole board seen clearly (shows_whole_board), holds
+// `pattern`, is larger, and the same detector finds that size without growing (the size named to
+// the user must be one kincal then finds); nullopt otherwise: the growth ran into the board's
+// edge, clutter, or out of the image.
+std::optional<cv::Size> confirmed_larger(const cv::Mat& grey, const std::vector<cv::Point2f>& grown, int cols, int rows,
+                                         cv::Size pattern) {
+  const cv::Size whole = whole_chessboard(cv::Size(cols, rows), pattern);
+  if (whole == pattern || !shows_whole_board(grey, grown, cols, rows)) return std::nullopt;
+  std::vector<cv::Point2f> again;
+  if (!cv::findChessboardCornersSB(grey, whole, again, cv::CALIB_CB_NORMALIZE_IMAGE)) return std::nullopt;
+  return whole;
+}
+
+// The larger board a grid of the given size lies in (step 3): nullopt when its squares do not
+// clearly continue (board_may_continue); else the smallest grid grown to the whole board when
+// that is confirmed (confirmed_larger), or `pattern` itself when the size cannot be measured.
+std::optional<cv::Size> larger_chessboard(const cv::Mat& grey, const std::vector<cv::Point2f>& corners,
+                                          cv::Size pattern) {
+  if (!board_may_continue(grey, corners, pattern.width, pattern.height)) return std::nullopt;
+  std::vector<cv::Point2f> seed;
+  cv::Mat meta;
+  if (!cv::findChessboardCornersSB(grey, kGrowSeed, seed, kGrowFlags, meta)) return pattern;
+  return confirmed_larger(grey, seed, meta.cols, meta.rows, pattern).value_or(pattern);
+}
+
 // The whole chessboard a view shows when the given size was not found in it (see the header): the
-// grid grown from the smallest one, when it has the board's outer squares beyond every side and
-// margin beyond those, all inside the image, and is not `pattern` (in either orientation); turned
-// like `pattern` (both wider than tall, or not). nullopt otherwise.
+// grid grown from the smallest one, when it shows a whole board (shows_whole_board) and is not
+// `pattern` (in either orientation); turned like `pattern` (both wider than tall, or not).
+// nullopt otherwise.
 std::optional<cv::Size> seen_whole_chessboard(const cv::Mat& grey, cv::Size pattern) {
   std::vector<cv::Point2f> corners;
   cv::Mat meta;
   if (!cv::findChessboardCornersSB(grey, kGrowSeed, corners, kGrowFlags, meta)) return std::nullopt;
   const int cols = meta.cols, rows = meta.rows;
-  if (cols < 2 || rows < 2 || corners.size() != static_cast<std::size_t>(cols * rows)) return std::nullopt;
-  const std::optional<double> c = interior_contrast(grey, corners, cols, rows);
-  if (!c) return std::nullopt;
-  for (int side = 0; side < 4; ++side) {
-    const std::optional<double> outer = ring_contrast_ratio(grey, corners, cols, rows, side, 1, *c);
-    const std::optional<double> beyond = ring_contrast_ratio(grey, corners, cols, rows, side, 2, *c);
-    if (!outer || !beyond || *outer < kOuterSquaresContrastRatio || *beyond >= kExtensionContrastRatio)
-      return std::nullopt;
-  }
+  if (!shows_whole_board(grey, corners, cols, rows)) return std::nullopt;
   const cv::Size seen =
       (cols >= rows) == (pattern.width >= pattern.height) ? cv::Size(cols, rows) : cv::Size(rows, cols);
   if (seen == pattern || seen == cv::Size(pattern.height, pattern.width)) return std::nullopt;
@@ -838,10 +895,16 @@ BoardDetection detect_board(const Board& board, const cv::Mat& image, const std:
                   std::to_string(seen->height) + " inner corners";
     };
     cv::Mat meta;
-    if (cv::findChessboardCornersSB(grey, pattern, corners, kGrowFlags, meta)) {
+    bool found = cv::findChessboardCornersSB(grey, pattern, corners, kGrowFlags, meta);
+    if (found && cv::Size(meta.cols, meta.rows) != pattern) {
+      // Grown beyond the given size: a larger board only when the grown grid shows it clearly;
+      // else the growth ran into the board's edge or clutter, and the given size is looked for alone.
+      if (const std::optional<cv::Size> whole = confirmed_larger(grey, corners, meta.cols, meta.rows, pattern))
+        return refuse_larger(*whole);
+      found = cv::findChessboardCornersSB(grey, pattern, corners, cv::CALIB_CB_NORMALIZE_IMAGE);
+    }
+    if (found) {
       d.detector = "findChessboardCornersSB";
-      if (const cv::Size whole = whole_chessboard(cv::Size(meta.cols, meta.rows), pattern); whole != pattern)
-        return refuse_larger(whole);
     } else if (cv::findChessboardCorners(grey, pattern, corners,
                                          cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE)) {
       d.detector = "findChessboardCorners";
@@ -862,13 +925,7 @@ BoardDetection detect_board(const Board& board, const cv::Mat& image, const std:
         cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, kRefineIterations, kRefineEpsilon_px));
     const std::string window = std::to_string(2 * d.refine_half_window_px + 1);
     d.detector += " + cornerSubPix " + window + "x" + window;
-    if (board_continues(grey, corners, board.cols, board.rows)) {
-      // Not grown from the given size: grown from the smallest grid instead, if it can be.
-      std::vector<cv::Point2f> seed;
-      if (cv::findChessboardCornersSB(grey, kGrowSeed, seed, kGrowFlags, meta))
-        return refuse_larger(whole_chessboard(cv::Size(meta.cols, meta.rows), pattern));
-      return refuse_larger(pattern);
-    }
+    if (const std::optional<cv::Size> whole = larger_chessboard(grey, corners, pattern)) return refuse_larger(*whole);
     orient_chessboard(board, grey, corners);
     for (int id = 0; id < board.corner_count(); ++id) d.ids.push_back(id);
   } else if (board.kind == BoardKind::kAprilGrid) {

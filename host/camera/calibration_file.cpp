@@ -396,6 +396,14 @@ CameraModel load_ros_camera(const std::string& path, const std::string& text) {
   try {
     if (root["cam0"] && root["cam0"].IsMap()) return load_kalibr_camera(path, root);
     const std::string model = root["distortion_model"] ? root["distortion_model"].as<std::string>() : "";
+    // No key of any camera file: another file given for a camera (a model, a geometry): the file
+    // is named as such, not the first key it lacks.
+    if (!root["camera_matrix"] && !root["image_width"] && !root["image_height"] && !root["distortion_coefficients"] &&
+        !root["cam0"])
+      throw CalibrationError(path +
+                             ": not a camera file (none of camera_matrix, image_width, image_height, "
+                             "distortion_coefficients): give `kincal camera calibrate`'s YAML, OpenCV's, a ROS "
+                             "camera_info or a Kalibr camchain");
     if (!root["image_width"] || !root["image_height"])
       throw CalibrationError(path + ": image_width and image_height must be given");
     return camera_from(ros_matrix(root, path, "camera_matrix", 3, 3),

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <utility>
 
@@ -23,6 +24,9 @@ using Eigen::Matrix3d;
 using Eigen::Vector3d;
 
 constexpr double kDeg = 180.0 / std::numbers::pi;
+constexpr int kMaxShiftTested = 3;
+constexpr double kScaleWarning = 0.03;  // step 7: a board scale this far from 1 is warned of  // step 7: poses shifted
+                                        // by up to this many rows against the images
 
 struct Residual {
   double rotation_rms_rad = 0, translation_rms_m = 0;
@@ -268,6 +272,101 @@ Isometry3d mean_target(const std::vector<Isometry3d>& base_T_gripper, const std:
   return mean;
 }
 
+// The AX = XB rotation residual (Park's solution) with image i paired with pose i + shift, over
+// the pairs both lists hold; nullopt when fewer than `min_poses` remain or OpenCV cannot solve.
+std::optional<double> shifted_rotation_rms(const std::vector<Isometry3d>& base_T_gripper,
+                                           const std::vector<Isometry3d>& camera_T_target, int shift, int min_poses) {
+  std::vector<Isometry3d> poses, boards;
+  for (std::size_t i = 0; i < camera_T_target.size(); ++i) {
+    const std::ptrdiff_t p = static_cast<std::ptrdiff_t>(i) + shift;
+    if (p < 0 || p >= static_cast<std::ptrdiff_t>(base_T_gripper.size())) continue;
+    poses.push_back(base_T_gripper[static_cast<std::size_t>(p)]);
+    boards.push_back(camera_T_target[i]);
+  }
+  if (static_cast<int>(poses.size()) < std::max(3, min_poses)) return std::nullopt;
+  try {
+    return ax_xb(poses, boards, solve_hand_eye(poses, boards, cv::CALIB_HAND_EYE_PARK)).rotation_rms_rad;
+  } catch (const CalibrationError&) {
+    return std::nullopt;
+  }
+}
+
+// Step 7 (see the header): the refusals for poses that cannot belong to the images, and the
+// warnings, with their likely cause, for poses and images that fit less well than a good set.
+std::vector<std::string> assess_consistency(const HandEyeCalibration& result,
+                                            const std::vector<Isometry3d>& base_T_gripper,
+                                            const std::vector<Isometry3d>& camera_T_target, const CameraModel& camera,
+                                            const std::vector<const BoardDetection*>& detections,
+                                            const Matrix3d& gripper_R_camera, const HandEyeOptions& options) {
+  const std::string residuals = "AX = XB residual " + fixed(result.rotation_rms_rad * kDeg, 2) + " degrees / " +
+                                fixed(result.translation_rms_m * 1e3, 1) + " mm RMS, reprojection " +
+                                fixed(result.rms_after_px, 2) + " px RMS";
+  const std::string mistake = "hand-eye calibration: the robot poses and the images do not belong together: ";
+  for (int shift = -kMaxShiftTested; shift <= kMaxShiftTested; ++shift) {
+    if (shift == 0 || result.rotation_rms_rad <= 0.5 / kDeg) continue;
+    const std::optional<double> shifted =
+        shifted_rotation_rms(base_T_gripper, camera_T_target, shift, options.min_poses);
+    if (shifted && *shifted * options.convention_ratio < result.rotation_rms_rad) {
+      throw CalibrationError(mistake + residuals + "; each image fits the pose " + std::to_string(std::abs(shift)) +
+                             (std::abs(shift) == 1 ? " row " : " rows ") + (shift > 0 ? "after" : "before") +
+                             " its own (AX = XB rotation residual " + fixed(*shifted * kDeg, 2) +
+                             " degrees): a poses file of another run, rows out of order, or images missing");
+    }
+  }
+  if (result.rotation_rms_rad > options.refuse_rotation_rms_rad) {
+    throw CalibrationError(mistake + residuals + " (rotations beyond " +
+                           fixed(options.refuse_rotation_rms_rad * kDeg, 1) +
+                           " degrees, which no intrinsics or board size explain): a poses file of another run, rows "
+                           "out of order, or another camera");
+  }
+  std::vector<std::string> warnings;
+  if (result.rotation_rms_rad > options.max_rotation_rms_rad ||
+      result.translation_rms_m > options.max_translation_rms_m || result.rms_after_px > options.max_reprojection_rms_px)
+    warnings.push_back("the robot poses and the images fit less well than a good set: " + residuals +
+                       " (a good set: " + fixed(options.max_rotation_rms_rad * kDeg, 2) + " degrees / " +
+                       fixed(options.max_translation_rms_m * 1e3, 1) + " mm, " +
+                       fixed(options.max_reprojection_rms_px, 2) +
+                       " px); the result is as uncertain as its sigma and the methods' spread say");
+  // A board of another size, or a camera whose focal length is off, scales the board's motion.
+  const BoardScale scale = fit_board_scale(base_T_gripper, camera_T_target, gripper_R_camera);
+  if (std::abs(scale.factor - 1.0) > kScaleWarning && scale.translation_rms_m < 0.7 * result.translation_rms_m) {
+    const cv::Matx33d& k = camera.camera_matrix;
+    const double square_m =
+        detections.front()->board_m.size() > 1
+            ? static_cast<double>(cv::norm(detections.front()->board_m[1] - detections.front()->board_m[0]))
+            : 0.0;
+    warnings.push_back(
+        "the views fit the robot's motions with the board's lengths " + fixed(scale.factor, 3) +
+        " times those given (AX = XB translation " + fixed(scale.translation_rms_m * 1e3, 1) + " mm RMS against " +
+        fixed(result.translation_rms_m * 1e3, 1) +
+        " mm): either the camera's focal length is off (the data suggest fx " + fixed(k(0, 0) * scale.factor, 1) +
+        ", fy " + fixed(k(1, 1) * scale.factor, 1) + " px for the " + fixed(k(0, 0), 1) + ", " + fixed(k(1, 1), 1) +
+        " given: factory intrinsics are often 10 % off; calibrate the camera with `kincal camera calibrate`) or the "
+        "board's square size is (the data suggest " +
+        fixed(square_m * scale.factor * 1e3, 2) + " mm for the " + fixed(square_m * 1e3, 2) + " mm given)");
+  }
+  return warnings;
+}
+
+// The refined gripper_T_camera's standard deviations from the refinement's Jacobian, the corner
+// noise estimated from its residuals (sigma^2 = SSR / (2N - 12)): per axis, rotation (rad) and
+// translation (m, gripper frame). Zero when Ceres cannot invert the information.
+void refined_sigma(ceres::Problem& problem, double* x, double final_cost, std::size_t corners,
+                   HandEyeCalibration& result) {
+  ceres::Covariance::Options covariance_options;
+  ceres::Covariance covariance(covariance_options);
+  const std::vector<std::pair<const double*, const double*>> blocks = {{x, x}};
+  if (!covariance.Compute(blocks, &problem)) return;
+  std::array<double, 36> c{};
+  covariance.GetCovarianceBlock(x, x, c.data());
+  const double dof = std::max(1.0, 2.0 * static_cast<double>(corners) - 12.0);
+  const double sigma2 = 2.0 * final_cost / dof;
+  for (std::size_t i = 0; i < 3; ++i) {
+    result.rotation_sigma_rad[i] = std::sqrt(sigma2 * c[i * 6 + i]);
+    result.translation_sigma_m[i] = std::sqrt(sigma2 * c[(i + 3) * 6 + i + 3]);
+  }
+}
+
 }  // namespace
 
 const char* convention_name(PoseConvention c) {
@@ -438,25 +537,14 @@ HandEyeCalibration calibrate_hand_eye(const std::vector<HandEyeView>& views, con
     v.loop_rotation_rad = Eigen::AngleAxisd(loop.rotation()).angle();
     v.loop_translation_m = loop.translation().norm();
   }
-  if (result.rotation_rms_rad > options.max_rotation_rms_rad ||
-      result.translation_rms_m > options.max_translation_rms_m ||
-      result.rms_after_px > options.max_reprojection_rms_px) {
-    // A board of another size than --board gives fits the motions once its lengths are scaled.
-    const BoardScale scale = fit_board_scale(base_T_gripper, camera_T_target, start.gripper_T_camera.linear());
-    const std::string mismatch_cause =
-        scale.translation_rms_m <= options.max_translation_rms_m && std::abs(scale.factor - 1.0) > 0.01
-            ? "the views fit the robot's motions with the board's lengths " + fixed(scale.factor, 3) +
-                  " times those given (AX = XB translation " + fixed(scale.translation_rms_m * 1e3, 1) +
-                  " mm RMS): is the board's square size right?"
-            : std::string("a poses file of another run, rows out of order, or another camera");
-    throw CalibrationError(
-        "hand-eye calibration: the robot poses and the images do not belong together: AX = XB "
-        "residual " +
-        fixed(result.rotation_rms_rad * kDeg, 2) + " degrees / " + fixed(result.translation_rms_m * 1e3, 1) +
-        " mm RMS (at most " + fixed(options.max_rotation_rms_rad * kDeg, 2) + " degrees / " +
-        fixed(options.max_translation_rms_m * 1e3, 1) + " mm), reprojection " + fixed(result.rms_after_px, 2) +
-        " px RMS (at most " + fixed(options.max_reprojection_rms_px, 2) + " px): " + mismatch_cause);
-  }
+  std::size_t corners = 0;
+  for (const BoardDetection* d : detections) corners += d->board_m.size();
+  refined_sigma(problem, x.data(), summary.final_cost, corners, result);
+  for (const HandEyeEstimate& e : result.methods)
+    result.methods_spread_m = std::max(
+        result.methods_spread_m, (e.gripper_T_camera.translation() - result.gripper_T_camera.translation()).norm());
+  result.warnings = assess_consistency(result, base_T_gripper, camera_T_target, camera, detections,
+                                       start.gripper_T_camera.linear(), options);
   return result;
 }
 
@@ -477,6 +565,11 @@ std::string describe(const HandEyeCalibration& c) {
   line({"refined", c.gripper_T_camera, c.rotation_rms_rad, c.translation_rms_m});
   out << "refinement from " << c.start_method << ": reprojection RMS " << fixed(c.rms_before_px, 4) << " px before, "
       << fixed(c.rms_after_px, 4) << " px after\n";
+  out << "gripper_t_camera sigma (from the residuals) x y z: " << fixed(c.translation_sigma_m[0] * 1e3, 2) << " "
+      << fixed(c.translation_sigma_m[1] * 1e3, 2) << " " << fixed(c.translation_sigma_m[2] * 1e3, 2)
+      << " mm; rotation about x y z: " << fixed(c.rotation_sigma_rad[0] * kDeg, 3) << " "
+      << fixed(c.rotation_sigma_rad[1] * kDeg, 3) << " " << fixed(c.rotation_sigma_rad[2] * kDeg, 3)
+      << " degrees; the AX = XB methods lie within " << fixed(c.methods_spread_m * 1e3, 2) << " mm of the refined\n";
   for (const HandEyeViewReport& v : c.views) {
     if (!v.used) out << "view " << v.view << ": rejected: " << v.rejection << "\n";
   }

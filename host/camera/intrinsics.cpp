@@ -103,6 +103,56 @@ std::vector<std::size_t> spread_views(const std::vector<BoardDetection>& detecti
   return chosen;
 }
 
+// A view's corners predicted by `camera`: the sum of squared distances (px^2) between them and
+// their projection at the pose cv::solvePnP fits to them.
+double prediction_ssr(const cv::Mat& camera_matrix, const cv::Mat& distortion, const BoardDetection& d) {
+  cv::Mat r, t;
+  cv::solvePnP(d.board_m, d.image_px, camera_matrix, distortion, r, t);
+  std::vector<cv::Point2f> predicted;
+  cv::projectPoints(d.board_m, r, t, camera_matrix, distortion, predicted);
+  double sum = 0.0;
+  for (std::size_t i = 0; i < predicted.size(); ++i) {
+    const cv::Point2f e = predicted[i] - d.image_px[i];
+    sum += static_cast<double>(e.dot(e));
+  }
+  return sum;
+}
+
+// Leave-views-out (see the header): the views of `judged` in `folds` folds (the k-th in fold
+// k % folds), each fold's views predicted by the camera calibrated on the other folds' views and
+// `also`; per judged view, its held-out squared error per corner (px^2), in the order of `judged`.
+std::vector<double> held_out_errors(const std::vector<BoardDetection>& detections,
+                                    const std::vector<std::size_t>& judged, const std::vector<std::size_t>& also,
+                                    std::size_t folds, int flags, cv::Size image_size) {
+  std::vector<double> out(judged.size(), 0.0);
+  for (std::size_t fold = 0; fold < folds; ++fold) {
+    std::vector<std::vector<cv::Point3f>> object_points;
+    std::vector<std::vector<cv::Point2f>> image_points;
+    const auto train = [&](std::size_t v) {
+      object_points.push_back(detections[v].board_m);
+      image_points.push_back(detections[v].image_px);
+    };
+    for (std::size_t k = 0; k < judged.size(); ++k)
+      if (k % folds != fold) train(judged[k]);
+    for (std::size_t v : also) train(v);
+    cv::Mat camera_matrix, distortion;
+    std::vector<cv::Mat> rvecs, tvecs;
+    cv::calibrateCamera(object_points, image_points, image_size, camera_matrix, distortion, rvecs, tvecs, flags);
+    for (std::size_t k = 0; k < judged.size(); ++k) {
+      if (k % folds != fold) continue;
+      const BoardDetection& d = detections[judged[k]];
+      out[k] = prediction_ssr(camera_matrix, distortion, d) / static_cast<double>(d.image_px.size());
+    }
+  }
+  return out;
+}
+
+double rms_of(const std::vector<double>& squared) {
+  double sum = 0.0;
+  for (double e : squared) sum += e;
+  return std::sqrt(sum / static_cast<double>(std::max<std::size_t>(squared.size(), 1)));
+}
+
 }  // namespace
 
 cv::Mat CameraModel::distortion_mat() const {
@@ -134,7 +184,10 @@ std::optional<BoardVote> most_given(const std::vector<BoardDetection>& detection
 void refuse_wrong_board(const std::vector<BoardDetection>& detections) {
   const auto wrong = [](const BoardDetection& d) { return d.larger_board || !d.fitting_board.empty(); };
   const auto count = std::count_if(detections.begin(), detections.end(), wrong);
-  if (count == 0) return;
+  const auto showing =
+      count + std::count_if(detections.begin(), detections.end(), [](const BoardDetection& d) { return d.found; });
+  // Enough views must show it (see the header): else those that do are left out as not found.
+  if (count == 0 || (count < showing && (count < kMinWrongBoardViews || count * kWrongBoardShare < showing))) return;
   // The view to name: the first measuring the size most views measured, else the first wrong one.
   const std::optional<BoardVote> most = most_given(detections, &BoardDetection::fitting_board);
   const auto named = std::find_if(detections.begin(), detections.end(), [&](const BoardDetection& d) {
@@ -240,26 +293,67 @@ IntrinsicCalibration calibrate_intrinsics(const std::vector<BoardDetection>& det
                                         tvecs, std_intrinsics, std_extrinsics, per_view, options.flags);
   };
   solve();
-  // The outlier gate (see the header): drop, solve again once.
+  // The outlier gate (see the header): candidates by their RMS, each left out only when the
+  // other views' held-out error says so; then one more solve.
   std::vector<double> sorted(per_view.begin<double>(), per_view.end<double>());
   std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
   const double median_px = sorted[sorted.size() / 2];
   const double limit_px = std::max(options.outlier_over_median * median_px, options.outlier_floor_px);
-  std::vector<std::size_t> kept, outliers;
-  for (std::size_t k = 0; k < used.size(); ++k) {
+  std::vector<std::size_t> candidates, others;  // indices into `used`
+  for (std::size_t k = 0; k < used.size(); ++k)
+    (per_view.at<double>(static_cast<int>(k)) > limit_px ? candidates : others).push_back(k);
+  std::vector<std::size_t> judged, all_candidates, kept, outliers;  // indices into detections
+  for (std::size_t k : others) judged.push_back(used[k]);
+  for (std::size_t k : candidates) all_candidates.push_back(used[k]);
+  kept = judged;
+  // The views judged: those below the limit, in options.outlier_folds folds of at least two views,
+  // each fold's complement (without any candidate) enough to calibrate on.
+  const std::size_t folds = static_cast<std::size_t>(std::max(2, options.outlier_folds));
+  const std::size_t largest_fold = (judged.size() + folds - 1) / folds;
+  const bool can_judge = judged.size() >= 2 * folds &&
+                         judged.size() - largest_fold >= static_cast<std::size_t>(std::max(3, options.min_views));
+  std::vector<double> with_all;
+  if (can_judge && !candidates.empty())
+    with_all = held_out_errors(detections, judged, all_candidates, folds, options.flags, image_size);
+  for (std::size_t k : candidates) {
     const double rms_px = per_view.at<double>(static_cast<int>(k));
-    if (rms_px <= limit_px) {
+    ViewReport& v = result.views[used[k]];
+    v.rms_px = rms_px;
+    const std::string above = "RMS " + fixed(rms_px, 3) + " px, more than " + fixed(limit_px, 3) + " px (" +
+                              fixed(options.outlier_over_median, 0) + " times the median view's " +
+                              fixed(median_px, 3) + " px, at least " + fixed(options.outlier_floor_px, 2) + " px)";
+    if (!can_judge) {
       kept.push_back(used[k]);
+      v.outlier_test = "kept: " + above + ", but too few other views (" + std::to_string(others.size()) +
+                       ") to show by cross-validation that leaving it out helps";
       continue;
     }
-    outliers.push_back(used[k]);
-    ViewReport& v = result.views[used[k]];
-    v.used = false;
-    v.rms_px = rms_px;
-    v.rejection = "an outlier: RMS " + fixed(rms_px, 3) + " px, more than " + fixed(limit_px, 3) + " px (" +
-                  fixed(options.outlier_over_median, 0) + " times the median view's " + fixed(median_px, 3) +
-                  " px, at least " + fixed(options.outlier_floor_px, 2) + " px): a bad detection or a moved board";
+    std::vector<std::size_t> rest;
+    for (std::size_t c : all_candidates)
+      if (c != used[k]) rest.push_back(c);
+    const std::vector<double> without = held_out_errors(detections, judged, rest, folds, options.flags, image_size);
+    // Paired over the judged views: the mean change of their held-out squared error and its
+    // standard error; left out only when it drops by two standard errors (a tie keeps the view).
+    double mean = 0.0, variance = 0.0;
+    const double n = static_cast<double>(without.size());
+    for (std::size_t i = 0; i < without.size(); ++i) mean += (without[i] - with_all[i]) / n;
+    for (std::size_t i = 0; i < without.size(); ++i) variance += std::pow(without[i] - with_all[i] - mean, 2) / (n - 1);
+    const bool lowers = mean < 0 && mean <= -2.0 * std::sqrt(variance / n);
+    const std::string numbers = "the other views' held-out RMS (" + std::to_string(folds) +
+                                "-fold leave-views-out) is " + fixed(rms_of(with_all), 3) + " px with it, " +
+                                fixed(rms_of(without), 3) + " px without";
+    if (lowers) {
+      outliers.push_back(used[k]);
+      v.used = false;
+      v.rejection = "an outlier: " + above + " and " + numbers + ": a bad detection or a moved board";
+    } else {
+      kept.push_back(used[k]);
+      v.outlier_test = "kept: " + above + ", but " + numbers +
+                       " (leaving it out does not lower it by two standard errors): its residuals cost the others "
+                       "nothing (often a close or steep view, where the lens model fits least)";
+    }
   }
+  std::sort(kept.begin(), kept.end());
   if (!outliers.empty()) {
     if (static_cast<double>(outliers.size()) > options.max_outlier_fraction * static_cast<double>(used.size())) {
       std::string message = "intrinsic calibration: " + std::to_string(outliers.size()) + " of " +
@@ -375,7 +469,8 @@ std::string describe(const IntrinsicCalibration& c) {
   for (const ViewReport& v : c.views) {
     out << "view " << v.view << ": ";
     if (v.used) {
-      out << v.corners << " corners, RMS " << fixed(v.rms_px, 4) << " px (" << v.detector << ")\n";
+      out << v.corners << " corners, RMS " << fixed(v.rms_px, 4) << " px (" << v.detector << ")"
+          << (v.outlier_test.empty() ? "" : "; " + v.outlier_test) << "\n";
     } else {
       out << "rejected: " << v.rejection << "\n";
     }

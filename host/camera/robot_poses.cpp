@@ -3,8 +3,11 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <optional>
@@ -89,6 +92,34 @@ struct Line {
   int number;
 };
 
+// A time column's name (see the header): its nanoseconds per unit, or none for another name.
+std::optional<double> time_unit_ns(const std::string& name) {
+  for (const char* base : {"timestamp", "time", "t", "stamp"}) {
+    const std::string b = base;
+    if (name.rfind(b, 0) != 0) continue;
+    const std::string unit = name.substr(b.size());
+    if (unit == " [ns]" || unit == "[ns]" || unit == "_ns") return 1.0;
+    if (unit == " [s]" || unit == "[s]" || unit == "_s") return 1e9;
+  }
+  return std::nullopt;
+}
+
+// A time field in nanoseconds: a whole number of them, or seconds (ns_per_unit 1e9) within
+// the 64-bit range of nanoseconds (+-292 years).
+std::int64_t time_of(const std::string& field, double ns_per_unit, const std::string& source, int line) {
+  if (ns_per_unit == 1.0) {
+    char* end = nullptr;
+    errno = 0;
+    const long long v = std::strtoll(field.c_str(), &end, 10);
+    if (field.empty() || end != field.c_str() + field.size() || errno == ERANGE)
+      bad_pose(source, line, "time '" + files::excerpt(field) + "' is not a whole number of nanoseconds");
+    return static_cast<std::int64_t>(v);
+  }
+  const double s = number_of(field, source, line);
+  if (!(std::abs(s) < 9.2e9)) bad_pose(source, line, "time '" + files::excerpt(field) + " s' is out of range");
+  return static_cast<std::int64_t>(std::llround(s * ns_per_unit));
+}
+
 std::vector<RobotPose> parse_csv(const std::vector<Line>& lines, const std::string& source, RotationColumns rotation) {
   const std::string& first = lines.front().text;
   // ',' or ';' between fields, or else spaces and tabs (a whitespace-separated table).
@@ -107,6 +138,16 @@ std::vector<RobotPose> parse_csv(const std::vector<Line>& lines, const std::stri
   const auto has = [&](std::initializer_list<const char*> names) {
     return std::all_of(names.begin(), names.end(), [&](const char* n) { return column.count(n) > 0; });
   };
+  std::optional<std::size_t> time_column;
+  std::optional<double> ns_per_unit;
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    const std::optional<double> unit = time_unit_ns(header[i]);
+    if (!unit) continue;
+    if (time_column)
+      bad_pose(source, header_line, "the header names two time columns, " + header[*time_column] + " and " + header[i]);
+    time_column = i;
+    ns_per_unit = unit;
+  }
   if (!has({"x", "y", "z"})) {
     std::string names;
     for (const std::string& name : header) names += (names.empty() ? "" : ",") + files::excerpt(name);
@@ -141,6 +182,10 @@ std::vector<RobotPose> parse_csv(const std::vector<Line>& lines, const std::stri
       p.pose.linear() = q.normalized().toRotationMatrix();
     } else {
       p.pose.linear() = rotation_of(rotation, Eigen::Vector3d(value("rx"), value("ry"), value("rz")), source, p.line);
+    }
+    if (time_column) {
+      if (*time_column >= f.size()) bad_pose(source, p.line, "no field for column " + header[*time_column]);
+      p.time_ns = time_of(f[*time_column], *ns_per_unit, source, p.line);
     }
     check_reach(p, source);
     poses.push_back(p);
@@ -218,6 +263,82 @@ std::vector<RobotPose> parse_robot_poses(std::istream& in, const std::string& so
 std::vector<RobotPose> read_robot_poses(const std::string& path, RotationColumns rotation) {
   std::istringstream in(files::read_text_or_throw<CalibrationError>(path, files::kDatasetFile));
   return parse_robot_poses(in, path, rotation);
+}
+
+std::vector<RobotPose> parse_timed_poses(std::istream& in, const std::string& source, RotationColumns rotation) {
+  std::vector<RobotPose> poses = parse_robot_poses(in, source, rotation);
+  if (!poses.front().time_ns)
+    bad_pose(source, poses.front().line,
+             "the poses have no time column: name one in the header, e.g. timestamp [ns] (nanoseconds) or "
+             "timestamp [s]");
+  for (std::size_t i = 1; i < poses.size(); ++i)
+    if (*poses[i].time_ns <= *poses[i - 1].time_ns)
+      bad_pose(source, poses[i].line,
+               "time " + std::to_string(*poses[i].time_ns) + " ns is not after the previous pose's (line " +
+                   std::to_string(poses[i - 1].line) + ", " + std::to_string(*poses[i - 1].time_ns) + " ns)");
+  return poses;
+}
+
+std::vector<RobotPose> read_timed_poses(const std::string& path, RotationColumns rotation) {
+  std::istringstream in(files::read_text_or_throw<CalibrationError>(path, files::kDatasetFile));
+  return parse_timed_poses(in, path, rotation);
+}
+
+PoseAtTime pose_at_time(const std::vector<RobotPose>& timed, std::int64_t time_ns, double max_gap_s) {
+  PoseAtTime out;
+  const auto seconds = [](std::int64_t ns) { return model::shortest_number_text(static_cast<double>(ns) * 1e-9); };
+  const auto after = std::lower_bound(timed.begin(), timed.end(), time_ns,
+                                      [](const RobotPose& p, std::int64_t t) { return *p.time_ns < t; });
+  if (after != timed.end() && *after->time_ns == time_ns) {
+    out.pose = after->pose;
+    out.line_before = out.line_after = after->line;
+    return out;
+  }
+  if (timed.empty() || after == timed.begin() || after == timed.end()) {
+    out.refusal = timed.empty() ? "no timed poses"
+                                : "no pose " + std::string(after == timed.begin() ? "before" : "after") +
+                                      " it: the poses run from " + std::to_string(*timed.front().time_ns) + " to " +
+                                      std::to_string(*timed.back().time_ns) + " ns";
+    return out;
+  }
+  const RobotPose& a = *(after - 1);
+  const RobotPose& b = *after;
+  out.line_before = a.line;
+  out.line_after = b.line;
+  const std::int64_t gap_ns = *b.time_ns - *a.time_ns;
+  if (static_cast<double>(gap_ns) * 1e-9 > max_gap_s) {
+    out.refusal = "the poses around it (lines " + std::to_string(a.line) + " and " + std::to_string(b.line) + ") are " +
+                  seconds(gap_ns) + " s apart, more than " + model::shortest_number_text(max_gap_s) +
+                  " s: the pose source lost the body between them?";
+    return out;
+  }
+  const double s = static_cast<double>(time_ns - *a.time_ns) / static_cast<double>(gap_ns);
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() =
+      Eigen::Quaterniond(a.pose.linear()).slerp(s, Eigen::Quaterniond(b.pose.linear())).normalized().toRotationMatrix();
+  pose.translation() = (1 - s) * a.pose.translation() + s * b.pose.translation();
+  out.pose = pose;
+  return out;
+}
+
+std::optional<std::int64_t> image_time_ns(const std::string& path) {
+  const std::string stem = std::filesystem::path(path).stem().string();
+  const std::size_t point = stem.find('.');
+  const std::string whole = stem.substr(0, point);
+  const std::string fraction = point == std::string::npos ? "" : stem.substr(point + 1);
+  const auto digits = [](const std::string& t) {
+    return !t.empty() && std::all_of(t.begin(), t.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
+  };
+  if (!digits(whole) || (point != std::string::npos && !digits(fraction))) return std::nullopt;
+  errno = 0;
+  const long long w = std::strtoll(whole.c_str(), nullptr, 10);
+  if (errno == ERANGE) return std::nullopt;
+  if (point == std::string::npos) return static_cast<std::int64_t>(w);
+  // Seconds with at most nanoseconds' decimals, within the 64-bit range of nanoseconds.
+  constexpr long long kNsPerS = 1'000'000'000;
+  if (fraction.size() > 9 || w > std::numeric_limits<long long>::max() / kNsPerS - 1) return std::nullopt;
+  const std::string ns = fraction + std::string(9 - fraction.size(), '0');
+  return static_cast<std::int64_t>(w * kNsPerS + std::strtoll(ns.c_str(), nullptr, 10));
 }
 
 }  // namespace kincal::camera

@@ -3,6 +3,7 @@
 #include <charconv>
 #include <chrono>
 #include <cstdio>
+#include <limits>
 
 #include "host/files/input_file.hpp"
 
@@ -24,6 +25,20 @@ std::uint64_t parse_unsigned(const std::string& text, int base, const char* what
   if (text.empty() || ec != std::errc() || ptr != end)
     throw CanError(std::string("bad ") + what + " '" + files::excerpt(text) + "'");
   return value;
+}
+
+// The seconds of a time stamp, held to what LoggedFrame::time_us (64 bits of microseconds)
+// holds: beyond it they would wrap and reorder the log.
+std::uint64_t parse_seconds(const std::string& stamp, const std::string& text) {
+  constexpr std::uint64_t kMaxSeconds = std::numeric_limits<std::uint64_t>::max() / 1000000 - 1;
+  std::uint64_t value = 0;
+  const char* end = text.data() + text.size();
+  const auto [ptr, ec] = std::from_chars(text.data(), end, value, 10);
+  if (!text.empty() && ptr == end &&
+      (ec == std::errc::result_out_of_range || (ec == std::errc() && value > kMaxSeconds)))
+    throw CanError("timestamp '" + files::excerpt(stamp) + "': " + files::excerpt(text) +
+                   " s is beyond the 64-bit microsecond clock (at most " + std::to_string(kMaxSeconds) + " s)");
+  return parse_unsigned(text, 10, "timestamp seconds");
 }
 
 }  // namespace
@@ -68,7 +83,7 @@ LoggedFrame parse_candump_line(const std::string& line) {
   const auto dot = stamp.find('.');
   if (dot == std::string::npos || stamp.size() - dot - 1 != 6)
     throw CanError("timestamp '" + files::excerpt(stamp) + "' is not SECONDS.MICROSECONDS with 6 digits");
-  out.time_us = parse_unsigned(stamp.substr(0, dot), 10, "timestamp seconds") * 1000000 +
+  out.time_us = parse_seconds(stamp, stamp.substr(0, dot)) * 1000000 +
                 parse_unsigned(stamp.substr(dot + 1), 10, "timestamp microseconds");
   if (close + 1 >= line.size() || line[close + 1] != ' ') throw CanError("expected a space after the timestamp");
   const auto space = line.find(' ', close + 2);

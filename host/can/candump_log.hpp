@@ -10,7 +10,9 @@
 // CandumpReader reads the log through files::read_text() (files/input_file.hpp): a regular file
 // of at most files::kCandumpFile.max_bytes, UTF-8 (ASCII in practice), LF or CRLF; anything else
 // (a directory, a device, a pipe, binary data) is refused by name before any frame is decoded.
-// Fields quoted in messages are cut to 80 bytes.
+// Fields quoted in messages are cut to 80 bytes. A time stamp's seconds must fit the 64-bit
+// microsecond clock of LoggedFrame::time_us (at most 18446744073708 s): a larger one is refused
+// naming the line, never wrapped.
 #pragma once
 
 #include <cstdint>

@@ -78,12 +78,14 @@ void add_blobs_command(CLI::App& app, int& status) {
   cmd->add_option("images", options->images,
                   std::string("Image files (any format OpenCV reads; ") + files::kImageLimitText + ")")
       ->required();
-  cmd->add_option("--polarity", options->polarity, "Blobs brighter or darker than the threshold")
-      ->check(CLI::IsMember({"bright", "dark"}))
-      ->capture_default_str();
-  add_threshold_option(*cmd, options->threshold);
+  auto* polarity = cmd->add_option("--polarity", options->polarity, "Blobs brighter or darker than the threshold")
+                       ->check(CLI::IsMember({"bright", "dark"}))
+                       ->capture_default_str();
+  auto* threshold = add_threshold_option(*cmd, options->threshold);
   cmd->add_option("--colour-table", options->colour_table,
-                  "Colour-class table (kincal colour-table): label that colour class instead of a threshold");
+                  "Colour-class table (kincal colour-table): label that colour class instead of a threshold")
+      ->excludes(polarity)
+      ->excludes(threshold);
   cmd->add_option("--connectivity", options->connectivity, "Pixel connectivity")
       ->check(CLI::IsMember({4, 8}))
       ->capture_default_str();

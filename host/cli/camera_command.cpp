@@ -1,6 +1,7 @@
 #include "host/cli/camera_command.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <iostream>
 #include <optional>
 #include <string>
@@ -9,6 +10,7 @@
 #include "host/camera/board.hpp"
 #include "host/camera/calibration_file.hpp"
 #include "host/camera/hand_eye.hpp"
+#include "host/camera/hand_eye_uncertainty.hpp"
 #include "host/camera/intrinsics.hpp"
 #include "host/camera/robot_poses.hpp"
 #include "host/camera/stereo.hpp"
@@ -28,8 +30,8 @@ struct CameraArgs {
   std::string board, out, report, left_camera, right_camera, camera, poses, convention = "gripper2base";
   std::string format = "opencv", camera_name = "camera", rotation;
   std::vector<std::string> images, left, right;
-  bool refine_intrinsics = false;
-  double tolerance_s = 0.5;
+  bool refine_intrinsics = false, timed_poses = false;
+  double tolerance_s = 0.5, max_pose_gap_s = camera::kMaxPoseGap_s;
   int min_corners = 6;
 };
 
@@ -119,18 +121,45 @@ int run_stereo(const CameraArgs& a) {
   return 0;
 }
 
+// --timed-poses: each image's pose interpolated at the time its name gives
+// (host/camera/robot_poses.hpp); an image without a pose around its time is left out, saying why.
+std::vector<camera::HandEyeView> timed_views(const CameraArgs& a, const std::vector<camera::RobotPose>& poses,
+                                             const std::vector<camera::BoardDetection>& detections) {
+  std::vector<camera::HandEyeView> views;
+  for (const camera::BoardDetection& d : detections) {
+    const std::optional<std::int64_t> t_ns = camera::image_time_ns(d.view);
+    if (!t_ns)
+      throw camera::CalibrationError(d.view + ": with --timed-poses an image's name is its time, in ns (" +
+                                     "1606153907495166540.jpg) or s (1606153907.495166540.png)");
+    const camera::PoseAtTime p = camera::pose_at_time(poses, *t_ns, a.max_pose_gap_s);
+    if (!p.pose) {
+      std::cout << d.view << ": left out, no pose at its time: " << p.refusal << "\n";
+      continue;
+    }
+    views.push_back(
+        {d.view + " (" + a.poses + ":" + std::to_string(p.line_before) + "-" + std::to_string(p.line_after) + ")",
+         *p.pose, d});
+  }
+  std::cout << views.size() << " of " << detections.size() << " images with a pose interpolated at their time\n";
+  return views;
+}
+
 int run_hand_eye(const CameraArgs& a) {
   const camera::Board board = camera::parse_board(a.board);
   const camera::CameraModel cam = camera::load_camera(a.camera);
-  const std::vector<camera::RobotPose> poses = camera::read_robot_poses(
-      a.poses, a.rotation.empty() ? camera::RotationColumns::kUnnamed : camera::rotation_columns(a.rotation));
+  const camera::RotationColumns rotation =
+      a.rotation.empty() ? camera::RotationColumns::kUnnamed : camera::rotation_columns(a.rotation);
+  const std::vector<camera::RobotPose> poses =
+      a.timed_poses ? camera::read_timed_poses(a.poses, rotation) : camera::read_robot_poses(a.poses, rotation);
   const std::vector<camera::BoardDetection> detections = detect_in_frames(board, a.images, a.min_corners);
-  if (detections.size() != poses.size()) {
+  if (!a.timed_poses && detections.size() != poses.size()) {
     throw camera::CalibrationError(a.poses + ": " + std::to_string(poses.size()) + " poses but " +
-                                   std::to_string(detections.size()) + " images");
+                                   std::to_string(detections.size()) + " images" +
+                                   (poses.front().time_ns ? " (the poses have times: --timed-poses?)" : ""));
   }
   std::vector<camera::HandEyeView> views;
-  for (std::size_t i = 0; i < detections.size(); ++i) {
+  if (a.timed_poses) views = timed_views(a, poses, detections);
+  for (std::size_t i = 0; !a.timed_poses && i < detections.size(); ++i) {
     views.push_back({detections[i].view + " (" + a.poses + ":" + std::to_string(poses[i].line) + ")", poses[i].pose,
                      detections[i]});
   }
@@ -139,6 +168,9 @@ int run_hand_eye(const CameraArgs& a) {
       a.convention == "base2gripper" ? camera::PoseConvention::kBaseToGripper : camera::PoseConvention::kGripperToBase;
   const camera::HandEyeCalibration h = camera::calibrate_hand_eye(views, cam, options);
   std::cout << camera::describe(h);
+  std::cout << camera::describe(camera::hand_eye_jackknife(views, cam, options, h));
+  // Poor data give the answer (exit 0) and what is wrong with them on standard error.
+  for (const std::string& w : h.warnings) std::cerr << "kincal camera hand-eye: warning: " << w << "\n";
   camera::save_hand_eye(a.out, h);
   std::cout << "wrote " << a.out << "\n";
   if (!a.report.empty()) {
@@ -183,10 +215,16 @@ void add_camera_command(CLI::App& app, int& status) {
       ->required();
   calibrate->add_option("--format", args->format, "opencv (OpenCV YAML, the default) or ros (ROS camera_info YAML)")
       ->check(CLI::IsMember({"opencv", "ros"}));
-  calibrate->add_option("--camera-name", args->camera_name, "camera_name of a ROS file")->capture_default_str();
+  auto* camera_name =
+      calibrate->add_option("--camera-name", args->camera_name, "camera_name of a ROS file (--format ros)")
+          ->capture_default_str();
   calibrate->add_option("--report", args->report,
                         "HTML report: residuals, coverage, distortion and projection uncertainty over the image");
-  calibrate->callback([args, &status] { guarded("calibrate", status, *args, [&] { return run_calibrate(*args); }); });
+  calibrate->callback([args, &status, camera_name] {
+    if (camera_name->count() > 0 && args->format != "ros")  // an OpenCV file has no camera name
+      throw CLI::ValidationError("--camera-name", "--camera-name is a ROS file's: it needs --format ros");
+    guarded("calibrate", status, *args, [&] { return run_calibrate(*args); });
+  });
 
   CLI::App* stereo = camera->add_subcommand("stereo", "Stereo calibration from image pairs of a board");
   add_common(stereo, *args);
@@ -215,7 +253,7 @@ void add_camera_command(CLI::App& app, int& status) {
   hand_eye
       ->add_option("--poses", args->poses,
                    "robot poses, one per image: CSV x,y,z,qw,qx,qy,qz or x,y,z,rx,ry,rz (other columns ignored), "
-                   "or 4x4 matrices row-major")
+                   "or 4x4 matrices row-major; with --timed-poses a timed stream, e.g. a motion capture's")
       ->required();
   hand_eye
       ->add_option("--rotation", args->rotation,
@@ -226,6 +264,15 @@ void add_camera_command(CLI::App& app, int& status) {
           "--images", args->images,
           std::string("images, in the order of the poses (files or a directory; ") + files::kImageLimitText + ")")
       ->required();
+  hand_eye->add_flag("--timed-poses", args->timed_poses,
+                     "the poses are a timed stream, as a motion capture records them (a time column: 'timestamp "
+                     "[ns]', time_ns, time_s, ...): each image's pose is interpolated at the time its file name gives "
+                     "(ns, as 1606153907495166540.jpg); the body's pose is the gripper's");
+  hand_eye
+      ->add_option("--max-pose-gap", args->max_pose_gap_s,
+                   "with --timed-poses: the longest time between the two poses around an image (s)")
+      ->check(finite_non_negative())
+      ->capture_default_str();
   hand_eye->add_option("--convention", args->convention, "what the poses are: base_T_gripper or gripper_T_base")
       ->check(CLI::IsMember({"gripper2base", "base2gripper"}))
       ->capture_default_str();

@@ -160,6 +160,7 @@ report::CameraPage hand_eye_report(const camera::HandEyeCalibration& h, const st
                                    const camera::CameraModel& camera) {
   report::CameraPage page{
       "Hand-eye calibration", report::utc_date_now(), facts_of(camera::describe(h), "view "), {}, {}};
+  for (const std::string& w : h.warnings) page.facts.push_back("warning: " + w);
   report::TextTable poses{"Poses",
                           {"view", "status", "board pose RMS (px)", "refined RMS (px)", "AX = XB rotation (deg)",
                            "AX = XB translation (mm)", "AX = ZB loop rotation (deg)", "AX = ZB loop translation (mm)"},

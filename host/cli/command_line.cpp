@@ -147,9 +147,9 @@ std::optional<std::string> nearest_word(const std::string& word, const std::vect
 }
 
 std::optional<int> parse_command_line(CLI::App& app, int argc, const char* const* argv) {
-  if (argc <= 1) {
-    std::cout << app.help();
-    return 0;
+  if (argc <= 1) {  // no command: nothing was done, which a script must see
+    std::cerr << app.help();
+    return kUsageError;
   }
   CLI::App* command = nullptr;
   if (const auto status = check_words(app, argc, argv, command)) return status;

@@ -1,8 +1,11 @@
-// The command line as the ecosystem's tools treat it: bare `kincal` prints the help; an unknown
+// The command line as the ecosystem's tools treat it: bare `kincal` prints the help on standard
+// error and exits kUsageError (it ran nothing); an unknown
 // subcommand or option, or a value the option refuses, is a usage error that exits 2 naming the
 // word and, where one is close, the valid word meant ("did you mean identify?"). So is an empty
 // word ('--constraints ""', an unset shell variable): taken as the option not given, it would
-// silently drop what it names.
+// silently drop what it names. An option that would have no effect with the others given is a
+// usage error naming the option it needs or excludes (CLI11's needs/excludes where each command
+// adds its options: import --euler needs --orientation, monitor --log needs --can, ...).
 #pragma once
 
 #include <CLI/App.hpp>

@@ -2,6 +2,8 @@
 
 #include <iostream>
 #include <memory>
+#include <numbers>
+#include <optional>
 #include <sstream>
 
 #include <Eigen/Geometry>
@@ -24,9 +26,41 @@ constexpr int kNotReached = 3;
 struct CorrectArgs {
   ModelOption model;
   std::string nominal, joints, poses, urscript, frame = "base", out;
-  std::vector<double> seed;
+  std::vector<double> seed, tcp;
   bool position_only = false;
+  double max_change_deg = 5.0, max_change_mm = 5.0;
 };
+
+// The point `correct` aims, the same in both models (robot_model.hpp): --tcp, else the TCP the
+// calibrated model or --nominal names (with its flange), else each model's tool -- the measured
+// point, for a model that names no TCP. Returns how the log names it.
+std::string aim_at_tcp(const CorrectArgs& a, model::RobotModel& nominal, model::RobotModel& calibrated) {
+  const auto take_flange = [](model::RobotModel& to, const model::RobotModel& from) {
+    to.flange_link = from.flange_link;
+    to.frame_n_T_flange = from.frame_n_T_flange;
+    to.flange_T_tcp = from.flange_T_tcp;
+  };
+  if (!calibrated.flange_T_tcp && nominal.flange_T_tcp) take_flange(calibrated, nominal);
+  if (!nominal.flange_T_tcp && calibrated.flange_T_tcp) take_flange(nominal, calibrated);
+  if (!a.tcp.empty()) {
+    if (a.tcp.size() != 3 && a.tcp.size() != 6)
+      throw model::InputError("--tcp: give x,y,z (m) or x,y,z,roll,pitch,yaw (m, rad), not " +
+                              std::to_string(a.tcp.size()) + " numbers");
+    model::Transform tcp;
+    tcp.translation = model::Vector3(a.tcp[0], a.tcp[1], a.tcp[2]);
+    if (a.tcp.size() == 6) tcp.rotation = model::rotation_from_rpy(model::Vector3(a.tcp[3], a.tcp[4], a.tcp[5]));
+    nominal.flange_T_tcp = calibrated.flange_T_tcp = tcp;
+  }
+  if (!calibrated.flange_T_tcp) return "the model's tool (it names no TCP: give --tcp for another point)";
+  std::ostringstream out;
+  out.precision(4);
+  const model::Vector3 p = calibrated.flange_T_tcp->translation * 1e3 + model::Vector3::Zero();
+  out << "the TCP (" << p.x() << ", " << p.y() << ", " << p.z() << " mm from the flange, "
+      << model::flange_name(calibrated) << "), not the measured point";
+  nominal = model::tool_at_tcp(nominal);
+  calibrated = model::tool_at_tcp(calibrated);
+  return out.str();
+}
 
 std::string csv(const correct::TargetTable& table, const std::vector<correct::TargetResult>& results, int n) {
   std::ostringstream out;
@@ -69,8 +103,8 @@ int run_correct(const CorrectArgs& a) {
                                                       {"--joints", a.joints},
                                                       {"--poses", a.poses},
                                                       {"--urscript", a.urscript}});
-    const model::RobotModel calibrated = a.model.load();
-    const model::RobotModel nominal =
+    model::RobotModel calibrated = a.model.load();
+    model::RobotModel nominal =
         a.nominal.empty() ? correct::nominal_from_record(calibrated) : model::load_model(a.nominal, a.model.ends);
     const int n = calibrated.joint_count();
     if (nominal.joint_count() != n)
@@ -99,10 +133,16 @@ int run_correct(const CorrectArgs& a) {
         targets.push_back({row.line, table.cartesian, row.q, row.pose, table.orientation});
     }
     correct::JointCorrectionOptions options;
+    // The calibration's own tool says what the data measured: a point leaves the orientation free.
     options.orientation = !a.position_only && calibrated.tool == model::ToolKind::frame;
+    const std::optional<correct::ParameterCovariance> covariance = correct::record_covariance(calibrated);
+    const std::string aimed = aim_at_tcp(a, nominal, calibrated);
+    correct::JointChangeLimit limit;
+    limit.revolute_rad = a.max_change_deg * std::numbers::pi / 180.0;
+    limit.prismatic_m = a.max_change_mm * 1e-3;
     correct::TargetCorrector corrector(nominal, calibrated,
                                        a.frame == "device" ? correct::TargetFrame::device : correct::TargetFrame::base,
-                                       correct::record_covariance(calibrated), options);
+                                       covariance, options, limit);
     const std::vector<correct::TargetResult> results = corrector.correct(targets, a.seed, source);
     std::ostream& log = a.out.empty() || a.out == "-" ? std::cerr : std::cout;
     int not_reached = 0;
@@ -110,8 +150,18 @@ int run_correct(const CorrectArgs& a) {
       const correct::Solution& s = results[i].solution;
       if (s.outcome == correct::Outcome::reached) continue;
       ++not_reached;
-      std::cerr << source << ':' << targets[i].line << ": not reached: " << correct::outcome_name(s.outcome)
-                << " (residual " << s.residual_m * 1e3 << " mm, " << s.residual_rad * 1e3 << " mrad)\n";
+      std::cerr << source << ':' << targets[i].line << ": not reached: " << correct::outcome_name(s.outcome);
+      if (s.outcome == correct::Outcome::joint_change_limit) {
+        const bool prismatic =
+            calibrated.joints[static_cast<std::size_t>(results[i].change_joint)].type == core::JointType::prismatic;
+        std::cerr << ": joint " << results[i].change_joint + 1 << " ("
+                  << calibrated.joints[static_cast<std::size_t>(results[i].change_joint)].name << ") would change by "
+                  << (prismatic ? results[i].change * 1e3 : results[i].change * 180.0 / std::numbers::pi)
+                  << (prismatic ? " mm, beyond --max-joint-change-mm " : " deg, beyond --max-joint-change-deg ")
+                  << (prismatic ? a.max_change_mm : a.max_change_deg)
+                  << "; the target's readings are left as they were";
+      }
+      std::cerr << " (residual " << s.residual_m * 1e3 << " mm, " << s.residual_rad * 1e3 << " mrad)\n";
     }
     if (!a.urscript.empty()) {
       if (not_reached > 0)
@@ -120,8 +170,8 @@ int run_correct(const CorrectArgs& a) {
     } else {
       files::write_output(a.out, csv(table, results, n));
     }
-    if (!corrector.joints().platform_step())
-      log << "kincal correct: joint targets by the Newton solve alone: " << corrector.joints().platform_note() << '\n';
+    log << "kincal correct: aimed " << aimed << ", "
+        << (options.orientation ? "position and orientation" : "position only") << '\n';
     log << "kincal correct: " << correct::summary_line(results) << '\n';
     return not_reached > 0 ? kNotReached : 0;
   } catch (const std::exception& e) {
@@ -139,22 +189,34 @@ void add_correct_command(CLI::App& app, int& status) {
   add_model_option(*cmd, a->model, "the calibrated model");
   cmd->add_option("--nominal", a->nominal,
                   "the model the robot controller computes with (default: the calibrated model's record undone)");
-  cmd->add_option("--joints", a->joints, "joint targets (CSV: q1..qN, rad or m)");
+  auto* joints = cmd->add_option("--joints", a->joints, "joint targets (CSV: q1..qN, rad or m)");
   cmd->add_option("--poses", a->poses,
                   "Cartesian targets (CSV: x,y,z[,qw,qx,qy,qz][,q1..qN seed], m) -> readings by inverse kinematics");
   cmd->add_option("--urscript", a->urscript,
                   "a URScript program: movej/movel/movep/servoj targets rewritten, every other byte kept");
   cmd->add_option("--frame", a->frame,
                   "frame of --poses: base (the robot's, default) or device (the measuring device's)")
-      ->check(CLI::IsMember({"base", "device"}));
+      ->check(CLI::IsMember({"base", "device"}))
+      ->excludes(joints);
   cmd->add_option("--seed", a->seed, "seed reading for Cartesian targets before any other (N numbers, rad or m)")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->excludes(joints);  // joint targets need no inverse kinematics to seed
   cmd->add_flag("--position-only", a->position_only,
-                "joint targets: correct the tool point alone, not its orientation (always so for a point tool)");
+                "joint targets: correct the TCP's position alone, not its orientation (always so when the "
+                "calibration measured points: a point tool)");
+  cmd->add_option("--tcp", a->tcp,
+                  "the controller's TCP from the flange, x,y,z (m) or x,y,z,roll,pitch,yaw (m, rad): the point "
+                  "corrected (default: the model's tcp, a URDF's tip link, else the model's tool)")
+      ->delimiter(',');
+  cmd->add_option("--max-joint-change-deg", a->max_change_deg,
+                  "refuse a target whose correction turns a joint by more than this (default 5 deg)")
+      ->check(CLI::Range(1e-6, 360.0));
+  cmd->add_option("--max-joint-change-mm", a->max_change_mm, "the same for a prismatic joint's travel (default 5 mm)")
+      ->check(CLI::Range(1e-6, 1e6));
   cmd->add_option("-o,--out", a->out, "output: the CSV or the program (default or '-': standard output)");
   cmd->footer(
-      "Exit status: 0 every target reached; 1 bad input (nothing written); 3 some target not reached (named on "
-      "standard error; the CSV is written with its outcome, a program is not).");
+      "Exit status: 0 every target reached; 1 bad input (nothing written); 3 some target not reached or refused "
+      "(named on standard error; the CSV is written with its outcome, a program is not).");
   cmd->callback([a, &status] { status = run_correct(*a); });
 }
 

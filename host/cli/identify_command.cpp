@@ -20,6 +20,7 @@
 #include "host/files/input_file.hpp"
 #include "host/files/input_limits.hpp"
 #include "host/files/output_file.hpp"
+#include "host/identify/data_mistakes.hpp"
 #include "host/identify/identify.hpp"
 #include "host/identify/model_selection.hpp"
 #include "host/identify/plausibility.hpp"
@@ -38,7 +39,7 @@ namespace {
 struct IdentifyArgs {
   ModelOption model;
   std::string data, out, method = "full", start = "nominal", validate, urdf, model_select = "auto", hand_eye,
-                         mount = "hand", report;
+                         mount = "hand", report, marker_link;
   std::vector<std::string> fix, params, prior;
   double sigma_m = 0.0, orientation_sigma_deg = 0.0, outlier_probability = 1e-3, max_rejected_fraction = 0.05;
   bool no_robust = false, no_model_error = false, accept_implausible = false, no_prior = false;
@@ -87,8 +88,15 @@ std::string summary(const IdentifyArgs& a, const identify::IdentifyResult& resul
     out << stats_line(kCalibrated, calibrated);
     after = calibrated.rms_m;
   }
+  const std::optional<std::string> unexplained =
+      identify::unexplained_fit(result.residuals.rms_m, result.median_instrument_sigma_m);
+  if (unexplained) std::cerr << "kincal identify: warning: " << *unexplained << '\n';
   if (!registered) return out.str();
   out << "verdict: ";
+  if (unexplained) {
+    out << "the data do not fit this model: " << *unexplained << '\n';
+    return out.str();
+  }
   char numbers[96];
   std::snprintf(numbers, sizeof numbers, "(%.3f mm RMS registered nominal, %.3f mm calibrated)", before * 1e3,
                 after * 1e3);
@@ -108,6 +116,56 @@ std::string summary(const IdentifyArgs& a, const identify::IdentifyResult& resul
            "model), or the held-out data differ\n";
   }
   return out.str();
+}
+
+// Held-out rows that are training rows judge nothing: all of them is a mistake (refused), some of
+// them a warning; rows at training readings measured anew, a warning (data_mistakes.hpp).
+void check_held_out(const model::Dataset& held_out, const model::Dataset& training) {
+  const identify::SharedRows shared = identify::training_rows_in(held_out, training);
+  const std::string of = " of the " + std::to_string(held_out.rows.size()) + " rows of " + held_out.source;
+  const std::string rows =
+      std::to_string(shared.rows) + of + " are rows of " + training.source + " (the same readings and measured point)";
+  if (shared.rows == static_cast<int>(held_out.rows.size()))
+    throw model::InputError("--validate " + held_out.source + ": " + rows +
+                            ": a validation needs measurements not used for training");
+  if (shared.rows > 0)
+    std::cerr << "kincal identify: warning: --validate: " << rows
+              << ": they flatter the held-out accuracy; leave them out of one of the files\n";
+  else if (shared.configurations > 0)
+    std::cerr << "kincal identify: warning: --validate: " << shared.configurations << of << " are at readings of "
+              << training.source << " measured again: they judge the arm's repeatability more than the calibration\n";
+}
+
+// A frame from the flange as a user types it into a controller: mm, and roll-pitch-yaw in deg.
+std::string pose_text(const model::Transform& t, bool rotation) {
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  out.precision(3);
+  const model::Vector3 p = t.translation * 1e3 + model::Vector3::Zero();  // + 0: no "-0.000"
+  out << "x " << p.x() << ", y " << p.y() << ", z " << p.z() << " mm";
+  if (rotation) {
+    const model::Vector3 rpy =
+        model::rpy_from_rotation(t.rotation) * (180.0 / std::numbers::pi) + model::Vector3::Zero();
+    out << "; roll " << rpy.x() << ", pitch " << rpy.y() << ", yaw " << rpy.z() << " deg";
+  }
+  return out.str();
+}
+
+// The measured point and the TCP, each from the flange it is given from (robot_model.hpp).
+std::string frames_lines(const model::RobotModel& m) {
+  const std::string flange = model::flange_name(m);
+  const bool frame = m.tool == model::ToolKind::frame;
+  std::string out =
+      "  the measured point (the model's tool: the reflector, marker or board the data measured) from the "
+      "flange, " +
+      flange + ": " + pose_text(model::flange_T_measured(m), frame) + "\n";
+  if (m.flange_T_tcp)
+    out += "  on the controller, the TCP from the flange, " + flange + ": " + pose_text(*m.flange_T_tcp, true) +
+           " (not calibrated: as given)\n";
+  else
+    out += "  on the controller, the TCP (the measured point: the model names no other) from the flange, " + flange +
+           ": " + pose_text(model::flange_T_measured(m), frame) + "\n";
+  return out;
 }
 
 // What to do with the calibrated model next.
@@ -132,10 +190,7 @@ std::string next_steps(const IdentifyArgs& a, const identify::IdentifyResult& re
   } catch (const model::InputError&) {
   }
   out << "  kincal predict --model " << a.out << " --joints q.csv    # where the calibrated arm puts its tool\n";
-  const model::Transform& tool = result.model.flange_T_tool;
-  out << "  on the controller, the tool (TCP) from the last joint's frame (flange_T_tool): x "
-      << tool.translation.x() * 1e3 << ", y " << tool.translation.y() * 1e3 << ", z " << tool.translation.z() * 1e3
-      << " mm\n";
+  out << frames_lines(result.model);
   return out.str();
 }
 
@@ -346,6 +401,7 @@ int run_identify(const IdentifyArgs& a) {
     if (!a.validate.empty()) {
       held_out = model::read_dataset(a.validate);
       model::check_joint_count(nominal, held_out->joint_count, held_out->source);
+      check_held_out(*held_out, data);
     }
     if (!a.accept_implausible)
       identify::require_plausible(nominal, data, "--accept-implausible", {.noise_given = a.sigma_m > 0});
@@ -371,15 +427,22 @@ int run_identify(const IdentifyArgs& a) {
     std::cout << summary(a, result, registered, held_out ? &*held_out : nullptr,
                          calibrated_held_out ? &*calibrated_held_out : nullptr);
     if (calibrated_held_out) result.model.calibration->validation_rms_m = calibrated_held_out->rms_m;
+    // Point data determine a point: the model file says so, and `correct` then aims positions only.
+    if (!result.orientation_used && options.method != identify::Method::cpa) result.model.tool = model::ToolKind::point;
     // Every output is made before the first is written: a URDF that cannot be written leaves no --out.
     const std::string model_text = model::write_model(result.model);
     std::optional<model::CalibratedUrdf> calibrated_urdf;
     std::string urdf_text;
     if (!a.urdf.empty() && model::is_urdf_path(a.model.path)) {  // the robot's own URDF, calibrated
-      calibrated_urdf = model::write_calibrated_urdf(files::read_text(a.model.path, files::kUrdfFile), a.model.path,
-                                                     a.model.ends, result.model);
+      // With its byte-order mark, if any: every byte but the changed values is written back.
+      calibrated_urdf = model::write_calibrated_urdf(files::read_text(a.model.path, files::kOriginalUrdfFile),
+                                                     a.model.path, a.model.ends, result.model, a.marker_link);
       urdf_text = calibrated_urdf->text;
     } else if (!a.urdf.empty()) {
+      if (!a.marker_link.empty())
+        throw model::InputError(
+            "--marker-link: only with a URDF --model (the URDF made from a model file ends at "
+            "its tool)");
       urdf_text = model::write_urdf(result.model);
     }
     const std::string hand_eye_text =
@@ -433,18 +496,20 @@ void add_identify_command(CLI::App& app, int& status) {
   cmd->add_option("--report", a->report,
                   "also write an HTML report: the model selection table, each parameter's prior and posterior, the "
                   "residuals against each joint, the rejected rows with their line and id");
-  cmd->add_option("--hand-eye", a->hand_eye,
-                  "also write the identified tool and device registration as `camera hand-eye` does (OpenCV YAML)");
+  auto* hand_eye =
+      cmd->add_option("--hand-eye", a->hand_eye,
+                      "also write the identified tool and device registration as `camera hand-eye` does (OpenCV YAML)");
   cmd->add_option("--mount", a->mount,
                   "with --hand-eye: hand (a camera on the flange, the board measures) or world (a board on the flange)")
       ->check(CLI::IsMember({"hand", "world"}))
-      ->capture_default_str();
+      ->capture_default_str()
+      ->needs(hand_eye);
   cmd->add_option("--method", a->method,
                   "full (default): nonlinear least squares; first-order: Doty's linear model; "
                   "cpa: circle-point analysis")
       ->check(CLI::IsMember({"full", "first-order", "cpa"}));
-  cmd->add_option("--start", a->start, "where full starts: nominal (default) or cpa")
-      ->check(CLI::IsMember({"nominal", "cpa"}));
+  auto* start = cmd->add_option("--start", a->start, "where full starts: nominal (default) or cpa")
+                    ->check(CLI::IsMember({"nominal", "cpa"}));
   cmd->add_option("--validate", a->validate, "held-out measurements (CSV): accuracy of nominal and calibrated model");
   cmd->add_option("--fix", a->fix, "parameters held at their start value (e.g. base,theta1,tool_z)")->delimiter(',');
   cmd->add_option("--params", a->params, "identify exactly these parameters (error if the data cannot)")
@@ -457,19 +522,23 @@ void add_identify_command(CLI::App& app, int& status) {
                   "instrument orientation noise (deg) of pose measurements (default: none; the model error is "
                   "estimated on top)")
       ->check(finite_in(1e-9, 180.0));
+  auto* no_robust = cmd->add_flag("--no-robust", a->no_robust, "reject no outliers");
   cmd->add_option("--outlier-probability", a->outlier_probability,
                   "reject rows whose studentized residual is beyond this tail probability over all rows "
                   "(default 0.001)")
-      ->check(finite_in(1e-12, 0.5));
+      ->check(finite_in(1e-12, 0.5))
+      ->excludes(no_robust);
   cmd->add_option("--max-rejected-fraction", a->max_rejected_fraction,
                   "reject at most this fraction of the rows (default 0.05)")
-      ->check(finite_in(0.0, 0.5));
-  cmd->add_flag("--no-robust", a->no_robust, "reject no outliers");
-  cmd->add_option("--prior", a->prior,
-                  "prior sigma of a parameter's deviation from the nominal, NAME=SIGMA with a unit (e.g. "
-                  "a5=0.5mm,theta5=0.2deg,base_x=inf); defaults: 1 mm lengths, 0.5 deg angles, base 100 mm / 10 deg, "
-                  "tool 10 mm / 5 deg, scale 0.01; these win over the model file's priors:")
-      ->delimiter(',');
+      ->check(finite_in(0.0, 0.5))
+      ->excludes(no_robust);
+  auto* prior =
+      cmd->add_option(
+             "--prior", a->prior,
+             "prior sigma of a parameter's deviation from the nominal, NAME=SIGMA with a unit (e.g. "
+             "a5=0.5mm,theta5=0.2deg,base_x=inf); defaults: 1 mm lengths, 0.5 deg angles, base 100 mm / 10 deg, "
+             "tool 10 mm / 5 deg, scale 0.01; these win over the model file's priors:")
+          ->delimiter(',');
   cmd->add_option("--model-select", a->model_select,
                   "auto (default, with at least 100 rows): the candidate model with the lowest mean of its 5-fold and "
                   "out-of-range cross-validated RMS (registration, joint-offsets, geometry-x2, geometry, "
@@ -478,7 +547,8 @@ void add_identify_command(CLI::App& app, int& status) {
                   "geometry+scales when a joint has no scale); off: every parameter, default priors; or a "
                   "candidate's name");
   cmd->add_flag("--no-prior", a->no_prior,
-                "no priors: plain least squares (the parameters the data see poorly may run off)");
+                "no priors: plain least squares (the parameters the data see poorly may run off)")
+      ->excludes(prior);
   cmd->add_flag("--no-model-error", a->no_model_error,
                 "no model-error variance: the noise is the data's covariance (or --sigma) alone, estimated only "
                 "where nothing gives it");
@@ -487,7 +557,15 @@ void add_identify_command(CLI::App& app, int& status) {
   cmd->add_option(
       "--urdf", a->urdf,
       "also write the calibrated model as URDF (a URDF --model: that URDF with the calibrated joint origins)");
-  cmd->callback([a, &status] { status = run_identify(*a); });
+  cmd->add_option("--marker-link", a->marker_link,
+                  "with --urdf and a URDF --model: also write the measured point (the tool the data measured: a "
+                  "reflector, a marker) as a new link of this name fixed to the tip link; without it no link moves "
+                  "beyond the last movable joint and none is added");
+  cmd->callback([a, &status, start] {
+    if (start->count() > 0 && a->method != "full")
+      throw CLI::ValidationError("--start", "--start is where --method full starts: not with --method " + a->method);
+    status = run_identify(*a);
+  });
 }
 
 }  // namespace kincal::cli

@@ -85,7 +85,8 @@ int run_import(const ImportArgs& a) {
                 << " distinct values of '" << a.id
                 << "': an id does not tell its rows apart (messages name the dataset's line too)\n";
     for (const std::string& f : findings) std::cerr << "kincal import: warning: " << f << '\n';
-    if (nominal && findings.empty()) std::cout << "plausible for " << nominal->name << " (units, limits, distances)\n";
+    if (nominal && findings.empty())
+      std::cout << "plausible for " << nominal->name << " (units, limits, distances, handedness, joint order)\n";
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "kincal import: " << e.what() << '\n';
@@ -116,19 +117,26 @@ void add_import_command(CLI::App& app, int& status) {
       ->required();
   cmd->add_option("--position-std", a->position_std, "header names of the std of x, y, z (-> covariance columns)")
       ->delimiter(',');
-  cmd->add_option("--orientation", a->orientation, "header names of the three Euler angles, in the convention's order")
-      ->delimiter(',');
+  auto* orientation = cmd->add_option("--orientation", a->orientation,
+                                      "header names of the three Euler angles, in the convention's order")
+                          ->delimiter(',');
+  // The convention, unit and std of the angles mean nothing without them.
   cmd->add_option("--euler", a->euler,
-                  "Euler convention: intrinsic-xyz (R = Rx Ry Rz), extrinsic-xyz (R = Rz Ry Rx), ...");
+                  "Euler convention: intrinsic-xyz (R = Rx Ry Rz), extrinsic-xyz (R = Rz Ry Rx), ...")
+      ->needs(orientation);
   cmd->add_option("--angle-unit", a->angle_unit, "unit of the Euler angles and their std (default deg)")
-      ->check(CLI::IsMember({"rad", "deg"}));
+      ->check(CLI::IsMember({"rad", "deg"}))
+      ->needs(orientation);
   cmd->add_option("--orientation-std", a->orientation_std,
                   "header names of the Euler angles' std (checked, summarized)")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->needs(orientation);
   cmd->add_option("--id", a->id,
                   "header name of a row id or time stamp column, kept per row (the dataset's id column) and named "
                   "in messages about the row");
-  add_model_option(*cmd, a->model, "check the data against this model and warn (units, limits, distances)", false);
+  add_model_option(*cmd, a->model,
+                   "check the data against this model and warn (units, limits, distances, handedness, joint order)",
+                   false);
   cmd->callback([a, &status] { status = run_import(*a); });
 }
 

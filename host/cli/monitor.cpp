@@ -60,10 +60,12 @@ void add_monitor_command(CLI::App& app, int& status) {
   auto* can_opt = cmd->add_option("--can", options->interface, "SocketCAN interface to listen on (e.g. vcan0)");
   auto* replay_opt = cmd->add_option("--replay", options->replay, "decode this candump -L log instead");
   can_opt->excludes(replay_opt);
-  cmd->add_flag("--fd", options->fd, "also receive CAN FD frames");
-  cmd->add_option("--log", options->log, "also write what is received as a candump -L log");
+  // What a live capture does: a replay receives nothing, logs nothing and runs to the log's end.
+  cmd->add_flag("--fd", options->fd, "also receive CAN FD frames")->needs(can_opt);
+  cmd->add_option("--log", options->log, "also write what is received as a candump -L log")->needs(can_opt);
   cmd->add_option("--duration-s", options->duration_s, "stop after this many seconds (0 = until interrupted)")
-      ->check(finite_non_negative());
+      ->check(finite_non_negative())
+      ->needs(can_opt);
   cmd->callback([options, &status, can_opt, replay_opt] {
     if (can_opt->count() == 0 && replay_opt->count() == 0)
       throw CLI::ValidationError("--can/--replay", "monitor needs --can IFACE or --replay FILE");

@@ -605,21 +605,29 @@ void add_session_command(CLI::App& app, int& status) {
                   "printed board)")
       ->check(CLI::IsMember({"platform", "stereo", "camera"}))
       ->capture_default_str();
-  cmd->add_option("--plan", a->plan, "calibration poses (joints CSV, e.g. from `kincal plan`)");
-  cmd->add_option("--sweeps", a->sweeps,
-                  "single-joint sweeps with this many readings per joint (default 10 on the stereo rig and with "
-                  "--discover)")
-      ->check(whole_in(4, 1000));
-  cmd->add_option("--poses", a->poses, "random calibration poses in view (simulated robot, platform rig)")
-      ->check(whole_in(1, 10000))
-      ->capture_default_str();
+  auto* plan = cmd->add_option("--plan", a->plan, "calibration poses (joints CSV, e.g. from `kincal plan`)");
+  auto* sweeps =
+      cmd->add_option("--sweeps", a->sweeps,
+                      "single-joint sweeps with this many readings per joint (default 10 on the stereo rig and with "
+                      "--discover)")
+          ->check(whole_in(4, 1000))
+          ->excludes(plan);
+  auto* poses = cmd->add_option("--poses", a->poses, "random calibration poses in view (simulated robot, platform rig)")
+                    ->check(whole_in(1, 10000))
+                    ->capture_default_str()
+                    ->excludes(plan)
+                    ->excludes(sweeps);
   cmd->add_option("--home", a->home, "home readings of the sweeps, comma-separated (rad, m)");
-  cmd->add_option("--validation", a->validation, "random validation poses (simulated robot)")
-      ->check(whole_in(0, 10000))
-      ->capture_default_str();
-  cmd->add_option("--validation-plan", a->validation_plan, "validation poses (joints CSV)");
-  cmd->add_option("--robot", a->robot, "sim or manual")->check(CLI::IsMember({"sim", "manual"}))->capture_default_str();
-  cmd->add_option("--robot-cmd", a->robot_cmd, "command that moves the robot; {q} = the joint values");
+  auto* validation = cmd->add_option("--validation", a->validation, "random validation poses (simulated robot)")
+                         ->check(whole_in(0, 10000))
+                         ->capture_default_str();
+  cmd->add_option("--validation-plan", a->validation_plan, "validation poses (joints CSV)")->excludes(validation);
+  auto* robot = cmd->add_option("--robot", a->robot, "sim or manual")
+                    ->check(CLI::IsMember({"sim", "manual"}))
+                    ->capture_default_str();
+  cmd->add_option("--robot-cmd", a->robot_cmd,
+                  "command that moves the robot; {q} = the joint values (not with --robot)")
+      ->excludes(robot);
   cmd->add_option("--left", a->left,
                   "real stereo rig: the left camera's frames: a V4L2 device (0, /dev/video0), a video, a "
                   "directory of images or image files (a quoted pattern like 'left/*.png' is expanded); recorded "
@@ -627,22 +635,26 @@ void add_session_command(CLI::App& app, int& status) {
                   "after 4 more, so that frames queued during the move are not used")
       ->expected(1, -1);
   cmd->add_option("--right", a->right, "real stereo rig: the right camera's frames, as --left")->expected(1, -1);
-  cmd->add_option("--stereo", a->stereo,
-                  "real stereo rig: the calibrated pair (`kincal camera stereo`); positions are measured in the "
-                  "left camera's frame (x right, y down, z forward): the model's base is placed in it");
+  auto* stereo =
+      cmd->add_option("--stereo", a->stereo,
+                      "real stereo rig: the calibrated pair (`kincal camera stereo`); positions are measured in the "
+                      "left camera's frame (x right, y down, z forward): the model's base is placed in it");
   cmd->add_option("--colour-table", a->colour_table,
                   "real stereo rig: the beacon's colour class (`kincal colour-table`); without it the beacon is the "
-                  "brightest blob");
+                  "brightest blob")
+      ->needs(stereo);
   cmd->add_option("--pixel-sigma", a->pixel_sigma_px,
                   "real stereo rig: centroid noise (px) the measurements' covariance assumes; the identification "
                   "estimates any excess as model error")
       ->check(finite_positive())
-      ->capture_default_str();
+      ->capture_default_str()
+      ->needs(stereo);
   cmd->add_option("--pair-tolerance", a->pair_tolerance_s,
                   "real stereo rig: largest time difference of a left and right frame (s); image sequences are "
                   "stamped 1 s apart")
       ->check(finite_non_negative())
-      ->capture_default_str();
+      ->capture_default_str()
+      ->needs(stereo);
   cmd->add_option("--board", a->board,
                   std::string("camera rig: the printed board, ") + camera::kBoardForms +
                       " (the simulated rig renders chessboards)")
@@ -661,27 +673,34 @@ void add_session_command(CLI::App& app, int& status) {
                   "image files, one per pose of --plan then --validation-plan; a live camera's frame is taken after "
                   "4 more")
       ->expected(1, -1);
-  cmd->add_flag("--discover", a->discover,
-                "discovery session (stereo rig): sweep each joint of an unknown arm from --home, discover its model "
-                "(`kincal discover`), then identify it fully from there");
-  cmd->add_option("--joints", a->joints, "discovery: the arm's joint count")->check(whole_in(1, 16));
+  auto* discover = cmd->add_flag(
+      "--discover", a->discover,
+      "discovery session (stereo rig): sweep each joint of an unknown arm from --home, discover its model "
+      "(`kincal discover`), then identify it fully from there");
+  poses->excludes(discover);
+  // The discovery's own options mean nothing in another session.
+  cmd->add_option("--joints", a->joints, "discovery: the arm's joint count")->check(whole_in(1, 16))->needs(discover);
   cmd->add_option("--prismatic", a->prismatic, "discovery: joints (1-based) the controller moves in metres")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->needs(discover);
   cmd->add_option("--sweep-deg", a->sweep_deg, "discovery: span of each revolute joint's sweep (deg)")
       ->check(finite_in(1, 720))
-      ->capture_default_str();
+      ->capture_default_str()
+      ->needs(discover);
   cmd->add_option("--sweep-m", a->sweep_m, "discovery: span of each prismatic joint's sweep (m)")
       ->check(finite_in(1e-3, 10))
-      ->capture_default_str();
-  cmd->add_option("--discovered", a->discovered, "discovery: write the discovered model here (YAML)");
+      ->capture_default_str()
+      ->needs(discover);
+  cmd->add_option("--discovered", a->discovered, "discovery: write the discovered model here (YAML)")->needs(discover);
   cmd->add_option("--platform-camera", a->platform_camera,
                   "real platform: its camera's calibration with intrinsics_covariance (`kincal camera calibrate`); "
                   "each pose's covariance then includes the camera's share");
-  cmd->add_option("--can", a->can, "SocketCAN interface of a real platform (e.g. can0, vcan0)");
+  auto* can = cmd->add_option("--can", a->can, "SocketCAN interface of a real platform (e.g. can0, vcan0)");
   cmd->add_flag("--fd", a->fd, "CAN FD");
   cmd->add_option("--squares", a->squares, "calibration squares on the strip (real platform)")
       ->check(whole_in(1, 64))
-      ->capture_default_str();
+      ->capture_default_str()
+      ->needs(can);
   cmd->add_option("--journal", a->journal, "the session's measurement journal")->capture_default_str();
   cmd->add_flag("--resume", a->resume, "continue the journal of a stopped session");
   cmd->add_option("--out", a->out, "write the identified model here (YAML)");

@@ -20,8 +20,8 @@ std::optional<std::uint8_t> grey_level(const std::string& text) {
 
 }  // namespace
 
-void add_threshold_option(CLI::App& command, std::optional<std::uint8_t>& level) {
-  command
+CLI::Option* add_threshold_option(CLI::App& command, std::optional<std::uint8_t>& level) {
+  return command
       .add_option_function<std::string>(
           "--threshold", [&level](const std::string& text) { level = grey_level(text); },
           "Grey level N (0..255) or auto (Otsu)")

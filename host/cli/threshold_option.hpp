@@ -13,6 +13,7 @@ namespace kincal::cli {
 
 // Adds --threshold to `command` (help default "auto"). A given level is stored in `level`, which
 // the caller keeps alive while the command line is parsed; auto, given or not, leaves it empty.
-void add_threshold_option(CLI::App& command, std::optional<std::uint8_t>& level);
+// Returns the option, for the options that exclude it.
+CLI::Option* add_threshold_option(CLI::App& command, std::optional<std::uint8_t>& level);
 
 }  // namespace kincal::cli

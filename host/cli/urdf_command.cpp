@@ -16,7 +16,7 @@ namespace {
 
 struct UrdfArgs {
   ModelOption model;
-  std::string original, out;
+  std::string original, out, marker_link;
 };
 
 int run_urdf(const UrdfArgs& a) {
@@ -24,6 +24,8 @@ int run_urdf(const UrdfArgs& a) {
     files::refuse_overwriting({{"-o", a.out}}, {{"--model", a.model.path}, {"--original", a.original}});
     std::string text;
     if (a.original.empty()) {
+      if (!a.marker_link.empty())
+        throw model::InputError("--marker-link: only with --original (a URDF made from the model ends at its tool)");
       text = model::write_urdf(a.model.load());
     } else {
       // The chain options name the original's chain; a YAML model has none.
@@ -31,7 +33,8 @@ int run_urdf(const UrdfArgs& a) {
           model::load_model(a.model.path, model::is_urdf_path(a.model.path) ? a.model.ends : model::UrdfChainEnds{});
       // Read with its byte-order mark, if any: every byte but the changed values is written back.
       const std::string original = files::read_text(a.original, files::kOriginalUrdfFile);
-      const model::CalibratedUrdf c = model::write_calibrated_urdf(original, a.original, a.model.ends, m);
+      const model::CalibratedUrdf c =
+          model::write_calibrated_urdf(original, a.original, a.model.ends, m, a.marker_link);
       text = c.text;
       std::ostream& report = a.out.empty() ? std::cerr : std::cout;
       report << print_registration(c);
@@ -70,6 +73,10 @@ void add_urdf_command(CLI::App& app, int& status) {
   cmd->add_option("--original", a->original,
                   "the robot's URDF: keep it all (names, meshes, inertias) and put the model's geometry into the "
                   "joint origins of its chain (--base-link, --tip-link)");
+  cmd->add_option("--marker-link", a->marker_link,
+                  "with --original: also write the measured point (the model's tool: a reflector, a marker) as a "
+                  "new link of this name, fixed to the tip link; without it the URDF's links keep their place and "
+                  "no link is added");
   cmd->add_option("-o,--out", a->out, "output file (default: standard output)");
   cmd->callback([a, &status] { status = run_urdf(*a); });
 }

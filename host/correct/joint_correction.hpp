@@ -5,15 +5,15 @@
 // correction, host/session/online_correction.hpp).
 //
 // One correction, two places. When the two models can be read as the platform's correction block
-// (session::correction_block: same joints and link conventions, at most shared::kJoints joints;
-// identify's starting model and its result always can), correct() first runs the very step the
-// platform runs on every streamed target -- firmware/core's correct_joint_readings (damped first-
-// order step plus one chord refinement, float, through the joint map; platform_step.hpp) -- so the
-// PC and the platform give the same readings to within float rounding. Where that step leaves more than accept_m /
-// accept_rad at the tool (measured in double on the host models), or refuses (a step above 0.05 rad), correct() goes on
-// with the damped Newton solve of pose_solver.hpp on the calibrated model, from the platform's
-// readings (or from r). Without a block (models the block cannot carry) the Newton solve does it
-// all; platform_step() says which.
+// (correct::correction_block, correction_block.hpp: same joints and link conventions, at most
+// shared::kJoints joints; identify's starting model and its result always can), correct() first
+// runs the very step the platform runs on every streamed target -- firmware/core's
+// correct_joint_readings (damped first-order step plus one chord refinement, float, through the joint map;
+// platform_step.hpp) -- so the PC and the platform give the same readings to within float rounding. Where that step
+// leaves more than accept_m / accept_rad at the tool (measured in double on the host models), or refuses (a step above
+// 0.05 rad), correct() goes on with the damped Newton solve of pose_solver.hpp on the calibrated model, from the
+// platform's readings (or from r). Without a block (models the block cannot carry) the Newton solve does it all;
+// platform_step() says which.
 //
 // Costs: the platform step a few microseconds, each Newton iteration one FK and one Jacobian.
 // Not thread-safe: correct() uses the object's float workspace (one object per thread).

@@ -1,7 +1,7 @@
 #include "host/correct/platform_step.hpp"
 
 #include "firmware/app/kinematic_correction.hpp"
-#include "host/session/online_correction.hpp"
+#include "host/correct/correction_block.hpp"
 
 namespace kincal::correct {
 
@@ -12,7 +12,7 @@ struct PlatformStep::Model {
 
 PlatformStep::PlatformStep(const model::RobotModel& controller, const model::RobotModel& calibrated)
     : m_(std::make_unique<Model>()) {
-  switch (app::prepare_block(session::correction_block(controller, calibrated), m_->prepared)) {
+  switch (app::prepare_block(correction_block(controller, calibrated), m_->prepared)) {
     case app::PrepareStatus::kOk:
       break;
     case app::PrepareStatus::kNotAChain:

@@ -1,5 +1,5 @@
 // The platform's online correction step on the host (issue #24): the correction block of two host
-// models (session::correction_block) read by the platform's own app::prepare_block
+// models (correct::correction_block, correction_block.hpp) read by the platform's own app::prepare_block
 // (firmware/app/kinematic_correction.hpp) and applied with
 // core::correct_joint_readings -- the same float code the platform runs, without the protocol's
 // 2^-16 rad quantization of the result. joint_correction.hpp builds on it; tests compare it with

@@ -55,6 +55,8 @@ const char* outcome_name(Outcome outcome) {
       return "out-of-reach";
     case Outcome::singularity:
       return "singularity";
+    case Outcome::joint_change_limit:
+      return "joint-change-limit";
     case Outcome::not_converged:
       break;
   }

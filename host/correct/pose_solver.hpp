@@ -50,9 +50,12 @@ struct SolveOptions {
   double stall_cosine = 1e-2;
 };
 
-enum class Outcome { reached, joint_limit, out_of_reach, singularity, not_converged };
+// joint_change_limit is the target corrector's (target_correction.hpp), never solve_pose's: the
+// target was reached only by moving a joint more than the caller allows.
+enum class Outcome { reached, joint_limit, out_of_reach, singularity, not_converged, joint_change_limit };
 
-// "reached", "joint-limit", "out-of-reach", "singularity", "not-converged" (as files and messages write it).
+// "reached", "joint-limit", "out-of-reach", "singularity", "not-converged", "joint-change-limit"
+// (as files and messages write it).
 const char* outcome_name(Outcome outcome);
 
 struct Solution {

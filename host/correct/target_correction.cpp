@@ -1,6 +1,7 @@
 #include "host/correct/target_correction.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
 
@@ -8,13 +9,15 @@ namespace kincal::correct {
 
 TargetCorrector::TargetCorrector(const model::RobotModel& nominal, const model::RobotModel& calibrated,
                                  TargetFrame frame, std::optional<ParameterCovariance> covariance,
-                                 const JointCorrectionOptions& options)
+                                 const JointCorrectionOptions& options, const JointChangeLimit& limit)
     : nominal_arm_(nominal),
       calibrated_(calibrated),
       frame_(frame),
       covariance_(std::move(covariance)),
       joints_(nominal, calibrated, options),
-      cartesian_(nominal, calibrated, frame, options.solve) {
+      cartesian_(nominal, calibrated, frame, options.solve),
+      limit_(limit),
+      orientation_(options.orientation) {
   nominal_arm_.base_T_frame0 = model::Transform{};  // commands are in the robot's base frame
 }
 
@@ -31,6 +34,7 @@ std::vector<TargetResult> TargetCorrector::correct(const std::vector<Target>& ta
       r.platform_step_used = c.platform_step_used;
       r.refined = c.refined;
       r.nominal = t.q;
+      limit_change(r, t.q, joints_.calibrated_arm(), c.goal, orientation_);
     } else {
       const std::vector<double>& start = t.q.empty() ? seed : t.q;
       if (start.empty())
@@ -41,6 +45,9 @@ std::vector<TargetResult> TargetCorrector::correct(const std::vector<Target>& ta
       r.solution = c.calibrated;
       r.command = model::forward_kinematics(nominal_arm_, r.solution.q);
       r.nominal = c.nominal.outcome == Outcome::reached ? c.nominal.q : start;
+      limit_change(r, r.nominal, cartesian_.calibrated_arm(), cartesian_.in_base(t.pose), t.orientation);
+      if (r.solution.outcome == Outcome::joint_change_limit)
+        r.command = model::forward_kinematics(nominal_arm_, r.solution.q);
     }
     if (covariance_)
       r.spread =
@@ -49,6 +56,25 @@ std::vector<TargetResult> TargetCorrector::correct(const std::vector<Target>& ta
     results.push_back(std::move(r));
   }
   return results;
+}
+
+void TargetCorrector::limit_change(TargetResult& r, const std::vector<double>& reference, const model::RobotModel& arm,
+                                   const model::Transform& goal, bool orientation) const {
+  for (std::size_t i = 0; i < reference.size() && i < r.solution.q.size(); ++i) {
+    const double change = std::abs(r.solution.q[i] - reference[i]);
+    const double limit = arm.joints[i].type == core::JointType::prismatic ? limit_.prismatic_m : limit_.revolute_rad;
+    if (change / limit <= r.change_over_limit) continue;
+    r.change_over_limit = change / limit;
+    r.change_joint = static_cast<int>(i);
+    r.change = change;
+  }
+  if (r.change_over_limit <= 1.0 || r.solution.outcome != Outcome::reached) return;
+  r.solution.outcome = Outcome::joint_change_limit;
+  r.solution.q = reference;
+  Eigen::Matrix<double, 6, 1> e = pose_residual(goal, model::forward_kinematics(arm, reference));
+  if (!orientation) e.tail<3>().setZero();
+  r.solution.residual_m = e.head<3>().norm();
+  r.solution.residual_rad = e.tail<3>().norm();
 }
 
 std::string summary_line(const std::vector<TargetResult>& results) {
@@ -71,10 +97,13 @@ std::string summary_line(const std::vector<TargetResult>& results) {
     separator = ", ";
   }
   char text[256];
-  std::snprintf(
-      text, sizeof text,
-      " (joint targets: %d by the platform's step alone, %d by the Newton solve); largest residual %.4f mm, %.4f mrad",
-      stepped, refined, residual_m * 1e3, residual_rad * 1e3);
+  if (stepped > 0)  // the platform's step is named only where it ran
+    std::snprintf(text, sizeof text, " (joint targets: %d by the platform's step alone, %d by the Newton solve)",
+                  stepped, refined);
+  else
+    std::snprintf(text, sizeof text, " (joint targets: %d by the Newton solve)", refined);
+  out += text;
+  std::snprintf(text, sizeof text, "; largest residual %.4f mm, %.4f mrad", residual_m * 1e3, residual_rad * 1e3);
   out += text;
   if (!spread.empty()) {
     std::sort(spread.begin(), spread.end());

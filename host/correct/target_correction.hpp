@@ -8,9 +8,18 @@
 // "SOURCE:LINE: ..."). Each result carries the predicted spread when a parameter covariance is
 // given (prediction_spread.hpp: base parameters counted for Cartesian targets in the device frame
 // only). Not thread-safe (the joint corrector's workspace).
+//
+// The joint-change limit (issue #42): a calibration moves a tool by millimetres, so its
+// correction moves joints by tenths of a degree. A target whose correction changes a joint by
+// more than the limit (from a joint target's own readings, or from the controller's solution of a
+// Cartesian target; with a starting point that is not that solution: from the seed) is reached
+// on a different branch or through a model that does not fit the arm -- a 105 degree swing, not a
+// correction. It is refused: outcome joint_change_limit, the readings left as they were (the
+// reference), the residual theirs, and the joint and its change named in the result.
 #pragma once
 
 #include <cstddef>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <vector>
@@ -34,11 +43,22 @@ struct Target {
   bool orientation = false;
 };
 
+// The most a correction may change a joint's reading (see the top).
+struct JointChangeLimit {
+  double revolute_rad = 5.0 * std::numbers::pi / 180.0;
+  double prismatic_m = 5e-3;
+};
+
 struct TargetResult {
   Solution solution;                                 // the readings to send, outcome and residual (frame 0 to tool)
   bool platform_step_used = false, refined = false;  // joint targets: as JointCorrection
   std::optional<PoseSpread> spread;
   std::vector<double> nominal;  // the controller's readings for the target (the next one's seed)
+  // The largest change of a reading from the reference, as a fraction of the limit, and its joint
+  // (0-based) and size (rad or m).
+  double change_over_limit = 0.0;
+  int change_joint = 0;
+  double change = 0.0;
   // Cartesian targets: the pose to command a controller that computes with the nominal model,
   // FK_nominal(solution.q) in frame 0 -- its own inverse kinematics then gives solution.q, and
   // the real arm puts the tool on the target (a movel stays a movel).
@@ -48,7 +68,8 @@ struct TargetResult {
 class TargetCorrector {
  public:
   TargetCorrector(const model::RobotModel& nominal, const model::RobotModel& calibrated, TargetFrame frame,
-                  std::optional<ParameterCovariance> covariance, const JointCorrectionOptions& options = {});
+                  std::optional<ParameterCovariance> covariance, const JointCorrectionOptions& options = {},
+                  const JointChangeLimit& limit = {});
 
   std::vector<TargetResult> correct(const std::vector<Target>& targets, const std::vector<double>& first_seed,
                                     const std::string& source);
@@ -61,9 +82,17 @@ class TargetCorrector {
   std::optional<ParameterCovariance> covariance_;
   JointCorrector joints_;
   CartesianSolver cartesian_;
+  JointChangeLimit limit_;
+  bool orientation_ = true;  // joint targets: the tool's orientation corrected too
+
+  // Fills r's change fields against `reference`; refuses r (see the top) beyond the limit, with
+  // its residual to `goal` (frame 0) on `arm`.
+  void limit_change(TargetResult& r, const std::vector<double>& reference, const model::RobotModel& arm,
+                    const model::Transform& goal, bool orientation) const;
 };
 
-// One line for a run: counts by outcome, how joint targets were corrected, the largest residual,
+// One line for a run: counts by outcome, how joint targets were corrected (the platform's step
+// named only when it ran), the largest residual,
 // the predicted spread's median and maximum. E.g. "12 targets: 12 reached (12 by the platform's
 // step, 0 refined by the Newton solve); largest residual 0.000 mm, 0.000 mrad; predicted position
 // sd median 0.031 mm, max 0.054 mm".

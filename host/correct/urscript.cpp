@@ -1,7 +1,10 @@
 #include "host/correct/urscript.hpp"
 
+#include <charconv>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
+#include <string_view>
 
 #include <Eigen/Geometry>
 
@@ -143,6 +146,9 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
         values.push_back(parse_cell(code_text.substr(from, comma - from),
                                     call.name + " value " + std::to_string(values.size() + 1), source, number,
                                     where(from)));
+        std::size_t value_end = comma;
+        while (value_end > from && (code_text[value_end - 1] == ' ' || code_text[value_end - 1] == '\t')) --value_end;
+        m.values.emplace_back(start + skip_blanks(code_text, from), start + value_end);
         from = comma + 1;
       }
       if (pose && values.size() != 6)
@@ -177,10 +183,19 @@ std::string write_urscript(const UrProgram& program, const std::vector<std::vect
   std::size_t copied = 0;
   for (std::size_t i = 0; i < values.size(); ++i) {
     const UrMotion& m = program.motions[i];
-    out.append(program.text, copied, m.begin - copied);
-    for (std::size_t k = 0; k < values[i].size(); ++k)
-      out += (k ? ", " : "") + model::shortest_number_text(values[i][k]);
-    copied = m.end;
+    if (values[i].size() != m.values.size())
+      throw std::invalid_argument("write_urscript: " + std::to_string(values[i].size()) + " values for motion " +
+                                  std::to_string(i + 1) + ", which has " + std::to_string(m.values.size()));
+    for (std::size_t k = 0; k < values[i].size(); ++k) {
+      const auto [begin, end] = m.values[k];
+      out.append(program.text, copied, begin - copied);
+      const std::string_view old(program.text.data() + begin, end - begin);
+      double was = 0.0;
+      const bool unchanged = std::from_chars(old.data(), old.data() + old.size(), was).ec == std::errc() &&
+                             was == values[i][k];  // as read (parse_cell): keeps its spelling
+      out += unchanged ? std::string(old) : model::shortest_number_text(values[i][k]);
+      copied = end;
+    }
   }
   out.append(program.text, copied, std::string::npos);
   return out;

@@ -15,16 +15,18 @@
 // (movej(home)): its value is not known before the program runs, and a target left uncorrected
 // would be silent.
 //
-// Written: the program's bytes unchanged but for the text between each target's brackets, which
-// becomes the new values (shortest exact decimal, ", " between them). Line ends (LF, CRLF),
-// comments, blank lines and every other line are kept byte for byte, a UTF-8 byte-order mark
-// too (files::kProgramFile keeps it).
+// Written: the program's bytes unchanged but for each target value's own bytes, which become the
+// new value (its shortest exact decimal; a value that did not change keeps its spelling). So the
+// commas, spaces and tabs inside the brackets, line ends (LF, CRLF, mixed, none after the last
+// line), comments, blank lines and every other line are kept byte for byte, a UTF-8 byte-order
+// mark too (files::kProgramFile keeps it).
 // The text comes from files::read_text (kProgramFile).
 #pragma once
 
 #include <cstddef>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "host/correct/target_correction.hpp"
@@ -35,6 +37,8 @@ struct UrMotion {
   std::string call;                // movej, movel, movep, servoj
   Target target;                   // line, cartesian, q or pose (orientation always)
   std::size_t begin = 0, end = 0;  // byte range of the values between the brackets in the text
+  // Byte range of each value in the text (the number alone, without the blanks around it).
+  std::vector<std::pair<std::size_t, std::size_t>> values;
 };
 
 struct UrProgram {
@@ -49,7 +53,8 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
                          std::size_t max_motions = kMaxTargets);
 
 // The program with each motion's values replaced: values[i] for motions[i] (joint readings for a
-// joint target, x,y,z,rx,ry,rz for a pose). Throws std::invalid_argument when the counts differ.
+// joint target, x,y,z,rx,ry,rz for a pose). Throws std::invalid_argument when the counts differ
+// (motions, or values of a motion).
 std::string write_urscript(const UrProgram& program, const std::vector<std::vector<double>>& values);
 
 // The new values of each motion from the corrector's results: the corrected readings for joint

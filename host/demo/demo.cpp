@@ -103,16 +103,20 @@ void print_accuracy(std::ostream& out, const char* label, const identify::Accura
   out << "\n";
 }
 
-// The identified parameters beside the truth (lengths in mm, angles in deg).
+// The identified parameters beside the truth (lengths in mm, angles in deg). An identified
+// parameter also carries what the held-fixed ones it absorbs are off by, so it is compared with
+// the truth in its own gauge (the true tool poses fitted in the identified parameters:
+// ParameterRow::identifiable_truth); the truth's own value is beside it, with what it absorbs.
 void print_parameters(std::ostream& out, const report::Run& run) {
-  out << "  parameter        nominal      identified  +- 1 sigma        truth   (mm, deg)\n";
+  out << "  parameter        nominal      identified  +- 1 sigma  truth, this gauge   truth itself   (mm, deg)\n";
   for (const report::ParameterRow& p : run.parameters) {
     const bool angle = p.quantity == report::Quantity::angle_rad;
     const double k = angle ? 180.0 / std::numbers::pi : 1e3;
-    char line[160];
-    std::snprintf(line, sizeof line, "  %-10s %12.4f %14.4f %11.4f %12.4f\n", p.name.c_str(), p.nominal * k,
-                  p.identified * k, p.stddev.value_or(0.0) * k, p.truth.value_or(NAN) * k);
-    out << line;
+    char line[200];
+    std::snprintf(line, sizeof line, "  %-10s %12.4f %14.4f %11.4f %18.4f %14.4f", p.name.c_str(), p.nominal * k,
+                  p.identified * k, p.stddev.value_or(0.0) * k, p.identifiable_truth.value_or(NAN) * k,
+                  p.truth.value_or(NAN) * k);
+    out << line << (p.absorbs.empty() ? "" : "   absorbs " + p.absorbs) << '\n';
   }
 }
 

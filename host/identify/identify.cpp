@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "host/identify/cpa.hpp"
+#include "host/identify/measured_point.hpp"
 #include "host/identify/model_selection.hpp"
 #include "host/identify/statistics.hpp"
 #include "host/model/axes.hpp"
@@ -228,7 +229,8 @@ struct SolveSummary {
 };
 
 // Plain least squares: outliers are handled by the leverage-aware rejection (a robust loss
-// would bias the variance components the noise model estimates from the same residuals).
+// would bias the variance components the noise model estimates from the same residuals). Within
+// the physical bounds (problem.hpp), which `delta` must meet on entry.
 SolveSummary solve_ceres(Parameterization& p, const model::Dataset& data, const Weights& w,
                          const std::vector<int>& rows, const Eigen::VectorXd& prior_weight,
                          const Eigen::VectorXd& prior_centre, int max_iterations, std::vector<double>& delta) {
@@ -239,6 +241,9 @@ SolveSummary solve_ceres(Parameterization& p, const model::Dataset& data, const 
   }
   if ((prior_weight.array() > 0.0).any())
     problem.AddResidualBlock(new PriorCost(prior_weight, prior_centre), nullptr, delta.data());
+  const Eigen::VectorXd lower = physical_lower_bounds(p);
+  for (Eigen::Index k = 0; k < lower.size(); ++k)
+    if (std::isfinite(lower(k))) problem.SetParameterLowerBound(delta.data(), static_cast<int>(k), lower(k));
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::DENSE_QR;
   options.max_num_iterations = max_iterations;
@@ -492,6 +497,10 @@ RobotModel reparameterize_for_identification(const RobotModel& m, double toleran
     notes->push_back(
         "the modified-DH chain has nearly parallel consecutive axes; rewritten as DH/Doty from its axes "
         "(same kinematics) for identification");
+  // Frame n moved on the last body: the flange (robot_model.hpp) keeps its place on that body.
+  const Transform frame_n = tool * m.flange_T_tool.inverse();
+  const Transform frame_n_rewritten = model::forward_kinematics(rewritten, zero) * rewritten.flange_T_tool.inverse();
+  rewritten.frame_n_T_flange = frame_n_rewritten.inverse() * frame_n * m.frame_n_T_flange;
   return rewritten;
 }
 
@@ -553,6 +562,8 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
   const bool base_free = std::none_of(options.fixed.begin(), options.fixed.end(),
                                       [](const std::string& f) { return f.starts_with("base"); });
   if (base_free && options.requested.empty()) register_base(result.start, data, result.notes);
+  const Transform tool_before_estimate = result.start.flange_T_tool;  // the record's tool changes are from here
+  result.start = with_estimated_measured_point(result.start, data, options, result.orientation_used, result.notes);
 
   const double orientation_given2 = result.orientation_sigma_rad * result.orientation_sigma_rad;
   // Start: 1 mm and 1 mrad of model error (the scale of real arms), refined from the residuals.
@@ -614,15 +625,18 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
 
   Parameterization param(result.start, ids);
   std::vector<double> delta(static_cast<std::size_t>(p), 0.0);
-  result.prior_sigma = prior_sigmas(options.prior, ids, n, "prior");
+  const Eigen::VectorXd default_sigma = prior_sigmas(options.prior, ids, n, "prior");
+  result.prior_sigma = default_sigma;
+  result.prior_scales = initial_prior_scales(options.prior, ids, n);
   result.prior_centre = Eigen::VectorXd::Zero(p);
   if (options.start == Start::cpa && options.prior.strength > 0.0)
     result.prior_centre = nominal_in_start(nominal, data, options, param, base_free && options.requested.empty(),
                                            result.orientation_used, result.notes);
-  const Eigen::VectorXd prior_weight = prior_weights(options.prior, result.prior_sigma);
+  Eigen::VectorXd prior_weight = prior_weights(options.prior, result.prior_sigma);
   const double negligible_position2 = 1e-6 * result.median_instrument_sigma_m * result.median_instrument_sigma_m;
 
-  // Solve, estimate the model error from the residuals (REML), re-weight, until it settles.
+  // Solve, estimate the model error from the residuals (REML) and the priors' widths
+  // (prior_scale.hpp), re-weight, until both settle.
   const auto fit = [&] {
     for (int pass = 0; pass < 20; ++pass) {
       weights = noise_weights(instrument, components, result.orientation_used);
@@ -635,7 +649,8 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
         stacked(param, data, weights, rows, r, &j);
         append_prior(prior_weight, result.prior_centre, delta, r, j);
         const Eigen::VectorXd step = j.colPivHouseholderQr().solve(-r);
-        for (int k = 0; k < p; ++k) delta[static_cast<std::size_t>(k)] = step(k);
+        const Eigen::VectorXd lower = physical_lower_bounds(param);  // the step projected onto them
+        for (int k = 0; k < p; ++k) delta[static_cast<std::size_t>(k)] = std::max(step(k), lower(k));
         param.set(delta);
         result.iterations = 1;
         result.termination = "one linear step (first-order model)";
@@ -646,20 +661,30 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
         result.termination = s.termination;
       }
       ++result.noise_passes;
-      if (!result.model_error_estimated) return;
-      Eigen::VectorXd e;
-      Eigen::MatrixXd j;
-      linearize(param, data, rows, result.orientation_used, e, j);
-      const Components next = reml(e, j, rows, instrument, orientation_given2, components, estimate_position,
-                                   estimate_orientation, size, negligible_position2);
+      if (!result.model_error_estimated && !result.prior_scales.estimated) return;
+      Components next = components;
+      if (result.model_error_estimated) {
+        Eigen::VectorXd e;
+        Eigen::MatrixXd j;
+        linearize(param, data, rows, result.orientation_used, e, j);
+        next = reml(e, j, rows, instrument, orientation_given2, components, estimate_position, estimate_orientation,
+                    size, negligible_position2);
+      }
+      const PriorScales scales =
+          update_prior_scales(param, delta, data, noise_weights(instrument, next, result.orientation_used), rows,
+                              result.prior_centre, default_sigma, options.prior, result.prior_scales);
       const auto moved = [](double a2, double b2) {
         return std::abs(std::sqrt(a2) - std::sqrt(b2)) > 1e-3 * std::sqrt(std::max(a2, b2));
       };
-      const bool settled =
-          !moved(next.position2, components.position2) && !moved(next.orientation2, components.orientation2);
+      const bool settled = !moved(next.position2, components.position2) &&
+                           !moved(next.orientation2, components.orientation2) &&
+                           !scales_moved(scales, result.prior_scales, 1e-3);
       components = next;
+      result.prior_scales = scales;
+      result.prior_sigma = scaled_sigmas(default_sigma, scales);
+      prior_weight = prior_weights(options.prior, result.prior_sigma);
       if (settled) break;
-      if (pass == 19) result.notes.push_back("the model-error estimate did not settle in 20 passes");
+      if (pass == 19) result.notes.push_back("the model-error and prior-width estimates did not settle in 20 passes");
     }
     weights = noise_weights(instrument, components, result.orientation_used);
   };
@@ -751,10 +776,11 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
     Eigen::MatrixXd j;
     stacked(param, data, noise_weights(instrument, c, out.orientation_used), used, r, &j);
     {
-      const Eigen::MatrixXd info = j.transpose() * j + Eigen::MatrixXd(prior_weight.cwiseAbs2().asDiagonal());
+      const Eigen::VectorXd w = prior_weights(options.prior, out.prior_sigma);  // the result's own widths
+      const Eigen::MatrixXd info = j.transpose() * j + Eigen::MatrixXd(w.cwiseAbs2().asDiagonal());
       out.covariance = info.ldlt().solve(Eigen::MatrixXd::Identity(info.rows(), info.cols()));
       out.stddev = out.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-      out.prior_share = out.covariance.diagonal().cwiseProduct(prior_weight.cwiseAbs2()).cwiseMin(1.0);
+      out.prior_share = out.covariance.diagonal().cwiseProduct(w.cwiseAbs2()).cwiseMin(1.0);
     }
     out.change = Eigen::Map<const Eigen::VectorXd>(at.data(), p);
     const double dof = static_cast<double>(r.size()) - p;
@@ -769,9 +795,13 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
     record.data = data.source;
     record.measurements = static_cast<int>(used.size());
     record.rms_residual_m = out.residuals.rms_m;
-    for (int k = 0; k < p; ++k)
-      record.parameters.push_back(
-          {model::parameter_name(ids[static_cast<std::size_t>(k)]), out.change(k), out.stddev(k)});
+    const Eigen::Matrix<double, 6, 1> tool_change = small_motion(tool_before_estimate, out.model.flange_T_tool);
+    for (int k = 0; k < p; ++k) {
+      const core::ParameterId id = ids[static_cast<std::size_t>(k)];
+      const bool tool = model::is_motion_parameter(id.kind) && id.kind >= core::ParameterKind::tool_x;
+      const int t = static_cast<int>(id.kind) - static_cast<int>(core::ParameterKind::tool_x);
+      record.parameters.push_back({model::parameter_name(id), tool ? tool_change(t) : out.change(k), out.stddev(k)});
+    }
     for (const HeldFixed& h : out.identifiability.held_fixed) record.held_fixed.push_back(model::parameter_name(h.id));
     out.model.calibration = record;
   };
@@ -946,6 +976,7 @@ std::string format_report(const IdentifyResult& r) {
     for (const HeldFixed& h : r.identifiability.held_fixed)
       out << "  held fixed: " << model::parameter_name(h.id) << " (" << h.reason << ")\n";
     out << format_noise(r);
+    out << format_prior_scales(r.prior_scales);
     if (std::any_of(r.identifiability.identified.begin(), r.identifiability.identified.end(),
                     [](const core::ParameterId& id) { return model::is_motion_parameter(id.kind); }))
       out << "frames: base_* move frame 0 along and about its own axes (base_T_frame0 * [exp(r), t]); tool_* move "

@@ -69,6 +69,15 @@
 // dependencies (identifiability.hpp) are still held fixed: the data cannot split them, so the
 // prior alone would. Each parameter's prior share of its posterior information is reported, and
 // a change beyond 3 prior sigmas is flagged in the report.
+// The widths of the priors' classes (link lengths, link angles, registration, measured point,
+// non-geometric) are the data's (prior_scale.hpp, issue #41): each noise pass, after the REML of
+// s_p and s_o, the evidence chooses each class's scale of its default widths at the solution, and
+// the next solve uses them, until the noise and the widths both settle; the report says what each
+// class got and why. Parameters whose prior the user named keep it.
+//
+// Physical bounds (problem.hpp, issue #41): a compliance never goes negative (a Ceres lower
+// bound; the first-order step projected), so every model identify writes loads in predict,
+// correct, export and urdf.
 //
 // Every method reports: the identifiable parameters and those held fixed with the reason
 // (identifiability.hpp: rank of the whitened Jacobian at the start), each identified
@@ -80,6 +89,11 @@
 // parameters are requested): when the model's tool points are more than 5 cm RMS from the data
 // (the base a placeholder for the device-to-robot registration), the rigid motion that best maps
 // them onto the measurements (Umeyama) is composed into the start's base, with a note.
+//
+// The measured point before deciding (full and first-order; measured_point.hpp): the start's
+// registration and tool are fitted at its geometry first, so that what the data identify is decided
+// where the data were measured (a reflector off the last axis sees that axis' tilt), and the tool's
+// prior is about that estimate.
 //
 // Reparameterization before solving: standard-DH links whose consecutive axes are within
 // parallel_tolerance_rad of parallel become Doty links (beta = 0: the same transform exactly),
@@ -102,6 +116,7 @@
 
 #include "host/identify/identifiability.hpp"
 #include "host/identify/prior.hpp"
+#include "host/identify/prior_scale.hpp"
 #include "host/identify/problem.hpp"
 #include "host/model/dataset.hpp"
 #include "host/model/robot_model.hpp"
@@ -125,7 +140,8 @@ struct IdentifyOptions {
   bool rejection_gate = true;  // cross-validation decides whether rejections stand (see above)
   int max_iterations = 100;
   double parallel_tolerance_rad = 0.1;
-  PriorOptions prior;  // MAP with these priors (prior.hpp); prior.strength = 0: least squares
+  PriorOptions prior;                   // MAP with these priors (prior.hpp); prior.strength = 0: least squares
+  bool estimate_measured_point = true;  // the measured point first (measured_point.hpp, issue #42)
 };
 
 // Position (and orientation) errors of a model against measurements.
@@ -173,7 +189,8 @@ struct IdentifyResult {
   Identifiability identifiability;
   Eigen::VectorXd change;  // of identifiability.identified, SI
   Eigen::VectorXd stddev;
-  Eigen::VectorXd prior_sigma;     // of change, SI; infinity where there is none
+  Eigen::VectorXd prior_sigma;     // of change, SI; infinity where there is none (as the data scaled it)
+  PriorScales prior_scales;        // the width each class of priors was given, and why (prior_scale.hpp)
   Eigen::VectorXd prior_centre;    // of change, SI: the nominal in the start's parameters (0 from the nominal)
   Eigen::VectorXd prior_share;     // of each parameter's posterior information, 0..1 (1 - data share)
   AccuracyStats residuals;         // over the measurements used

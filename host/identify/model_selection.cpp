@@ -16,10 +16,12 @@ namespace kincal::identify {
 
 namespace {
 
+// strength != 1: the default widths times 1 / strength, fixed (the data do not rescale them).
 Candidate make(std::string name, std::string description, const RobotModel& model, const IdentifyOptions& base,
                double strength, const std::vector<std::string>& fixed) {
   Candidate c{std::move(name), std::move(description), model, base};
   c.options.prior.strength *= strength;
+  if (strength != 1.0) c.options.prior.estimate_scales = false;
   c.options.fixed.insert(c.options.fixed.end(), fixed.begin(), fixed.end());
   return c;
 }
@@ -107,9 +109,12 @@ std::vector<Candidate> candidate_models(const RobotModel& nominal, const Identif
   std::vector<Candidate> out{
       make("registration", "base and tool only, the geometry nominal", nominal, base, 1.0, registration),
       make("joint-offsets", "base, tool and each joint's zero offset", nominal, base, 1.0, offsets),
-      make("geometry-x2", "every geometric parameter, priors twice as strong", nominal, base, 2.0, joint_map),
-      make("geometry", "every geometric parameter, the default priors", nominal, base, 1.0, joint_map),
-      make("geometry-x0.5", "every geometric parameter, priors half as strong", nominal, base, 0.5, joint_map),
+      make("geometry-x2", "every geometric parameter, the default priors twice as strong", nominal, base, 2.0,
+           joint_map),
+      make("geometry", "every geometric parameter, the priors' widths chosen by the data", nominal, base, 1.0,
+           joint_map),
+      make("geometry-x0.5", "every geometric parameter, the default priors half as strong", nominal, base, 0.5,
+           joint_map),
       make("geometry-noprior", "every geometric parameter, no priors", nominal, base, 0.0, joint_map)};
   if (!joint_map.empty())
     out.push_back(make("geometry+nongeometric", "every parameter with the model file's scales and compliances", nominal,

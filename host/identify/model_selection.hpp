@@ -4,10 +4,11 @@
 // Candidates (candidate_models), from the smallest model to the largest:
 //   registration        the base and the tool only, the geometry nominal
 //   joint-offsets       and each joint's zero offset (theta<i>)
-//   geometry-x2         every geometric parameter, the priors twice as strong (sigmas halved)
-//   geometry            every geometric parameter, the default priors (prior.hpp): the default
-//                       before model selection
-//   geometry-x0.5       the priors half as strong (sigmas doubled)
+//   geometry-x2         every geometric parameter, the default priors twice as strong (sigmas
+//                       halved), fixed
+//   geometry            every geometric parameter, the priors' widths chosen by the data
+//                       (prior_scale.hpp): the default before model selection
+//   geometry-x0.5       the default priors half as strong (sigmas doubled), fixed
 //   geometry-noprior    no priors: plain least squares
 //   geometry+nongeometric  every parameter, the model file's scale<i>/compliance<i> included
 //                       (only when the model has them; the geometry candidates hold them fixed)
@@ -22,7 +23,11 @@
 //                       set the readings' scales are identified to about 0.01 % and differ from 1
 //                       by up to 0.09 %
 // Each is the caller's options (noise, rejection, --fix, --prior) with the candidate's fixed
-// parameters added and its prior strength multiplied.
+// parameters added and its prior strength multiplied. Every candidate but geometry-x2 and
+// geometry-x0.5 lets the data choose its priors' widths (prior_scale.hpp); those two keep the
+// default widths, halved and doubled, so that cross-validation can overrule the evidence. The
+// solve keeps every candidate within the physical bounds (problem.hpp: compliances never
+// negative), so that each writes a model every command accepts.
 //
 // Scores, position errors of rows the candidate was not identified from (nothing is tuned on
 // other data):

@@ -5,9 +5,12 @@
 #include <cstdio>
 #include <numbers>
 #include <optional>
+#include <utility>
 
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
+
+#include "host/identify/data_mistakes.hpp"
 
 namespace kincal::identify {
 
@@ -212,6 +215,7 @@ std::vector<std::string> implausibilities(const model::RobotModel& nominal, cons
   check_positions(data, p, found);
   check_orientations(data, p, found);
   check_exact_fit(data, p, options, found);
+  for (std::string& f : frame_mistakes(nominal, data)) found.push_back(std::move(f));
   return found;
 }
 

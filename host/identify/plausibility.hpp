@@ -20,6 +20,7 @@
 //   exact fit     the nominal model reproduces every point within 1e-9 m and the data carry no
 //                 noise (no sigma/covariance columns, no --sigma): no noise level or uncertainty
 //                 can be estimated from it (data made by `kincal predict`?).
+//   mirror, swapped joint columns   data_mistakes.hpp: fits, not scales.
 //
 // Cost: one forward kinematics per row. Finds nothing on data too short to compare (< 3 pairs).
 #pragma once

@@ -22,6 +22,9 @@
 // `sigma` overrides a parameter by name (--prior on the command line, `priors:` in the model
 // file); `strength` multiplies every 1 / sigma (0: no prior at all, the plain least squares of
 // before).
+// These are the classes' default widths: identify scales each class to what its data call for
+// (prior_scale.hpp: the evidence, type-II maximum likelihood), unless estimate_scales is off; a
+// sigma named in `sigma` is kept as given.
 //
 // The deviations are counted from the nominal after reparameterization and base registration
 // (identify.hpp), whatever the start: with --start cpa the solve starts from cpa's fit and the
@@ -50,6 +53,11 @@ struct PriorOptions {
   double tool_angle_rad = 5.0 * std::numbers::pi / 180.0;
   double scale = 0.01;
   double compliance = std::numeric_limits<double>::infinity();
+  // The data choose each class's width (prior_scale.hpp), within [min_scale, max_scale] times
+  // the sigmas above; off: the widths above as they are.
+  bool estimate_scales = true;
+  double min_scale = 0.1;
+  double max_scale = 100.0;
   // Per-parameter sigmas (SI: m, rad, 1, rad/(N m)), by parameter name (theta5, a2, base_x,
   // tool_rz, scale3, ...); later entries win. Infinity: no prior on that parameter.
   std::vector<std::pair<std::string, double>> sigma;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <Eigen/Geometry>
@@ -166,6 +167,14 @@ Transform Parameterization::pose(std::span<const double> q, Eigen::MatrixXd* jac
     motion_corrected(e, *jacobian);
   }
   return frames.base_T_tool;
+}
+
+Eigen::VectorXd physical_lower_bounds(const Parameterization& p) {
+  Eigen::VectorXd lower = Eigen::VectorXd::Constant(p.size(), -std::numeric_limits<double>::infinity());
+  for (std::size_t k = 0; k < p.ids().size(); ++k)
+    if (p.ids()[k].kind == model::kJointCompliance)
+      lower(static_cast<Eigen::Index>(k)) = -p.start().joints.at(p.ids()[k].link).compliance.value_or(0.0);
+  return lower;
 }
 
 std::vector<Matrix6> instrument_covariances(const model::Dataset& data, double sigma_m, double orientation_sigma_rad) {

@@ -83,6 +83,13 @@ Eigen::Vector3d so3_log(const Eigen::Matrix3d& r);
 // b = a * [exp(r), t], so t is in a's axes.
 Eigen::Matrix<double, 6, 1> small_motion(const Transform& a, const Transform& b);
 
+// The physical bounds of the parameters (issue #41: every file identify writes is one every
+// command accepts): the lowest change of each of p's parameters, -infinity for none. A joint's
+// compliance must not be negative (model files refuse it: a joint yields with its load), so a
+// compliance<i> change is at least minus the start's value; the solve keeps to it (Ceres bounds;
+// the first-order step is projected onto it). Masses are the model's, never identified.
+Eigen::VectorXd physical_lower_bounds(const Parameterization& p);
+
 using Matrix6 = model::Matrix6;
 
 // The whitening of every row: residuals per row (3: position; 6: position and orientation) and

@@ -18,11 +18,19 @@ namespace {
 
 constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 
+// The header's most frequent of ';', tab and ',' outside double quotes (a quoted name may hold
+// any of them).
 char detect_separator(const std::string& header) {
+  std::string unquoted;
+  bool quoted = false;
+  for (const char c : header) {
+    if (c == '"') quoted = !quoted;
+    if (!quoted) unquoted += c;
+  }
   char best = ',';
   long most = 0;
   for (char c : {';', '\t', ','}) {
-    const long count = std::count(header.begin(), header.end(), c);
+    const long count = std::count(unquoted.begin(), unquoted.end(), c);
     if (count > most) {
       most = count;
       best = c;
@@ -54,7 +62,13 @@ struct Table {
   std::map<std::string, std::size_t> index;
   std::vector<std::string> names;
   int header_line = 0;
-  char decimal = '.';
+  char separator = ',';
+  // The decimal mark, decided by the numbers together: the first line whose number has a
+  // decimal comma, and (in a ',' separated file, where a comma can only be in a quoted field)
+  // the first with a decimal point: both in one such file is refused, since there the comma
+  // may as well be a thousands separator.
+  int first_comma_line = 0;
+  int first_point_line = 0;
   std::string row_id;  // of the row being read, for its messages
 
   [[noreturn]] void fail_row(int line, std::size_t column, const std::string& what) const {
@@ -75,9 +89,10 @@ struct Table {
     return it->second;
   }
 
-  double number(const std::vector<std::string>& fields, std::size_t c, int line) const {
+  double number(const std::vector<std::string>& fields, std::size_t c, int line) {
     std::string text = fields[c];
-    if (decimal == ',') std::replace(text.begin(), text.end(), ',', '.');
+    decimal_mark(text, c, line);
+    std::replace(text.begin(), text.end(), ',', '.');
     double v = 0.0;
     const char* first = text.data();
     const char* last = text.data() + text.size();
@@ -89,6 +104,24 @@ struct Table {
                "column '" + files::excerpt(names[c]) + "': '" + files::excerpt(fields[c]) + "' is not a number");
     if (!std::isfinite(v)) fail_row(line, c, "column '" + names[c] + "' is not finite");
     return v;
+  }
+
+  // Records the decimal mark of a number's text; refuses one with both marks, and a ','
+  // separated file whose numbers use both.
+  void decimal_mark(const std::string& text, std::size_t c, int line) {
+    const bool comma = text.find(',') != std::string::npos;
+    const bool point = text.find('.') != std::string::npos;
+    const std::string field = "column '" + files::excerpt(names[c]) + "': '" + files::excerpt(text) + "'";
+    if (comma && point)
+      fail_row(line, c, field + " has both '.' and ',' (a thousands separator?): export the numbers without one");
+    if (comma && first_comma_line == 0) first_comma_line = line;
+    if (point && separator == ',' && first_point_line == 0) first_point_line = line;
+    if (separator == ',' && first_comma_line != 0 && first_point_line != 0)
+      fail_row(line, c,
+               field + ": this ',' separated file writes numbers with a decimal comma (line " +
+                   std::to_string(first_comma_line) + ") and with a decimal point (line " +
+                   std::to_string(first_point_line) +
+                   "), so a comma may be a thousands separator: export with one decimal mark");
   }
 };
 
@@ -194,7 +227,7 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   }
   const double angle = o.angle_unit == AngleUnit::deg ? kRadPerDeg : 1.0;
 
-  Table t{source, {}, {}, 0, '.', {}};
+  Table t{source, {}, {}, 0, ',', 0, 0, {}};
   std::string line;
   int number = 0;
   while (std::getline(in, line)) {
@@ -204,6 +237,7 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   if (trim_field(line, true).empty()) throw InputError(source + ": empty file (expected a header row)");
   t.header_line = number;
   result.separator = o.separator != 0 ? o.separator : detect_separator(line);
+  t.separator = result.separator;
   t.names = export_fields(line, result.separator, source, number);
   for (std::size_t i = 0; i < t.names.size(); ++i)
     if (!t.names[i].empty() && !t.index.emplace(t.names[i], i).second)
@@ -247,10 +281,11 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
     if (fields.size() != t.names.size())
       fail(source, number, std::min(fields.size(), t.names.size()),
            "expected " + std::to_string(t.names.size()) + " fields as in the header, found " +
-               std::to_string(fields.size()));
-    if (result.separator != ',' && t.decimal == '.')
-      for (const std::string& f : fields)
-        if (f.find(',') != std::string::npos) t.decimal = ',';
+               std::to_string(fields.size()) +
+               (result.separator == ',' && fields.size() > t.names.size()
+                    ? " (decimal commas in a ',' separated file must be quoted, \"-21,14\", or the file "
+                      "separated by ';' or tabs)"
+                    : ""));
     Measurement m;
     m.line = number;
     if (o.id) {
@@ -290,7 +325,7 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
     result.data.rows.push_back(std::move(m));
   }
   if (result.data.rows.empty()) throw InputError(source + ": no data rows after the header");
-  result.decimal_comma = t.decimal == ',';
+  result.decimal_comma = t.first_comma_line != 0;
   result.median_position_std_m = median_of(position_stds);
   result.median_angle_std_rad = median_of(angle_stds);
   result.distinct_ids = ids.size();

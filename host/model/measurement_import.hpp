@@ -5,8 +5,12 @@
 // readings, the position and (optionally) the orientation; the unit of each (mm or m; deg or rad);
 // the Euler convention of the orientation; optionally the per-component standard deviations.
 // Guessed only where no ambiguity exists: the separator (the header line's most frequent of ';',
-// tab and ','; or given), and the decimal separator (a comma in a field is a decimal comma unless
-// ',' separates the fields).
+// tab and ',' outside double quotes; or given), and the decimal mark, from the numbers together:
+// a comma in a number is a decimal comma (in a ',' separated file it can only be there in a
+// quoted field, "-21,140068", as spreadsheets write it). Refused as ambiguous: a number with both
+// '.' and ',' (a thousands separator), a ',' separated file whose numbers use both marks, and a
+// ',' separated row with more fields than the header (unquoted decimal commas: the message says
+// so).
 //
 // Euler conventions: "intrinsic-ABC" or "extrinsic-ABC" with ABC three axis letters (x, y, z, no
 // two neighbours equal), the angles given in the order of the letters:

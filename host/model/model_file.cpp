@@ -10,6 +10,8 @@
 #include <charconv>
 #include <cmath>
 #include <initializer_list>
+#include <iostream>
+#include <limits>
 #include <numbers>
 #include <sstream>
 
@@ -61,19 +63,53 @@ class Reader {
     return value;
   }
 
-  double angle(const YAML::Node& node, const std::string& what, AngleUnit unit) const {
+  // An angle in rad, within `turns` turns either way. In a file whose angles are radians, one
+  // beyond that is most likely degrees (alpha: 90), which the message says.
+  double angle(const YAML::Node& node, const std::string& what, AngleUnit unit, double turns = 1.0) const {
     const double v = number(node, what);
-    return unit == AngleUnit::deg ? v / kDegPerRad : v;
+    const double rad = unit == AngleUnit::deg ? v / kDegPerRad : v;
+    if (std::abs(rad) > turns * 2.0 * std::numbers::pi + 1e-9) {
+      const std::string within = turns == 1.0 ? "a turn" : shortest_number_text(turns) + " turns";
+      if (unit == AngleUnit::rad)
+        fail(node, what + ": " + files::excerpt(node.Scalar()) + " rad is more than " + within +
+                       ": are the file's angles degrees? then say 'angles: deg' at its top (without it, angles "
+                       "are radians)");
+      fail(node, what + ": " + files::excerpt(node.Scalar()) + " deg is more than " + within);
+    }
+    return rad;
   }
 
-  Vector3 vector3(const YAML::Node& node, const std::string& what, double scale = 1.0) const {
+  // A number within [lowest, highest], the range's reason in the message.
+  double bounded(const YAML::Node& node, const std::string& what, double lowest, double highest,
+                 const std::string& why) const {
+    const double v = number(node, what);
+    if (v < lowest || v > highest)
+      fail(node, what + ": " + files::excerpt(node.Scalar()) + " is outside [" + shortest_number_text(lowest) + ", " +
+                     shortest_number_text(highest) + "] " + why);
+    return v;
+  }
+
+  // A length in m, at most `limit` either way.
+  double length(const YAML::Node& node, const std::string& what, double limit = kMaxLength_m) const {
+    return bounded(node, what, -limit, limit, "(m: is it in millimetres?)");
+  }
+
+  Vector3 vector3(const YAML::Node& node, const std::string& what, double limit = kMaxLength_m) const {
     if (!node.IsSequence() || node.size() != 3) fail(node, what + " must be a list of 3 numbers");
-    return Vector3(number(node[0], what) * scale, number(node[1], what) * scale, number(node[2], what) * scale);
+    return Vector3(length(node[0], what, limit), length(node[1], what, limit), length(node[2], what, limit));
+  }
+
+  Vector3 angles3(const YAML::Node& node, const std::string& what, AngleUnit unit) const {
+    if (!node.IsSequence() || node.size() != 3) fail(node, what + " must be a list of 3 numbers");
+    return Vector3(angle(node[0], what, unit), angle(node[1], what, unit), angle(node[2], what, unit));
   }
 
   double mass(const YAML::Node& node, const std::string& what) const {
     const double v = number(node, what);
     if (v < 0.0) fail(node, what + " must not be negative (kg)");
+    if (v > kMaxMass_kg)
+      fail(node, what + ": " + files::excerpt(node.Scalar()) + " kg is more than " + shortest_number_text(kMaxMass_kg) +
+                     " kg, more than any arm's link or payload (grams?)");
     return v;
   }
 
@@ -86,14 +122,11 @@ class Reader {
   }
 
   // translation + rpy or quaternion (both optional: identity).
-  Transform transform(const YAML::Node& node, const std::string& what, AngleUnit unit) const {
+  Transform transform(const YAML::Node& node, const std::string& what, AngleUnit unit, double limit) const {
     Transform t;
-    if (node["translation"]) t.translation = vector3(node["translation"], what + " translation");
+    if (node["translation"]) t.translation = vector3(node["translation"], what + " translation", limit);
     if (node["rpy"] && node["quaternion"]) fail(node, what + ": give rpy or quaternion, not both");
-    if (node["rpy"]) {
-      const double s = unit == AngleUnit::deg ? 1.0 / kDegPerRad : 1.0;
-      t.rotation = rotation_from_rpy(vector3(node["rpy"], what + " rpy", s));
-    }
+    if (node["rpy"]) t.rotation = rotation_from_rpy(angles3(node["rpy"], what + " rpy", unit));
     if (node["quaternion"]) {
       const YAML::Node& qn = node["quaternion"];
       if (!qn.IsSequence() || qn.size() != 4) fail(qn, what + " quaternion must be a list of 4 numbers [w, x, y, z]");
@@ -127,15 +160,53 @@ void check_coupling(const Reader& r, const YAML::Node& joints, const RobotModel&
     r.fail(joints, "the joints' coupling rows are linearly dependent: two joints would follow the same readings");
 }
 
+// Joint names name a joint in messages, parameters and URDF: two joints of one name (a name
+// given twice, or a given name equal to another joint's default j<i>) are refused naming both.
+void check_names(const Reader& r, const YAML::Node& joints, const RobotModel& model) {
+  for (std::size_t i = 0; i < model.joints.size(); ++i)
+    for (std::size_t k = 0; k < i; ++k) {
+      if (model.joints[i].name != model.joints[k].name) continue;
+      const YAML::Node first = joints[k]["name"] ? joints[k]["name"] : joints[k];
+      const YAML::Node second = joints[i]["name"] ? joints[i]["name"] : joints[i];
+      r.fail(second, "joint " + std::to_string(i + 1) + "'s name '" + files::excerpt(model.joints[i].name) +
+                         "' is joint " + std::to_string(k + 1) + "'s name too (line " +
+                         std::to_string(first.Mark().line + 1) + "): joint names must differ");
+    }
+}
+
+// A compliance deflects its joint by the gravity load of the bodies the joint moves (its link,
+// the links after it, the payload): with no mass on any of them the load is zero in every pose
+// and the compliance can do nothing.
+void check_loaded_compliances(const Reader& r, const YAML::Node& joints, const RobotModel& model) {
+  double carried_kg = model.payload.mass_kg;
+  for (std::size_t i = model.joints.size(); i-- > 0;) {
+    carried_kg += model.joints[i].mass_kg;
+    if (model.joints[i].compliance && carried_kg == 0.0)
+      r.fail(joints[i]["compliance"],
+             "joint " + std::to_string(i + 1) + " compliance: neither the links this joint moves nor a payload " +
+                 "have a mass, so gravity loads it with nothing and the compliance cannot act (give their " +
+                 "'mass:' and 'centre_of_mass:', or a 'payload:')");
+  }
+}
+
 CalibrationRecord read_calibration(const Reader& r, const YAML::Node& node) {
   r.only_keys(node, "calibration",
               {"method", "data", "measurements", "rms_residual_m", "validation_rms_m", "held_fixed", "parameters"});
   CalibrationRecord c;
   if (node["method"]) c.method = r.text(node["method"], "calibration method");
   if (node["data"]) c.data = r.text(node["data"], "calibration data");
-  if (node["measurements"]) c.measurements = static_cast<int>(r.number(node["measurements"], "measurements"));
-  if (node["rms_residual_m"]) c.rms_residual_m = r.number(node["rms_residual_m"], "rms_residual_m");
-  if (node["validation_rms_m"]) c.validation_rms_m = r.number(node["validation_rms_m"], "validation_rms_m");
+  if (node["measurements"]) {
+    const double count =
+        r.bounded(node["measurements"], "measurements", 0.0, std::numeric_limits<int>::max(), "(a count of rows)");
+    if (count != std::floor(count)) r.fail(node["measurements"], "measurements must be a whole number");
+    c.measurements = static_cast<int>(count);
+  }
+  if (node["rms_residual_m"])
+    c.rms_residual_m =
+        r.bounded(node["rms_residual_m"], "rms_residual_m", 0.0, std::numeric_limits<double>::max(), "(an RMS)");
+  if (node["validation_rms_m"])
+    c.validation_rms_m =
+        r.bounded(node["validation_rms_m"], "validation_rms_m", 0.0, std::numeric_limits<double>::max(), "(an RMS)");
   if (node["held_fixed"]) {
     if (!node["held_fixed"].IsSequence()) r.fail(node["held_fixed"], "held_fixed must be a list");
     for (const auto& n : node["held_fixed"]) c.held_fixed.push_back(r.text(n, "held_fixed entry"));
@@ -147,7 +218,8 @@ CalibrationRecord read_calibration(const Reader& r, const YAML::Node& node) {
       ParameterReport p;
       p.name = r.text(n["name"], "parameter name");
       if (n["change"]) p.value = r.number(n["change"], "change");
-      if (n["stddev"]) p.stddev = r.number(n["stddev"], "stddev");
+      if (n["stddev"])
+        p.stddev = r.bounded(n["stddev"], "stddev", 0.0, std::numeric_limits<double>::max(), "(a standard deviation)");
       c.parameters.push_back(p);
     }
   }
@@ -159,6 +231,7 @@ std::vector<std::pair<std::string, double>> read_priors(const Reader& r, const Y
                                                         AngleUnit unit) {
   if (!node.IsMap()) r.fail(node, "priors must be a mapping of parameter names to sigmas");
   std::vector<std::pair<std::string, double>> out;
+  std::vector<std::pair<core::ParameterId, YAML::Node>> seen;
   for (const auto& entry : node) {
     const std::string name = r.text(entry.first, "a prior's parameter name");
     core::ParameterId id{};
@@ -167,12 +240,26 @@ std::vector<std::pair<std::string, double>> read_priors(const Reader& r, const Y
     } catch (const InputError& e) {
       r.fail(entry.first, std::string("priors: ") + e.what());
     }
+    for (const auto& [other, key] : seen)
+      if (other.kind == id.kind && other.link == id.link)
+        r.fail(entry.first, "priors: '" + files::excerpt(name) + "' names the parameter that '" +
+                                files::excerpt(key.Scalar()) + "' (line " + std::to_string(key.Mark().line + 1) +
+                                ") names: give one prior per parameter");
+    seen.emplace_back(id, entry.first);
     const bool angle = id.kind == core::ParameterKind::link_theta || id.kind == core::ParameterKind::link_alpha ||
                        id.kind == core::ParameterKind::link_beta ||
                        (id.kind >= core::ParameterKind::base_rx && id.kind <= core::ParameterKind::base_rz) ||
                        (id.kind >= core::ParameterKind::tool_rx && id.kind <= core::ParameterKind::tool_rz);
     const double sigma =
         angle ? r.angle(entry.second, "priors: " + name, unit) : r.number(entry.second, "priors: " + name);
+    // A sigma beyond the parameter's own range says nothing the range does not.
+    const double largest = angle                         ? 2.0 * std::numbers::pi
+                           : id.kind == kJointScale      ? kMaxScale
+                           : id.kind == kJointCompliance ? kMaxCompliance
+                                                         : kMaxLength_m;
+    if (sigma > largest)
+      r.fail(entry.second, "priors: " + name + ": " + shortest_number_text(sigma) + " is more than " +
+                               shortest_number_text(largest) + ", the parameter's own range (m, rad, or SI)");
     if (!(sigma > 0.0)) r.fail(entry.second, "priors: " + name + " must be positive (a standard deviation)");
     if (sigma < kMinPriorSigma)
       r.fail(entry.second, "priors: " + name + ": " + shortest_number_text(sigma) + " (m or rad) is below " +
@@ -185,8 +272,9 @@ std::vector<std::pair<std::string, double>> read_priors(const Reader& r, const Y
 
 RobotModel read_model(const YAML::Node& root, const Reader& r) {
   if (!root || root.IsNull()) r.fail(root, "empty model file");
-  r.only_keys(root, "the model",
-              {"name", "angles", "base", "joints", "tool", "gravity", "payload", "calibration", "priors"});
+  r.only_keys(
+      root, "the model",
+      {"name", "angles", "base", "joints", "tool", "flange", "tcp", "gravity", "payload", "calibration", "priors"});
   RobotModel model;
   model.name = root["name"] ? r.text(root["name"], "name") : "robot";
   if (root["angles"]) {
@@ -200,7 +288,7 @@ RobotModel read_model(const YAML::Node& root, const Reader& r) {
   const AngleUnit unit = model.file_angles;
   if (root["base"]) {
     r.only_keys(root["base"], "base", {"translation", "rpy", "quaternion"});
-    model.base_T_frame0 = r.transform(root["base"], "base", unit);
+    model.base_T_frame0 = r.transform(root["base"], "base", unit, kMaxBaseDistance_m);
   }
   const YAML::Node joints = root["joints"];
   if (!joints) r.fail(root, "the model has no 'joints' list");
@@ -242,19 +330,21 @@ RobotModel read_model(const YAML::Node& root, const Reader& r) {
       if (!jn[key]) r.fail(jn, what + ": missing parameter '" + key + "'");
     if (jn["beta"] && j.convention != core::LinkConvention::doty)
       r.fail(jn["beta"], what + ": beta belongs to the doty convention only");
-    j.parameters.d_m = r.number(jn["d"], what + " d");
-    j.parameters.a_m = r.number(jn["a"], what + " a");
+    j.parameters.d_m = r.length(jn["d"], what + " d");
+    j.parameters.a_m = r.length(jn["a"], what + " a");
     j.parameters.theta_rad = r.angle(jn["theta"], what + " theta", unit);
     j.parameters.alpha_rad = r.angle(jn["alpha"], what + " alpha", unit);
     if (jn["beta"]) j.parameters.beta_rad = r.angle(jn["beta"], what + " beta", unit);
     const bool revolute = j.type == core::JointType::revolute;
     if (jn["offset"])
-      j.offset = revolute ? r.angle(jn["offset"], what + " offset", unit) : r.number(jn["offset"], what + " offset");
+      j.offset = revolute ? r.angle(jn["offset"], what + " offset", unit) : r.length(jn["offset"], what + " offset");
     if (jn["limits"]) {
       const YAML::Node& l = jn["limits"];
       if (!l.IsSequence() || l.size() != 2) r.fail(l, what + ": limits must be [lower, upper]");
-      j.lower = revolute ? r.angle(l[0], what + " lower limit", unit) : r.number(l[0], what + " lower limit");
-      j.upper = revolute ? r.angle(l[1], what + " upper limit", unit) : r.number(l[1], what + " upper limit");
+      j.lower =
+          revolute ? r.angle(l[0], what + " lower limit", unit, kMaxLimitTurns) : r.length(l[0], what + " lower limit");
+      j.upper =
+          revolute ? r.angle(l[1], what + " upper limit", unit, kMaxLimitTurns) : r.length(l[1], what + " upper limit");
       if (!(j.lower < j.upper))
         r.fail(l, what + ": lower limit must be below the upper limit (equal limits leave the joint no motion)");
     }
@@ -263,11 +353,15 @@ RobotModel read_model(const YAML::Node& root, const Reader& r) {
       if (!c.IsSequence() || c.size() != joints.size())
         r.fail(c, what + ": coupling must be a list of " + std::to_string(joints.size()) +
                       " coefficients, one per joint reading");
-      for (const auto& k : c) j.coupling.push_back(r.number(k, what + " coupling"));
+      for (const auto& k : c)
+        j.coupling.push_back(r.bounded(k, what + " coupling", -kMaxCoupling, kMaxCoupling,
+                                       "(a reading's share in this joint's motion)"));
     }
     if (jn["scale"]) {
       j.scale = r.number(jn["scale"], what + " scale");
       if (!(*j.scale > 0.0)) r.fail(jn["scale"], what + ": scale must be positive");
+      (void)r.bounded(jn["scale"], what + " scale", kMinScale, kMaxScale,
+                      "(a gear-ratio error near 1: a factor like 57.3 or 1000 is a unit, not a scale)");
     }
     if (jn["compliance"]) {
       j.compliance = r.number(jn["compliance"], what + " compliance");
@@ -275,12 +369,16 @@ RobotModel read_model(const YAML::Node& root, const Reader& r) {
         r.fail(jn["compliance"], what +
                                      ": compliance must not be negative (a joint yields with its load, "
                                      "rad/(N m) or m/N)");
+      (void)r.bounded(jn["compliance"], what + " compliance", 0.0, kMaxCompliance,
+                      revolute ? "(rad/(N m): 1 N m would turn the joint by a radian)"
+                               : "(m/N: 1 N would move the joint by a metre)");
     }
     if (jn["mass"]) j.mass_kg = r.mass(jn["mass"], what + " mass");
     if (jn["centre_of_mass"]) j.centre_of_mass_m = r.vector3(jn["centre_of_mass"], what + " centre_of_mass");
     model.joints.push_back(j);
   }
   check_coupling(r, joints, model);
+  check_names(r, joints, model);
   if (root["tool"]) {
     const YAML::Node& t = root["tool"];
     r.only_keys(t, "tool", {"point", "translation", "rpy", "quaternion"});
@@ -291,16 +389,32 @@ RobotModel read_model(const YAML::Node& root, const Reader& r) {
       model.flange_T_tool.translation = r.vector3(t["point"], "tool point");
     } else {
       model.tool = ToolKind::frame;
-      model.flange_T_tool = r.transform(t, "tool", unit);
+      model.flange_T_tool = r.transform(t, "tool", unit, kMaxLength_m);
     }
   }
-  if (root["gravity"]) model.gravity_mps2 = r.vector3(root["gravity"], "gravity");
+  if (root["flange"]) {  // robot_model.hpp: the flange in frame n, and the TCP from it
+    r.only_keys(root["flange"], "flange", {"link", "translation", "rpy", "quaternion"});
+    if (root["flange"]["link"]) model.flange_link = r.text(root["flange"]["link"], "flange link");
+    model.frame_n_T_flange = r.transform(root["flange"], "flange", unit, kMaxLength_m);
+  }
+  if (root["tcp"]) {
+    r.only_keys(root["tcp"], "tcp", {"translation", "rpy", "quaternion"});
+    model.flange_T_tcp = r.transform(root["tcp"], "tcp", unit, kMaxLength_m);
+  }
+  if (root["gravity"]) {
+    model.gravity_mps2 = r.vector3(root["gravity"], "gravity", std::numeric_limits<double>::max());
+    if (model.gravity_mps2.norm() > kMaxGravity_mps2)
+      r.fail(root["gravity"], "gravity: " + shortest_number_text(model.gravity_mps2.norm()) + " m/s^2 is more than " +
+                                  shortest_number_text(kMaxGravity_mps2) +
+                                  " m/s^2 (twice the standard gravity; is it in mm/s^2?)");
+  }
   if (root["payload"]) {
     const YAML::Node& p = root["payload"];
     r.only_keys(p, "payload", {"mass", "centre_of_mass"});
     if (p["mass"]) model.payload.mass_kg = r.mass(p["mass"], "payload mass");
     if (p["centre_of_mass"]) model.payload.centre_of_mass_m = r.vector3(p["centre_of_mass"], "payload centre_of_mass");
   }
+  check_loaded_compliances(r, joints, model);
   if (root["calibration"]) model.calibration = read_calibration(r, root["calibration"]);
   if (root["priors"])
     (void)read_priors(r, root["priors"], model.joint_count(), unit);  // checked here, used by identify
@@ -341,8 +455,11 @@ RobotModel parse_model(const std::string& text, const std::string& source) {
 }
 
 RobotModel load_model(const std::string& path, const UrdfChainEnds& ends) {
-  if (is_urdf_path(path))
-    return model_from_urdf(parse_urdf_chain(files::read_text_or_throw<InputError>(path, files::kUrdfFile), path, ends));
+  if (is_urdf_path(path)) {
+    const UrdfChain chain = parse_urdf_chain(files::read_text_or_throw<InputError>(path, files::kUrdfFile), path, ends);
+    for (const std::string& w : chain.warnings) std::cerr << "kincal: warning: " << w << '\n';  // urdf_chain.hpp
+    return model_from_urdf(chain);
+  }
   if (!ends.base_link.empty() || !ends.tip_link.empty())
     throw InputError(path + ": --base-link and --tip-link are for URDF models (*.urdf)");
   return parse_model(files::read_text_or_throw<InputError>(path, files::kModelFile), path);
@@ -410,6 +527,20 @@ std::string write_model(const RobotModel& model) {
     out << YAML::EndMap;
   } else {
     emit_transform(out, model.flange_T_tool, a);
+  }
+  if (!model.flange_link.empty() || !model.frame_n_T_flange.translation.isZero(0.0) ||
+      !model.frame_n_T_flange.rotation.isIdentity(0.0)) {
+    out << YAML::Key << "flange" << YAML::Value << YAML::BeginMap;
+    if (!model.flange_link.empty()) out << YAML::Key << "link" << YAML::Value << model.flange_link;
+    out << YAML::Key << "translation" << YAML::Value;
+    emit_vector(out, model.frame_n_T_flange.translation);
+    out << YAML::Key << "rpy" << YAML::Value;
+    emit_vector(out, rpy_from_rotation(model.frame_n_T_flange.rotation), a);
+    out << YAML::EndMap;
+  }
+  if (model.flange_T_tcp) {
+    out << YAML::Key << "tcp" << YAML::Value;
+    emit_transform(out, *model.flange_T_tcp, a);
   }
   if (has_compliance(model) || model.gravity_mps2 != RobotModel{}.gravity_mps2) {
     out << YAML::Key << "gravity" << YAML::Value;

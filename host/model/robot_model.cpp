@@ -126,6 +126,20 @@ Eigen::MatrixXd deflection_by_values(const RobotModel& model, const core::Prepar
 
 }  // namespace
 
+Transform flange_T_measured(const RobotModel& model) { return model.frame_n_T_flange.inverse() * model.flange_T_tool; }
+
+RobotModel tool_at_tcp(const RobotModel& model) {
+  if (!model.flange_T_tcp) return model;
+  RobotModel out = model;
+  out.flange_T_tool = model.frame_n_T_flange * *model.flange_T_tcp;
+  out.tool = ToolKind::frame;
+  return out;
+}
+
+std::string flange_name(const RobotModel& model) {
+  return model.flange_link.empty() ? "frame n (the last joint's frame)" : "link '" + model.flange_link + "'";
+}
+
 bool has_joint_map(const RobotModel& model) {
   return std::any_of(model.joints.begin(), model.joints.end(),
                      [](const Joint& j) { return !j.coupling.empty() || j.scale.has_value(); });

@@ -7,7 +7,20 @@
 //   device    the measuring device's frame (tracker, stereo pair); measurements are in it.
 //   frame 0   the chain's first frame; base_T_frame0 places it in the device frame (so the
 //             "base" transform is the device-to-robot registration, identified with the rest).
-//   flange    frame n after the last link; flange_T_tool places the tool point or frame.
+//   frame n   after the last link: the core chain's "flange" (core::ChainModel::flange_T_tool
+//             is from there).
+//   tool      the measured point or frame: what the data measure (a tracker's reflector, a mocap
+//             marker, a camera's board): flange_T_tool places it in frame n, and the tool_*
+//             parameters identify it. Often 50-150 mm off the flange, known to a few mm at best.
+//   flange    the frame a tool is mounted on and the controller gives its TCP from: a URDF's
+//             tip link (--tip-link), named by flange_link; frame_n_T_flange places it in frame n
+//             (identity for a model file without 'flange:'). Nominal: never identified.
+//   tcp       the controller's tool centre point, flange_T_tcp in the flange frame: what
+//             `correct` aims. Never identified and never folded into the chain; a model without
+//             one (a model file without 'tcp:') has its measured point as its TCP.
+// Nothing converts one into another silently: tool_at_tcp() below is the one place the TCP
+// takes the measured point's place, and flange_T_measured() the one that reads the measured
+// point from the flange.
 //
 // Joint readings: q_i as the controller reports it (rad or m). The chain's variable is
 // q_i + offset_i, added to theta (revolute) or d (prismatic). The offset is where calibrated
@@ -112,8 +125,11 @@ struct RobotModel {
   std::string name;
   std::vector<Joint> joints;
   Transform base_T_frame0{};
-  Transform flange_T_tool{};
+  Transform flange_T_tool{};  // frame n -> the measured point or frame (see the top)
   ToolKind tool = ToolKind::point;
+  std::string flange_link;                 // the flange's link name; "" : frame n is the flange
+  Transform frame_n_T_flange{};            // the flange in frame n (nominal)
+  std::optional<Transform> flange_T_tcp;   // the controller's TCP; absent: the measured point
   AngleUnit file_angles = AngleUnit::rad;  // how the file wrote angles; writing keeps it
   std::optional<CalibrationRecord> calibration;
   Vector3 gravity_mps2{0.0, 0.0, -kStandardGravity_mps2};  // in frame 0
@@ -121,6 +137,17 @@ struct RobotModel {
 
   int joint_count() const { return static_cast<int>(joints.size()); }
 };
+
+// The measured point or frame from the flange: frame_n_T_flange^-1 * flange_T_tool -- what a
+// user reads as "the reflector is 102 mm from the flange".
+Transform flange_T_measured(const RobotModel& model);
+
+// The model with its tool at the TCP (flange_T_tool = frame_n_T_flange * flange_T_tcp, a frame);
+// a model without a TCP as it is. What `correct` aims and what a controller computes with.
+RobotModel tool_at_tcp(const RobotModel& model);
+
+// How messages name the flange: "link 'tool0'" or "frame n (the last joint's frame)".
+std::string flange_name(const RobotModel& model);
 
 // Whether readings go through scale or coupling, and whether any joint has a compliance.
 bool has_joint_map(const RobotModel& model);

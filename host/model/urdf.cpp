@@ -110,23 +110,30 @@ Transform onto_axis(const Transform& estimate, const Vector3& axis_in_link, cons
 constexpr double kUnchangedM = 1e-11;
 constexpr double kUnchangedRad = 1e-11;
 
-// The text for three numbers whose attribute held `old_text`: a number within `tolerance` of
-// the old one keeps its old spelling.
+// The text for three numbers whose attribute held `old_text`: the old text with each number that
+// moved by more than `tolerance` respelled, so that white space (tabs, several spaces, a line
+// end inside the value) and the spelling of the numbers that did not move stay as they were.
+// An old value that is not three numbers is replaced whole.
 std::string triple_text(const Vector3& value, std::string_view old_text, double tolerance) {
-  std::vector<std::string_view> old;
+  std::vector<std::pair<std::size_t, std::size_t>> numbers;  // [begin, end) in old_text
   for (std::size_t p = old_text.find_first_not_of(" \t\r\n"); p != std::string_view::npos;) {
     const std::size_t end = std::min(old_text.find_first_of(" \t\r\n", p), old_text.size());
-    old.push_back(old_text.substr(p, end - p));
+    numbers.emplace_back(p, end);
     p = old_text.find_first_not_of(" \t\r\n", end);
   }
-  std::string out;
-  for (Eigen::Index i = 0; i < 3; ++i) {
-    const auto k = static_cast<std::size_t>(i);
+  if (numbers.size() != 3) return triple(value);
+  std::string out(old_text.substr(0, numbers[0].first));
+  for (std::size_t k = 0; k < 3; ++k) {
+    const std::string_view old = old_text.substr(numbers[k].first, numbers[k].second - numbers[k].first);
+    const std::string_view digits = old.starts_with('+') ? old.substr(1) : old;  // as the reader takes it
     double was = 0.0;
-    const bool keep = old.size() == 3 &&
-                      std::from_chars(old[k].data(), old[k].data() + old[k].size(), was).ec == std::errc() &&
-                      std::abs(was - value[i]) <= tolerance;
-    out += (i == 0 ? "" : " ") + (keep ? std::string(old[k]) : num(value[i]));
+    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), was);
+    const auto i = static_cast<Eigen::Index>(k);
+    const bool keep =
+        ec == std::errc() && end == digits.data() + digits.size() && std::abs(was - value[i]) <= tolerance;
+    out += keep ? std::string(old) : num(value[i]);
+    const std::size_t next = k + 1 < 3 ? numbers[k + 1].first : old_text.size();
+    out += old_text.substr(numbers[k].second, next - numbers[k].second);
   }
   return out;
 }
@@ -173,6 +180,38 @@ void edit_origin(const std::string& text, const XmlTextMap& map, const UrdfJoint
   if (turn) set("rpy", rpy_from_rotation(o.rotation), kUnchangedRad);
 }
 
+// The file's own line end: CRLF when its first line ends so.
+std::string line_end(const std::string& text) {
+  const std::size_t first_end = text.find('\n');
+  return first_end != std::string::npos && first_end > 0 && text[first_end - 1] == '\r' ? "\r\n" : "\n";
+}
+
+// The new link `name` for the measured point and the fixed joint "<name>_joint" that places it
+// in the tip link, inserted right after the <robot> start tag (links and joints may come in any
+// order) with the file's own line end. Refused when the URDF has a link or joint of either name.
+Edit measured_point_edit(const std::string& text, const XmlTextMap& map, const std::string& source,
+                         const std::string& tip_link, const std::string& name, const Transform& tip_T_measured) {
+  const std::string joint = name + "_joint";
+  for (const XmlElementSpan& e : map.elements) {
+    const XmlAttributeSpan* a = e.attribute("name");
+    if (a == nullptr || (e.name != "link" && e.name != "joint")) continue;
+    const std::string_view value(text.data() + a->value_begin, a->value_end - a->value_begin);
+    if ((e.name == "link" && value == name) || (e.name == "joint" && value == joint))
+      fail_at(source, e.line,
+              "the URDF has a " + std::string(e.name) + " named '" + std::string(value) +
+                  "' already: choose another name for the measured point's link");
+  }
+  if (map.elements.empty() || map.elements.front().name != "robot")
+    throw std::logic_error("write_calibrated_urdf: the text's first element is not <robot>");
+  const std::string eol = line_end(text);
+  const std::string link = escape_xml_text(name);
+  return {map.elements.front().start_tag_end, map.elements.front().start_tag_end,
+          eol + "  <!-- kincal: the measured point (reflector, marker, board) the calibration identified -->" + eol +
+              "  <link name=\"" + link + "\"/>" + eol + "  <joint name=\"" + escape_xml_text(joint) +
+              "\" type=\"fixed\">" + eol + "    <parent link=\"" + escape_xml_text(tip_link) + "\"/>" + eol +
+              "    <child link=\"" + link + "\"/>" + eol + "    " + origin(tip_T_measured) + eol + "  </joint>"};
+}
+
 std::string millimetres(double m) {
   std::ostringstream out;
   out.setf(std::ios::fixed);
@@ -193,7 +232,8 @@ std::string non_geometric_note(const RobotModel& model) {
 }
 
 CalibratedUrdf write_calibrated_urdf(const std::string& original_text, const std::string& source,
-                                     const UrdfChainEnds& ends, const RobotModel& calibrated) {
+                                     const UrdfChainEnds& ends, const RobotModel& calibrated,
+                                     const std::string& measured_point_link) {
   const UrdfChain chain = parse_urdf_chain(original_text, source, ends);
   const RobotModel nominal = model_from_urdf(chain);
   const int n = nominal.joint_count();
@@ -232,27 +272,23 @@ CalibratedUrdf write_calibrated_urdf(const std::string& original_text, const std
   for (std::size_t k = 0; k < chain.joints.size(); ++k) {
     const UrdfJoint& j = chain.joints[k];
     const Transform parent = k == 0 ? Transform{} : poses[k - 1];
-    const bool last = k + 1 == chain.joints.size();
     if (j.type != UrdfJointType::fixed) {
       ++body;
       poses[k] = onto_axis(body_moved(body, nominal_poses[k]), j.axis, cal_axes[static_cast<std::size_t>(body - 1)]);
       rewrite[k] = true;
-      if (last) {
-        const Transform off = poses[k].inverse() * cal_tool;
-        const double angle = Eigen::AngleAxisd(off.rotation).angle();
-        if (off.translation.norm() > 1e-9 || (calibrated.tool == ToolKind::frame && angle > 1e-9))
-          result.notes.push_back("the tip link '" + chain.tip_link + "' is the child of joint '" + j.name +
-                                 "': the calibrated tool (" + millimetres(off.translation.norm()) +
-                                 " from it) is not in the URDF; add a fixed joint to a tool link");
-      }
-    } else if (last) {
-      poses[k] = calibrated.tool == ToolKind::frame ? cal_tool : body_moved(body, nominal_poses[k]);
-      poses[k].translation = cal_tool.translation;
-      rewrite[k] = true;
     } else {
-      poses[k] = parent * j.parent_T_joint;
+      poses[k] = parent * j.parent_T_joint;  // a fixed joint keeps its origin, wherever it is
     }
   }
+  // The measured point or frame from the tip link: a link of its own when asked, else a note.
+  Transform tip_T_measured = poses.back().inverse() * cal_tool;
+  if (calibrated.tool == ToolKind::point) tip_T_measured.rotation.setIdentity();
+  const double measured_turn = Eigen::AngleAxisd(tip_T_measured.rotation).angle();
+  if (measured_point_link.empty() && (tip_T_measured.translation.norm() > 1e-9 || measured_turn > 1e-9))
+    result.notes.push_back("the measured point (the model's tool) is " +
+                           millimetres(tip_T_measured.translation.norm()) + " from the tip link '" + chain.tip_link +
+                           "' and is no link of this URDF (ask for it as a link of its own: kincal urdf --marker-link "
+                           "NAME); the tip link and every fixed joint keep their place");
 
   // Edit the text itself, so that everything but the chain's changed <origin> attributes stays
   // byte for byte (formatting, comments, quotes, attribute order, line ends, a byte-order mark).
@@ -264,6 +300,9 @@ CalibratedUrdf write_calibrated_urdf(const std::string& original_text, const std
     const Transform parent = k == 0 ? Transform{} : poses[k - 1];
     edit_origin(original_text, map, j, parent.inverse() * poses[k], edits);
   }
+  if (!measured_point_link.empty())
+    edits.push_back(
+        measured_point_edit(original_text, map, source, chain.tip_link, measured_point_link, tip_T_measured));
   const Transform& r = result.device_T_base_link;
   std::string comment = " kincal: calibrated joint origins of the chain " + chain.base_link + " -> " + chain.tip_link +
                         " (model '" + calibrated.name + "'). " + chain.base_link +
@@ -271,9 +310,7 @@ CalibratedUrdf write_calibrated_urdf(const std::string& original_text, const std
                         "\" rpy=\"" + triple(rpy_from_rotation(r.rotation)) + "\" ";
   for (const std::string& note : result.notes) comment += "Note: " + note + " ";
   for (std::size_t p = comment.find("--"); p != std::string::npos; p = comment.find("--")) comment.replace(p, 2, "- ");
-  const std::size_t first_end = original_text.find('\n');
-  const std::string eol =
-      first_end != std::string::npos && first_end > 0 && original_text[first_end - 1] == '\r' ? "\r\n" : "\n";
+  const std::string eol = line_end(original_text);
   edits.push_back({map.prolog_end, map.prolog_end,
                    (map.has_declaration ? eol : "") + "<!--" + comment + "-->" + (map.has_declaration ? "" : eol)});
   std::sort(edits.begin(), edits.end(), [](const Edit& a, const Edit& b) { return a.begin > b.begin; });

@@ -20,7 +20,8 @@
 // (urdf_text.hpp), so any spelling the reader accepts works: of the chain's <origin> elements
 // only the xyz or rpy values that changed by more than 1e-11 m or 1e-11 rad are rewritten (in
 // the element's own quotes; a number of three within that of its old value keeps its old
-// spelling; a missing attribute is added after the element's name, a missing <origin> after
+// spelling, and the white space around and between the three stays as it was (tabs, several
+// spaces, a line end); a missing attribute is added after the element's name, a missing <origin> after
 // the joint's start tag). So a joint whose origin did not change keeps its text byte for byte,
 // and the same model written back gives the original text plus the comment. The comment goes
 // after the XML declaration (or after a byte-order mark, which stays first, when there is no
@@ -39,12 +40,16 @@
 //     <axis> unchanged. The DH drift of nearly parallel axes (d of metres that cancel) never
 //     reaches the link frames, so meshes stay on their bodies (the reason UR's description
 //     moves offsets along the joint axes).
-//   - Fixed joints keep their origins, except the last one before the tip link, which takes
-//     the calibrated tool (a frame tool: the whole pose; a point tool: the position). When the
-//     tip link is the last movable joint's child, the tool's calibration cannot be written and
-//     a note says how far it is off.
+//   - Every fixed joint keeps its origin byte for byte, those beyond the last movable joint
+//     included: the tip link (the flange, --tip-link) and the hand, fingers and TCP links after
+//     it stay on the last body where the URDF puts them (issue #42). The model's tool is the
+//     measured point (a tracker's reflector, a marker: robot_model.hpp), never a joint of the
+//     robot: it is written only when `measured_point_link` names a new link, placed in the tip
+//     link by a new fixed joint "<name>_joint" (a frame tool: the whole pose; a point tool: the
+//     position, the tip link's axes); otherwise a note says how far it is from the tip link.
 // Forward kinematics of the written URDF, mapped by device_T_base_link, equal the calibrated
-// model's for every reading (tests/host/model/urdf_test.cpp, to 1e-9 m).
+// model's for every reading at the measured point's link when it is written, and otherwise at
+// the tip link up to the measured point's fixed offset (tests/host/model/urdf_test.cpp, to 1e-9 m).
 #pragma once
 
 #include <string>
@@ -67,10 +72,12 @@ struct CalibratedUrdf {
   std::vector<std::string> notes;  // what the URDF could not carry
 };
 
-// Throws InputError when the URDF is bad (urdf_chain.hpp) or its chain does not match the model
-// (joint count or types). The joint map (coupling, scale, compliance: robot_model.hpp) has no
-// place in a URDF; a model with one gets a note (non_geometric_note).
+// Throws InputError when the URDF is bad (urdf_chain.hpp), its chain does not match the model
+// (joint count or types), or it has a link named `measured_point_link` or a joint named
+// "<measured_point_link>_joint" already. The joint map (coupling, scale, compliance:
+// robot_model.hpp) has no place in a URDF; a model with one gets a note (non_geometric_note).
 CalibratedUrdf write_calibrated_urdf(const std::string& original_text, const std::string& source,
-                                     const UrdfChainEnds& ends, const RobotModel& calibrated);
+                                     const UrdfChainEnds& ends, const RobotModel& calibrated,
+                                     const std::string& measured_point_link = {});
 
 }  // namespace kincal::model

@@ -89,7 +89,16 @@ ElementIndex index_elements(const tinyxml2::XMLDocument& doc) {
   return index;
 }
 
-UrdfJoint parse_joint(const tinyxml2::XMLElement& e, const ElementIndex& index, const std::string& source) {
+// What a joint's own values leave to say, by joint name: refusals that matter only when the
+// joint is on the chain (its limits and axis are used nowhere else; urdfdom loads such a file),
+// and warnings for the chain's joints.
+struct JointFindings {
+  std::map<std::string, std::pair<int, std::string>> refusals;  // line, reason
+  std::map<std::string, std::string> warnings;                  // "FILE:LINE: what"
+};
+
+UrdfJoint parse_joint(const tinyxml2::XMLElement& e, const ElementIndex& index, const std::string& source,
+                      JointFindings& findings) {
   UrdfJoint j;
   j.line = e.GetLineNum();
   j.element = index.at(&e);
@@ -104,9 +113,13 @@ UrdfJoint parse_joint(const tinyxml2::XMLElement& e, const ElementIndex& index, 
     j.type = UrdfJointType::prismatic;
   } else if (type == "fixed") {
     j.type = UrdfJointType::fixed;
-  } else {
+  } else if (type == "floating" || type == "planar") {
     j.type = UrdfJointType::fixed;
     j.lower = j.upper = std::numeric_limits<double>::quiet_NaN();  // marks "not a chain joint"
+  } else {
+    fail_at(source, j.line,
+            where + " is of type '" + type +
+                "', which URDF does not have (revolute, continuous, prismatic, fixed, floating, planar)");
   }
   const tinyxml2::XMLElement* parent = e.FirstChildElement("parent");
   const tinyxml2::XMLElement* child = e.FirstChildElement("child");
@@ -123,7 +136,7 @@ UrdfJoint parse_joint(const tinyxml2::XMLElement& e, const ElementIndex& index, 
     if (const char* xyz = axis->Attribute("xyz")) {
       const Vector3 v = parse_triple(xyz, source, axis->GetLineNum(), where + ": axis");
       if (v.norm() < 1e-12 && j.type != UrdfJointType::fixed)
-        fail_at(source, axis->GetLineNum(), where + ": zero axis");
+        findings.refusals.emplace(j.name, std::pair{axis->GetLineNum(), where + ": zero axis"});
       if (v.norm() >= 1e-12) j.axis = v.normalized();
     }
   }
@@ -132,15 +145,25 @@ UrdfJoint parse_joint(const tinyxml2::XMLElement& e, const ElementIndex& index, 
     if (limit == nullptr) fail_at(source, j.line, where + " (" + type + ") needs a <limit>");
     const char* lower = limit->Attribute("lower");
     const char* upper = limit->Attribute("upper");
+    const int line = limit->GetLineNum();
     if (lower != nullptr || upper != nullptr) {  // neither: no limits (urdf_chain.hpp)
-      j.lower = lower != nullptr ? parse_number(lower, source, limit->GetLineNum(), "lower") : 0.0;
-      j.upper = upper != nullptr ? parse_number(upper, source, limit->GetLineNum(), "upper") : 0.0;
+      j.lower = lower != nullptr ? parse_number(lower, source, line, "lower") : 0.0;
+      j.upper = upper != nullptr ? parse_number(upper, source, line, "upper") : 0.0;
     }
-    if (j.lower > j.upper) fail_at(source, limit->GetLineNum(), where + ": lower limit above upper");
-    if (j.lower == j.upper)
-      fail_at(source, limit->GetLineNum(),
-              where + ": lower and upper limits are equal (" + shortest_number_text(j.lower) +
-                  "), so the joint cannot move: make it fixed, or give its range");
+    if (j.lower == 0.0 && j.upper == 0.0) {  // CAD exporters' "not set" (urdf_chain.hpp)
+      j.lower = -std::numeric_limits<double>::infinity();
+      j.upper = std::numeric_limits<double>::infinity();
+      findings.warnings.emplace(j.name, source + ":" + std::to_string(line) + ": " + where +
+                                            ": limits 0 and 0 read as no limits given (as CAD exporters write "
+                                            "them); give the joint's range if it has one");
+    } else if (j.lower > j.upper) {
+      findings.refusals.emplace(j.name, std::pair{line, where + ": lower limit above upper"});
+    } else if (j.lower == j.upper) {
+      findings.refusals.emplace(
+          j.name, std::pair{line, where + ": lower and upper limits are equal (" + shortest_number_text(j.lower) +
+                                      "), so the joint cannot move: make it fixed, or give its "
+                                      "range"});
+    }
   }
   return j;
 }
@@ -157,8 +180,55 @@ struct Tree {
   std::map<std::string, UrdfJoint> joint_to_child;  // by child link
   std::map<std::string, int> mimic_lines;           // by joint name
   std::map<std::string, std::string> type_names;    // joint name -> type text (for refusals)
+  JointFindings findings;
   std::string robot_name;
+  std::string root;  // the one link that is no joint's child
 };
+
+// The links form one tree (what urdfdom's initTree and initRoot demand, and a cycle wherever it
+// is): every link has at most one parent by now; a link from which the way up never reaches a
+// root is on or below a cycle, refused at the cycle's last joint in the file; then a second root
+// is refused.
+void check_one_tree(Tree& tree, const std::string& source) {
+  std::map<std::string, int> state;  // 1: on the way up being walked, 2: reaches a root
+  for (const auto& [start, line] : tree.link_lines) {
+    std::vector<std::string> way;
+    std::string link = start;
+    for (;;) {
+      const int s = state[link];
+      if (s == 2) break;
+      if (s == 1) {  // `link` is on a cycle: the joints from it up to it again
+        std::vector<const UrdfJoint*> cycle;
+        std::string names = link;
+        for (std::string l = link; cycle.empty() || l != link;) {
+          cycle.push_back(&tree.joint_to_child.at(l));
+          l = cycle.back()->parent_link;
+          names += " <- " + l;
+        }
+        const UrdfJoint* last = *std::max_element(
+            cycle.begin(), cycle.end(), [](const UrdfJoint* a, const UrdfJoint* b) { return a->line < b->line; });
+        fail_at(source, last->line,
+                "joint '" + last->name + "' closes a cycle of links (" + names +
+                    ", each the child of the next): a URDF's links form a tree");
+      }
+      state[link] = 1;
+      way.push_back(link);
+      const auto up = tree.joint_to_child.find(link);
+      if (up == tree.joint_to_child.end()) break;  // a root
+      link = up->second.parent_link;
+    }
+    for (const std::string& l : way) state[l] = 2;
+  }
+  std::vector<std::pair<int, std::string>> roots;  // by line
+  for (const auto& [name, line] : tree.link_lines)
+    if (!tree.joint_to_child.contains(name)) roots.emplace_back(line, name);
+  std::sort(roots.begin(), roots.end());
+  if (roots.size() > 1)
+    fail_at(source, roots[1].first,
+            "link '" + roots[1].second + "' is the child of no joint, as is link '" + roots[0].second +
+                "': a URDF's links form one tree (connect it with a joint, or remove it)");
+  tree.root = roots.front().second;
+}
 
 Tree parse_tree(const std::string& text, const std::string& source) {
   if (const std::size_t nul = text.find('\0'); nul != std::string::npos)
@@ -176,11 +246,14 @@ Tree parse_tree(const std::string& text, const std::string& source) {
   const tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
   if (robot == nullptr) fail_at(source, 1, "no <robot> element: not a URDF");
   Tree tree;
-  tree.robot_name = robot->Attribute("name") != nullptr ? robot->Attribute("name") : "";
+  if (robot->Attribute("name") == nullptr)
+    fail_at(source, robot->GetLineNum(), "<robot> without a 'name' attribute, which URDF requires");
+  tree.robot_name = robot->Attribute("name");
   for (const tinyxml2::XMLElement* l = robot->FirstChildElement("link"); l; l = l->NextSiblingElement("link")) {
     const std::string name = required_attribute(*l, "name", source);
-    if (!tree.link_lines.emplace(name, l->GetLineNum()).second)
-      fail_at(source, l->GetLineNum(), "link '" + name + "' defined twice");
+    if (const auto [first, added] = tree.link_lines.emplace(name, l->GetLineNum()); !added)
+      fail_at(source, l->GetLineNum(),
+              "link '" + name + "' defined twice (first on line " + std::to_string(first->second) + ")");
     if (const tinyxml2::XMLElement* inertial = l->FirstChildElement("inertial")) {
       const tinyxml2::XMLElement* mass = inertial->FirstChildElement("mass");
       if (mass == nullptr) continue;
@@ -198,10 +271,12 @@ Tree parse_tree(const std::string& text, const std::string& source) {
     }
   }
   const ElementIndex index = index_elements(doc);
-  std::set<std::string> joint_names;
+  std::map<std::string, int> joint_lines;
   for (const tinyxml2::XMLElement* e = robot->FirstChildElement("joint"); e; e = e->NextSiblingElement("joint")) {
-    UrdfJoint j = parse_joint(*e, index, source);
-    if (!joint_names.insert(j.name).second) fail_at(source, j.line, "joint '" + j.name + "' defined twice");
+    UrdfJoint j = parse_joint(*e, index, source, tree.findings);
+    if (const auto [first, added] = joint_lines.emplace(j.name, j.line); !added)
+      fail_at(source, j.line,
+              "joint '" + j.name + "' defined twice (first on line " + std::to_string(first->second) + ")");
     for (const std::string* link : {&j.parent_link, &j.child_link})
       if (!tree.link_lines.contains(*link))
         fail_at(source, j.line, "joint '" + j.name + "' names link '" + *link + "', which is not defined");
@@ -209,22 +284,23 @@ Tree parse_tree(const std::string& text, const std::string& source) {
       tree.mimic_lines[j.name] = e->FirstChildElement("mimic")->GetLineNum();
     tree.type_names[j.name] = e->Attribute("type");
     const std::string child = j.child_link;
-    if (tree.joint_to_child.contains(child))
-      fail_at(source, j.line, "link '" + child + "' is the child of two joints: not a tree");
+    if (const auto other = tree.joint_to_child.find(child); other != tree.joint_to_child.end())
+      fail_at(source, j.line,
+              "link '" + child + "' is the child of joint '" + j.name + "' and of joint '" + other->second.name +
+                  "' (line " + std::to_string(other->second.line) + "): a link has one parent in a URDF's tree");
     tree.joint_to_child.emplace(child, std::move(j));
   }
   if (tree.link_lines.empty()) fail_at(source, robot->GetLineNum(), "the robot has no links");
+  check_one_tree(tree, source);
   return tree;
 }
 
-// The joints from `base` down to `tip` (empty when tip == base); nullopt-like empty result with
-// found = false when base is not above tip.
+// The joints from `base` down to `tip` (empty when tip == base); false when base is not above
+// tip. The links form a tree (check_one_tree), so the way up ends.
 bool path_between(const Tree& tree, const std::string& base, const std::string& tip, std::vector<UrdfJoint>& out) {
   out.clear();
   std::string link = tip;
-  std::set<std::string> seen;
   while (link != base) {
-    if (!seen.insert(link).second) return false;  // a cycle
     const auto it = tree.joint_to_child.find(link);
     if (it == tree.joint_to_child.end()) return false;
     out.push_back(it->second);
@@ -272,22 +348,9 @@ UrdfChain parse_urdf_chain(const std::string& text, const std::string& source, c
   chain.source = source;
   chain.robot_name = tree.robot_name;
 
-  std::vector<std::string> roots;
-  for (const auto& [name, line] : tree.link_lines)
-    if (!tree.joint_to_child.contains(name)) roots.push_back(name);
-  if (!ends.base_link.empty()) {
-    if (!tree.link_lines.contains(ends.base_link))
-      fail_at(source, 1, "no link named '" + ends.base_link + "' (--base-link)");
-    chain.base_link = ends.base_link;
-  } else {
-    if (roots.size() != 1) {
-      std::string list;
-      for (const std::string& r : roots) list += (list.empty() ? "" : ", ") + r;
-      fail_at(source, 1,
-              "the links form no single tree (roots: " + list + "): choose the chain's first link with --base-link");
-    }
-    chain.base_link = roots.front();
-  }
+  if (!ends.base_link.empty() && !tree.link_lines.contains(ends.base_link))
+    fail_at(source, 1, "no link named '" + ends.base_link + "' (--base-link)");
+  chain.base_link = ends.base_link.empty() ? tree.root : ends.base_link;
 
   std::vector<UrdfJoint> path;
   if (!ends.tip_link.empty()) {
@@ -349,6 +412,10 @@ UrdfChain parse_urdf_chain(const std::string& text, const std::string& source, c
               "joint '" + j.name +
                   "' mimics another joint: chains with mimic joints are not supported "
                   "(calibrate the chain without it, or make it fixed)");
+    if (const auto r = tree.findings.refusals.find(j.name); r != tree.findings.refusals.end())
+      fail_at(source, r->second.first, r->second.second);
+    if (const auto w = tree.findings.warnings.find(j.name); w != tree.findings.warnings.end())
+      chain.warnings.push_back(w->second);
   }
   chain.joints = std::move(path);
   std::map<std::string, std::vector<const UrdfJoint*>> children;  // by parent link
@@ -431,6 +498,11 @@ RobotModel model_from_urdf(const UrdfChain& chain) {
   Transform slide;
   slide.translation = Vector3(0, 0, -s);
   model.flange_T_tool = slide * model.flange_T_tool;
+  // The tip link is the flange (robot_model.hpp): the TCP there until told otherwise, and the
+  // measured point there until identify estimates it.
+  model.flange_link = chain.tip_link;
+  model.frame_n_T_flange = model.flange_T_tool;
+  model.flange_T_tcp = Transform{};
   // Masses: movable joint i moves its child link and the links fixed after it up to the next
   // movable joint; their centre of mass in frame i at the readings' zero, where the URDF's link
   // poses are known. Gravity: the base link's -z (REP 103), in frame 0.

@@ -1,33 +1,45 @@
 // URDF in: the serial chain between a base link and a tip link of a robot's URDF, and that chain
 // as a kincal model (`--model robot.urdf`), without changing its kinematics.
 //
-// Reading (tinyxml2, so every error names the file and the line): links and joints form a tree;
-// the chain is the path from `base_link` to `tip_link`. Defaults: the base is the tree's root;
+// Reading (tinyxml2, so every error names the file and the line): links and joints form one tree
+// (as urdfdom requires); the chain is the path from `base_link` to `tip_link`. Defaults: the base
+// is the tree's root;
 // the tip is the leaf below the base with the most movable joints on its way, when that leaf is
 // unique -- otherwise InputError lists the candidate chains ("base_link -> tool0 (6 joints)";
 // the first kMaxListedChains of them, then how many more) and asks for --tip-link. Choosing the
 // default costs O(links log links), however many leaves there are.
 //
 // Accepted: any XML spelling tinyxml2 reads (either quote, spaces around '=', attributes in any
-// order, comments, CDATA, CRLF line ends, a UTF-8 byte-order mark). Joint types: revolute,
-// continuous (no limits), prismatic (movable); fixed (folded into the neighbours). A missing
-// <origin> is the identity, a missing <axis> is (1, 0, 0) as URDF says; the axis is normalized.
+// order, tabs, comments, CDATA, LF, CRLF or mixed line ends, no line end after the last line, a
+// UTF-8 byte-order mark). Joint types: revolute, continuous (no limits), prismatic (movable);
+// fixed (folded into the neighbours); floating and planar off the chain. A missing <origin> is
+// the identity, a missing <axis> is (1, 0, 0) as URDF says; the axis is normalized.
 // Limits of a revolute or prismatic joint: a <limit> without lower and upper (effort and
 // velocity only) means no limits -- not [0, 0], URDF's default for the two, which would hold
 // the joint at 0 (issue #25: `plan` did); with one of them, the other is URDF's default 0.
+// Limits that come to 0 and 0 (lower="0" upper="0", as CAD exporters such as SolidWorks' write
+// for "not set", which every ROS tool loads) are no limits either: a revolute joint reads as
+// continuous, a prismatic one as unbounded, and a chain joint's UrdfChain::warnings says so with
+// the <limit>'s file:line.
 //
 // Refused, with InputError "FILE:LINE: reason" (LINE: the offending element's line, or 1 for
-// whole-document problems and unknown --base-link/--tip-link names): XML errors and NUL bytes,
+// unknown --base-link/--tip-link names): XML errors and NUL bytes,
 // a link's <mass> without a value or with one that is not a finite number from 0 to kMaxMassKg,
 // an end tag that closes no element (tinyxml2 would ignore the rest of the file silently), a
 // tag written "</a .../>" (tinyxml2 would read an element a);
-// no <robot>, no links, a link or joint defined twice, a joint naming an undefined link, a link
-// that is the child of two joints; a joint without name, type, <parent> or <child>; numbers that
+// what is no URDF for any tool, anywhere in the file (what urdfdom's check_urdf refuses, and
+// beyond it the two ways its tree check misses): no <robot> or one without a name, no links, a
+// link or joint name defined twice (both lines named), a joint naming an undefined link, a joint
+// type URDF does not have, a second root (a link no joint has as child besides the first: a
+// forest or a stray link, whichever --base-link), a cycle of joints (on the chain or off it:
+// urdfdom takes a cycle that leaves one root for a tree), a link that is the child of two
+// joints (urdfdom keeps the last); a joint without name, type, <parent> or <child>; numbers that
 // are not finite (decimal commas included), an origin more than kMaxOriginM from its parent
-// frame; a zero axis on a movable joint; a revolute or
-// prismatic joint without <limit>, with lower above upper, or with equal limits (it cannot move:
-// make it fixed); on the chain: floating and planar joints and <mimic> joints (their values are
-// not readings of their own), no movable joint at all, more than core::kMaxJoints of them.
+// frame; a revolute or prismatic joint without <limit>. On the chain only (their values are
+// used nowhere else; urdfdom loads them): a zero axis on a movable joint, lower limit above upper,
+// equal limits other than 0 and 0 (it cannot move: make it fixed); floating and planar joints and
+// <mimic> joints (their values are not readings of their own), no movable joint at all, more
+// than core::kMaxJoints of them.
 // Names are taken as the bytes they are: the text is expected to be UTF-8, which the input layer
 // (host/files) checks for every file read by path.
 //
@@ -41,7 +53,9 @@
 // link, moved onto that joint's axis (for a UR description: base_link_inertia, the controller's
 // base); links by chain_from_axes (axes.hpp: standard DH, Doty's convention where consecutive
 // axes are within 0.1 rad of parallel), joint offsets folded into theta/d so that a reading of 0
-// is the URDF's 0; the tool is a frame: the tip link. Masses (for model selection's gravity
+// is the URDF's 0; the tip link is the flange (flange_link, frame_n_T_flange) and the TCP
+// (flange_T_tcp identity), and the tool -- the measured point, robot_model.hpp -- a frame there
+// until identified. Masses (for model selection's gravity
 // candidate, model_selection.hpp): joint i carries the <inertial> masses of the chain's links it
 // moves up to the next movable joint and of the links fixed to them off the chain (links behind
 // another movable joint off the chain, e.g. a mobile robot's head, are left out), their centre of
@@ -101,6 +115,9 @@ struct UrdfChain {
   int tip_line = 0;  // of the tip's <link> element
   std::vector<UrdfJoint> joints;
   std::vector<UrdfMass> masses;  // of each joint's child link (see the top)
+  // "FILE:LINE: what" for what the chain's joints were read as and a user may not expect (limits
+  // 0 and 0: none); model::load_model prints them to standard error.
+  std::vector<std::string> warnings;
 
   int movable_count() const;
 };

@@ -60,6 +60,25 @@
 //                                          the flange orientation (the largest axis of the
 //                                          parameter covariance propagated to it, RMS over the
 //                                          held-out rows): how well positions alone determine it
+// Issue #41: the priors' widths chosen by the data (identify/prior_scale.hpp).
+//   realdata_ur10_prior_scale_<class>[_nN|_extrapolation]   the scale the data chose for each
+//                                          class of priors (x its default width) in the default
+//                                          identify's fit (plain: N = 300)
+//   realdata_ur10_fixed_priors_heldout_rms_mm[_nN], realdata_ur10_extrapolation_fixed_priors_rms_mm
+//                                          the same defaults (model selection included) with the
+//                                          fixed default widths (before issue #41)
+//   realdata_ur10_extrapolation995_rms_mm  issue #41's extrapolation split: train on the rows of
+//                                          the 995 training rows inside the central 70 % of every
+//                                          joint's range (over those rows), judge every other row;
+//                                          _fixed_priors_ the same before
+//   sim_service_arm_heldout_over_noprior   a simulated service arm (tests/host/identify/simulation.hpp:
+//                                          8 joints with a prismatic torso, 3 mm / 0.5 deg errors,
+//                                          a mocap's 0.2 mm, 37 rows, below model selection's 100):
+//                                          pooled held-out RMS against the truth over 20 seeds, the
+//                                          defaults over --no-prior; _fixed_priors_ the same with
+//                                          the fixed default widths (before); sim_precise_arm_* the
+//                                          same for a PUMA with 0.2 mm / 0.02 deg errors, 0.02 mm
+//                                          noise, 40 rows
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -122,14 +141,16 @@ void figure(const std::string& name, double value, const char* unit) {
 
 // identify's default (kincal identify): the model chosen by cross-validation with enough rows,
 // every parameter with the default priors below that (Selection::chosen alone filled then).
-identify::Selection chosen(const model::RobotModel& nominal, const model::Dataset& train, const char* label) {
+// `base`: the options the candidates start from (the defaults, or the fixed prior widths).
+identify::Selection chosen(const model::RobotModel& nominal, const model::Dataset& train, const char* label,
+                           const identify::IdentifyOptions& base = {}) {
   if (static_cast<int>(train.rows.size()) < identify::kMinRowsForSelection) {
     identify::Selection none;
-    none.chosen = {"", "", nominal, {}};
+    none.chosen = {"", "", nominal, base};
     return none;
   }
   const auto start = std::chrono::steady_clock::now();
-  const identify::Selection s = identify::select_model(nominal, train, {});
+  const identify::Selection s = identify::select_model(nominal, train, base);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf("%s (%zu rows): %s", label, train.rows.size(), identify::format_selection(s).c_str());
   figure(std::string("realdata_ur10_selection_seconds_") + label, seconds, "s");
@@ -155,6 +176,82 @@ double flange_sigma_rad(const identify::IdentifyResult& r, const model::Dataset&
     sum += Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c).eigenvalues().maxCoeff();
   }
   return std::sqrt(sum / static_cast<double>(rows.rows.size()));
+}
+
+// The options of identify before issue #41: the default prior widths, fixed.
+identify::IdentifyOptions fixed_priors() {
+  identify::IdentifyOptions o;
+  o.prior.estimate_scales = false;
+  return o;
+}
+
+// The scale the data chose for each class of priors in `r`.
+void prior_scale_figures(const identify::IdentifyResult& r, const std::string& suffix) {
+  for (const identify::ClassScale& c : r.prior_scales.classes) {
+    std::string name = identify::prior_class_name(c.kind);
+    std::replace(name.begin(), name.end(), ' ', '_');
+    std::replace(name.begin(), name.end(), '-', '_');
+    figure("realdata_ur10_prior_scale_" + name + suffix, c.scale, "x_default");
+  }
+}
+
+// The simulated error classes above: pooled held-out RMS against the truth of identify's
+// defaults (below 100 rows: every parameter, the priors' widths from the data), of the fixed
+// default widths and of --no-prior.
+void error_class(const char* label, const model::RobotModel& nominal, const sim::ErrorScale& errors, double noise_m,
+                 int rows) {
+  double defaults2 = 0.0, fixed2 = 0.0, none2 = 0.0;
+  for (std::uint64_t seed = 0; seed < 20; ++seed) {
+    const simulation::ArmCase arm = simulation::simulated_arm(nominal, errors, noise_m, rows, 4100 + seed);
+    const auto held_out2 = [&](const identify::IdentifyOptions& o) {
+      return std::pow(
+          simulation::prediction_rms(identify::identify(nominal, arm.train, o).model, arm.truth, arm.held_out), 2);
+    };
+    identify::IdentifyOptions none;
+    none.prior.strength = 0.0;
+    defaults2 += held_out2({});
+    fixed2 += held_out2(fixed_priors());
+    none2 += held_out2(none);
+  }
+  const std::string name = std::string("sim_") + label;
+  figure(name + "_heldout_mm", std::sqrt(defaults2 / 20.0) * 1e3, "mm");
+  figure(name + "_noprior_heldout_mm", std::sqrt(none2 / 20.0) * 1e3, "mm");
+  figure(name + "_heldout_over_noprior", std::sqrt(defaults2 / none2), "ratio");
+  figure(name + "_fixed_priors_over_noprior", std::sqrt(fixed2 / none2), "ratio");
+}
+
+void error_classes() {
+  sim::ErrorScale service;
+  service.length_m = 3e-3;
+  service.angle_rad = 0.5 * std::numbers::pi / 180.0;
+  error_class("service_arm", simulation::service_arm(), service, 2e-4, 37);
+  sim::ErrorScale precise;
+  precise.length_m = 2e-4;
+  precise.angle_rad = 0.02 * std::numbers::pi / 180.0;
+  error_class("precise_arm", model::load_model(KINCAL_ROBOTS_DIR "/puma560.yaml"), precise, 2e-5, 40);
+}
+
+// The extrapolation split as issue #41 counts it: the rows of the 995 training rows inside the
+// central 70 % of every joint's range (over those 995) train; every other row of the file, the
+// 500 held out included, is judged. With the defaults and with the fixed default widths.
+void issue41_extrapolation(const model::RobotModel& nominal, const model::Dataset& all, const realdata::Split& split) {
+  const identify::RowSplit central = identify::out_of_range_split(realdata::subset(all, split.train_order), 0.7);
+  std::vector<int> train_rows, judged_rows;
+  std::vector<bool> training(all.rows.size(), false);
+  for (const int i : central.inside)
+    training[static_cast<std::size_t>(split.train_order[static_cast<std::size_t>(i)])] = true;
+  for (int i = 0; i < static_cast<int>(all.rows.size()); ++i)
+    (training[static_cast<std::size_t>(i)] ? train_rows : judged_rows).push_back(i);
+  const model::Dataset train = realdata::subset(all, train_rows), judged = realdata::subset(all, judged_rows);
+  figure("realdata_ur10_extrapolation995_train_rows", static_cast<double>(train_rows.size()), "rows");
+  figure("realdata_ur10_extrapolation995_judged_rows", static_cast<double>(judged_rows.size()), "rows");
+  const identify::Selection now = chosen(nominal, train, "extrapolation995");
+  const Outcome after = run(now.chosen.model, train, judged, now.chosen.options, selection_scores(now));
+  figure("realdata_ur10_extrapolation995_rms_mm", after.rms_m * 1e3, "mm");
+  prior_scale_figures(after.result, "_extrapolation995");
+  const identify::Selection fixed = chosen(nominal, train, "extrapolation995_fixed_priors", fixed_priors());
+  figure("realdata_ur10_extrapolation995_fixed_priors_rms_mm",
+         run(fixed.chosen.model, train, judged, fixed.chosen.options, selection_scores(fixed)).rms_m * 1e3, "mm");
 }
 
 // The simulated sagging sweep sets above.
@@ -184,6 +281,7 @@ void sagging_sweeps(const model::RobotModel& puma) {
 }  // namespace
 
 int main() {
+  error_classes();
   sagging_sweeps(model::load_model(KINCAL_ROBOTS_DIR "/puma560.yaml"));
   const model::RobotModel nominal = model::load_model(KINCAL_ROBOTS_DIR "/ur10.yaml");
   const model::Dataset all = realdata::import_ur10(KINCAL_REALDATA_DIR).data;
@@ -227,8 +325,16 @@ int main() {
     figure("realdata_ur10_model_error_deg" + suffix, cov.result.model_error_orientation_rad * 180.0 / std::numbers::pi,
            "deg");
     figure("realdata_ur10_rejected" + suffix, static_cast<double>(cov.result.rejections.size()), "rows");
+    prior_scale_figures(cov.result, suffix);
+    {
+      const identify::Selection f =
+          chosen(nominal, train, ("fixed_priors_n" + std::to_string(n)).c_str(), fixed_priors());
+      figure("realdata_ur10_fixed_priors_heldout_rms_mm" + suffix,
+             run(f.chosen.model, train, held_out, f.chosen.options, selection_scores(f)).rms_m * 1e3, "mm");
+    }
     if (n == 300) {
       figure("realdata_ur10_heldout_rms_mm", cov.rms_m * 1e3, "mm");
+      prior_scale_figures(cov.result, "");
       figure("realdata_ur10_coverage_95", cov.coverage, "fraction");
       model::Dataset points = train;
       points.has_orientation = false;
@@ -256,7 +362,14 @@ int main() {
     const Outcome old = run(nominal, inside, outside, old_default);
     figure("realdata_ur10_extrapolation_train_rows", static_cast<double>(inside.rows.size()), "rows");
     figure("realdata_ur10_extrapolation_rms_mm", now.rms_m * 1e3, "mm");
+    prior_scale_figures(now.result, "_extrapolation");
+    {
+      const identify::Selection f = chosen(nominal, inside, "extrapolation_fixed_priors", fixed_priors());
+      figure("realdata_ur10_extrapolation_fixed_priors_rms_mm",
+             run(f.chosen.model, inside, outside, f.chosen.options, selection_scores(f)).rms_m * 1e3, "mm");
+    }
     figure("realdata_ur10_extrapolation_default_before_rms_mm", before.rms_m * 1e3, "mm");
+    issue41_extrapolation(nominal, all, split);
     figure("realdata_ur10_extrapolation_over_default", now.rms_m / before.rms_m, "ratio");
     figure("realdata_ur10_extrapolation_old_default_rms_mm", old.rms_m * 1e3, "mm");
     figure("realdata_ur10_extrapolation_coverage_95", now.coverage, "fraction");

@@ -5,7 +5,11 @@
 // the plan (pose measurements, as identify uses the set), identified with the default options:
 //   realdata_ur10_plan_heldout_rms_mm        held-out position RMS of the planned 30 rows
 //   realdata_ur10_random30_heldout_rms_mm    mean over 20 random 30-row choices (seeds 1..20)
-//   realdata_ur10_plan_over_random           the ratio (issue #23: <= 0.9)
+//   realdata_ur10_plan_share_of_achievable   (random-30 - plan-30) / (random-30 - all 995
+//                                            candidates): how much of what more rows could gain a
+//                                            30-row plan gains (issue #41: >= 0.6; it replaces the
+//                                            withdrawn plan/random ratio, whose 0.9 was below what
+//                                            the data allow)
 //   realdata_ur10_random30_better_than_plan  how many of the 20 random choices beat the plan
 //   realdata_ur10_plan_index_over_random     O1 of the plan over the random choices' mean (the
 //                                            nominal model's Jacobian, what the plan maximizes)
@@ -84,7 +88,7 @@ int main() {
   const double all_rms = heldout_rms_m(nominal, all, split.train_order, held_out);
   figure("realdata_ur10_plan_heldout_rms_mm", plan_rms * 1e3, "mm");
   figure("realdata_ur10_random30_heldout_rms_mm", random_mean * 1e3, "mm");
-  figure("realdata_ur10_plan_over_random", plan_rms / random_mean, "ratio");
+  figure("realdata_ur10_plan_share_of_achievable", (random_mean - plan_rms) / (random_mean - all_rms), "ratio");
   figure("realdata_ur10_random30_better_than_plan", better, "of_20");
   figure("realdata_ur10_plan_index_over_random", index_ratio, "ratio");
   figure("realdata_ur10_plan_positions_heldout_rms_mm", positions_rms * 1e3, "mm");

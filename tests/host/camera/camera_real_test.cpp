@@ -18,6 +18,7 @@
 #include "host/camera/intrinsics.hpp"
 #include "host/camera/stereo.hpp"
 #include "tests/host/camera/error_text.hpp"
+#include "tests/host/camera/real_corpus.hpp"
 
 using namespace kincal::camera;
 
@@ -235,4 +236,39 @@ TEST_CASE("a right list shifted by one, or out of order any other way, is refuse
   CHECK(swapped.baseline_m == doctest::Approx(s.baseline_m).epsilon(0.01));
   CHECK(contains(describe(swapped), "to the left of the left camera"));
   CHECK_FALSE(contains(describe(s), "to the left of the left camera"));
+}
+
+// Issue #43, a whole board next to the image edge or against texture is the board: each left
+// view cropped so that an image edge runs through the board's outer squares (half a square
+// beyond its outermost corners, on each of the four edges), and pasted without its white margin
+// onto another photograph, is found at its true size in every view; the old ring test called the
+// board larger in some (9x7 grown into the cut squares, "its squares continue" on texture).
+// Given a wrong size, the same views still refuse the calibration, naming the board's own.
+TEST_CASE("a board cut by the image edge or against texture is found at its true size; wrong sizes still refused") {
+  namespace corpus = kincal::camera::testing;
+  std::vector<corpus::RealView> views;
+  int k = 0;
+  for (const corpus::RealView& v : corpus::sample_views("left")) {
+    for (int edge = 0; edge < 4; ++edge) {
+      const cv::Mat cut = corpus::cut_outer_squares(v.image, edge, 0.5);
+      if (!cut.empty()) views.push_back({v.name + " cut " + std::to_string(edge), cut});
+    }
+    views.push_back({v.name + " on texture",
+                     corpus::board_on_texture(v.image, corpus::background_texture(v.image.size(), k++), 0)});
+  }
+  REQUIRE(views.size() >= 40);
+  std::vector<cv::Mat> images;
+  std::vector<std::string> names;
+  for (const corpus::RealView& v : views) {
+    images.push_back(v.image);
+    names.push_back(v.name);
+  }
+  const std::vector<BoardDetection> right_size = detect_boards(parse_board(corpus::kSampleBoard), images, names);
+  for (const BoardDetection& d : right_size) CHECK_MESSAGE(d.found, d.view << ": " << d.reason);
+  CHECK_NOTHROW(refuse_wrong_board(right_size));
+  for (const std::string given : {"8x6", "9x5"}) {
+    const std::vector<BoardDetection> d = detect_boards(parse_board("chessboard:" + given + ":0.025"), images, names);
+    const std::string message = error_of([&] { refuse_wrong_board(d); });
+    CHECK_MESSAGE(contains(message, "give --board chessboard:9x6:0.025"), given << ": " << message);
+  }
 }

@@ -6,6 +6,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <string>
 
 using namespace kincal;
 
@@ -80,4 +82,26 @@ TEST_CASE("the reader names file and line of a bad line") {
   CHECK_THROWS_WITH_AS(reader.next(), doctest::Contains(doctest::String((path + ":3: ").c_str())), can::CanError);
   std::filesystem::remove(path);
   CHECK_THROWS_WITH_AS(can::CandumpReader("/nonexistent/x.log"), doctest::Contains("no such file"), can::CanError);
+}
+
+// Issue #44: a time stamp's seconds fit the 64-bit microsecond clock or are refused, never wrapped.
+TEST_CASE("time stamps beyond the 64-bit microsecond clock are refused naming the line") {
+  const std::uint64_t last_s = std::numeric_limits<std::uint64_t>::max() / 1000000 - 1;
+  CHECK(can::parse_candump_line("(" + std::to_string(last_s) + ".999999) vcan0 123#00").time_us ==
+        last_s * 1000000 + 999999);
+  for (const std::string& stamp : {std::to_string(last_s + 1) + ".000000", std::string("18446744073709551616.000000"),
+                                   std::string(40, '9') + ".000000"})
+    CHECK_THROWS_WITH_AS(can::parse_candump_line("(" + stamp + ") vcan0 123#00"),
+                         doctest::Contains("s is beyond the 64-bit microsecond clock (at most 18446744073708 s)"),
+                         can::CanError);
+  const auto path = (std::filesystem::temp_directory_path() / "kincal-stamp.log").string();
+  {
+    std::ofstream out(path);
+    out << "(1.000000) vcan0 123#00\n(99999999999999999999.000000) vcan0 123#00\n";
+  }
+  can::CandumpReader reader(path);
+  CHECK(reader.next().has_value());
+  CHECK_THROWS_WITH_AS(reader.next(), doctest::Contains(doctest::String((path + ":2: timestamp").c_str())),
+                       can::CanError);
+  std::filesystem::remove(path);
 }

@@ -11,12 +11,12 @@
 
 #include "firmware/app/kinematic_correction.hpp"
 #include "host/correct/cartesian_targets.hpp"
+#include "host/correct/correction_block.hpp"
 #include "host/correct/joint_correction.hpp"
 #include "host/correct/joint_offsets.hpp"
 #include "host/correct/platform_step.hpp"
 #include "host/correct/prediction_spread.hpp"
 #include "host/model/model_file.hpp"
-#include "host/session/online_correction.hpp"
 
 using namespace kincal;
 
@@ -78,7 +78,7 @@ void check_agreement(const model::RobotModel& start, const model::RobotModel& ca
   // The platform step is the platform's: the app's correction gives the same readings to its
   // 2^-16 rad quantization (one LSB: the float results may straddle a rounding boundary).
   static app::KinematicCorrection app_correction;
-  const shared::CorrectionParameters block = session::correction_block(start, calibrated);
+  const shared::CorrectionParameters block = correct::correction_block(start, calibrated);
   std::mt19937_64 rng(5);
   double worst_apart_m = 0.0, worst_goal_m = 0.0, worst_uncorrected_m = 0.0;
   for (int trial = 0; trial < 30; ++trial) {

@@ -235,3 +235,42 @@ TEST_CASE("URScript from a file: a byte-order mark is kept, the rest read as wit
   CHECK(correct::write_urscript(p, {{0.5, -1.2, 1.4, -1.6, -1.5, 0.3}}) ==
         "\xEF\xBB\xBFmovej([0.5, -1.2, 1.4, -1.6, -1.5, 0.3])\r\nend\r\n");
 }
+
+TEST_CASE("urscript: a program as editors write it comes back byte for byte but the values that changed (issue #44)") {
+  // A byte-order mark, tabs, CRLF and LF mixed, no spaces or odd spaces inside the brackets, values
+  // spelled with a '+'-less exponent and trailing zeros, no line end after the last line.
+  const std::string program =
+      "\xEF\xBB\xBF"
+      "def p():\r\n\t# home\r\n\tmovej([0.1,-0.4,0.30,2e-1,-0.5,0.7], a=1.4)\n"
+      "\tservoj([ 0.2 ,\t-0.3, 0.2, 0.1, -0.6, 0.5 ], t=0.008)\r\n"
+      "\tmovel( p[0.5,\t0.1, 0.4 , 0, 3.14, 0] )\r\nend";
+  const correct::UrProgram parsed = correct::parse_urscript(program, "p.script", 6);
+  REQUIRE(parsed.motions.size() == 3);
+  CHECK(parsed.motions[0].target.q[3] == 0.2);
+  // Each value's own bytes are the number alone.
+  for (const correct::UrMotion& m : parsed.motions) {
+    REQUIRE(m.values.size() == 6);
+    for (const auto& [begin, end] : m.values) {
+      const std::string value = program.substr(begin, end - begin);
+      CHECK(value.find_first_of(" \t,[]") == std::string::npos);
+      CHECK(!value.empty());
+    }
+  }
+  // The same values back: the very same bytes (spellings such as 0.30 and 2e-1 kept).
+  std::vector<std::vector<double>> same = {
+      parsed.motions[0].target.q, parsed.motions[1].target.q, {0.5, 0.1, 0.4, 0, 3.14, 0}};
+  CHECK(correct::write_urscript(parsed, same) == program);
+  // Two values changed: only their bytes differ.
+  std::vector<std::vector<double>> changed = same;
+  changed[0][2] = 0.3125;
+  changed[2][1] = -0.25;
+  const std::string written = correct::write_urscript(parsed, changed);
+  CHECK(written ==
+        "\xEF\xBB\xBF"
+        "def p():\r\n\t# home\r\n\tmovej([0.1,-0.4,0.3125,2e-1,-0.5,0.7], a=1.4)\n"
+        "\tservoj([ 0.2 ,\t-0.3, 0.2, 0.1, -0.6, 0.5 ], t=0.008)\r\n"
+        "\tmovel( p[0.5,\t-0.25, 0.4 , 0, 3.14, 0] )\r\nend");
+  // A motion given a wrong count of values is a programming error, not a silent truncation.
+  changed[1].pop_back();
+  CHECK_THROWS_AS(correct::write_urscript(parsed, changed), std::invalid_argument);
+}

@@ -300,7 +300,8 @@ case("camera:hand-eye poses of other images", ["camera", "hand-eye"] + board + [
      "--images", bg, "-o", "he.yaml"], r"do not belong together: AX = XB residual [0-9.]+ degrees / [0-9.]+ mm RMS.*another run")
 case("camera:hand-eye a square 5/6 of the board's", ["camera", "hand-eye", "--board", "chessboard:9x6:0.025", "--camera", "cam.yaml",
      "--poses", os.path.join(camera_dir, "poses.csv"), "--images", bg, "-o", "he.yaml"],
-     r"do not belong together: .*with the board's lengths 1\.(19|20|21)[0-9] times those given .*is the board's square size right\?")
+     r"warning: [^\n]*with the board's lengths 1\.(19|20|21)[0-9] times those given .*or the board's square size is \(the data suggest",
+     rc_ok=True)  # poor data give the answer with a warning (issue #43)
 case("camera:hand-eye consistent", ["camera", "hand-eye"] + board + ["--camera", "cam.yaml", "--poses", os.path.join(camera_dir, "poses.csv"),
      "--images", bg, "-o", "he.yaml"], r"wrote he\.yaml", rc_ok=True)
 
@@ -551,7 +552,7 @@ def table_cases():
         ("session --out", ["session", "--model", arid, "--poses", "12", "--journal", "j.journal", "--out", "{out}"], False),
         ("session --report", ["session", "--model", arid, "--poses", "12", "--journal", "j.journal", "--report", "{out}"], False),
         ("session --dataset", ["session", "--model", arid, "--poses", "12", "--journal", "j.journal", "--dataset", "{out}"], False),
-        ("monitor --log", ["monitor", "--replay", LOG, "--log", "{out}"], False),
+        ("monitor --log", ["monitor", "--can", "kincal-none0", "--log", "{out}"], False),  # --log is live's (#44)
     ]
     output_classes = [
         ("named pipe", lambda p: (os.mkfifo(p), {p: is_fifo(p)})[1], r"is a named pipe \(FIFO\), not a regular file: refusing to replace it"),
@@ -920,6 +921,231 @@ case("camera:calibrate -o over an image of DIR", ["camera", "calibrate"] + board
 case("board-poses:-o over an image of --images DIR", BP + ["--images", "views_here", "--joints", os.path.join(camera_dir, "poses.csv"),
      "-o", here_paths[2]], r"-o views_here/view_02\.png is an image in the directory --images views_here", protect=here_paths)
 
+
+# --- issue #44: every value and option means something. Each class on inputs of its own (not the
+# issue's examples); a model refused names its line and column, an option the one it needs or excludes.
+def model_with(name, joints, extra="", angles="# angles: not given (radians)\n"):
+    with open(name, "w") as f:
+        f.write("name: m44\n" + angles + "joints:\n" + "".join("  - {" + j + "}\n" for j in joints) +
+                "tool:\n  point: [0, 0, 0.1]\n" + extra)
+    return name
+R = "type: revolute, convention: dh, d: 0.3, theta: 0, a: 0.2, alpha: {}, limits: [-3, 3]"
+P44 = "type: prismatic, convention: dh, d: 0, theta: 0, a: 0, alpha: 0, limits: [0, 0.5]"
+def predict_model(path):
+    return ["predict", "--model", path, "--joints", os.path.join(work, "sweeps_q.csv"), "-o", "o44.csv"]
+# names: two joints of one name, a name equal to another joint's default j<i>, two priors of one parameter
+for label, path, pattern in [
+        ("third joint named like the first", model_with("dup1.yaml", ["name: base, " + R.format(0), R.format(1.5), "name: base, " + P44]),
+         r"dup1\.yaml:6:12: joint 3's name 'base' is joint 1's name too \(line 4\)"),
+        ("a name that is another joint's default", model_with("dup2.yaml", [R.format(0), "name: j1, " + R.format(1.5), P44]),
+         r"dup2\.yaml:5:12: joint 2's name 'j1' is joint 1's name too"),
+        ("one parameter's prior twice", model_with("dup3.yaml", [R.format(0), R.format(1.5), P44], "priors: {d2: 0.001, d02: 0.002}\n"),
+         r"dup3\.yaml:9:[0-9]+: priors: 'd02' names the parameter that 'd2' \(line 9\) names")]:
+    case(f"predict:model with {label}", predict_model(path), pattern, protect=[path])
+# degrees without 'angles: deg': a theta, an offset, a base rpy, limits of a wrist
+for label, joints, extra, pattern in [
+        ("theta 180", [R.format(0).replace("theta: 0", "theta: 180"), R.format(0), P44], "", r":4:.*theta: 180 rad is more than a turn.*angles: deg"),
+        ("offset -45", [R.format(0), R.format(0) + ", offset: -45", P44], "", r":5:.*offset: -45 rad is more than a turn.*angles: deg"),
+        ("base rpy", [R.format(0), R.format(0), P44], "base: {rpy: [0, 0, 150]}\n", r":9:.*base rpy: 150 rad is more than a turn"),
+        ("wrist limits", [R.format(0).replace("[-3, 3]", "[-270, 270]"), R.format(0), P44], "", r":4:.*lower limit: -270 rad is more than 8 turns")]:
+    path = model_with("deg_" + label.replace(" ", "_") + ".yaml", joints, extra)
+    case(f"predict:model in degrees without its key, {label}", predict_model(path), re.escape(path) + pattern, protect=[path])
+# magnitudes: a gear scale in mm/m, a link mass in grams, a compliance in the wrong unit, a length in
+# mm, gravity in mm/s^2, a centre of mass in mm, a 2^64 measurement count
+for label, joints, extra, pattern in [
+        ("scale 1000", [R.format(0) + ", scale: 1000", R.format(0), P44], "", r":4:.*joint 1 scale: 1000 is outside \[0\.5, 2\]"),
+        ("mass in grams", [R.format(0) + ", mass: 250000", R.format(0), P44], "", r":4:.*joint 1 mass: 250000 kg is more than 1e\+05 kg"),
+        ("compliance 3 rad/(N m)", [R.format(0) + ", mass: 5, compliance: 3", R.format(0), P44], "", r":4:.*joint 1 compliance: 3 is outside \[0, 1\]"),
+        ("d in mm", [R.format(0).replace("d: 0.3", "d: 300"), R.format(0), P44], "", r":4:.*joint 1 d: 300 is outside \[-100, 100\] \(m: is it in millimetres\?\)"),
+        ("gravity in mm/s^2", [R.format(0), R.format(0), P44], "gravity: [0, -9806.65, 0]\n", r":9:.*gravity: 9806\.65 m/s\^2 is more than"),
+        ("centre of mass in mm", [R.format(0) + ", mass: 2, centre_of_mass: [0, 250, 0]", R.format(0), P44], "", r":4:.*centre_of_mass: 250 is outside"),
+        ("2^64 measurements", [R.format(0), R.format(0), P44], "calibration: {measurements: 18446744073709551616}\n", r":9:.*measurements: 18446744073709551616 is outside")]:
+    path = model_with("mag_" + re.sub(r"\W", "_", label) + ".yaml", joints, extra, "angles: rad\n")
+    case(f"predict:model with {label}", predict_model(path), re.escape(path) + pattern, protect=[path])
+# a compliance with nothing to carry: on a revolute joint, on a prismatic one, on a joint whose
+# later links carry no mass (the mass is on an earlier link)
+for label, joints, pattern in [
+        ("revolute", [R.format(0) + ", compliance: 1e-5", R.format(0), P44], r":4:.*joint 1 compliance: neither the links"),
+        ("prismatic", [R.format(0), R.format(0), P44 + ", compliance: 1e-6"], r":6:.*joint 3 compliance: neither"),
+        ("mass only before it", [R.format(0) + ", mass: 8", R.format(0) + ", compliance: 1e-5", P44], r":5:.*joint 2 compliance: neither")]:
+    path = model_with("idle_" + label.replace(" ", "_") + ".yaml", joints)
+    case(f"predict:compliance carrying no mass, {label}", predict_model(path), re.escape(path) + pattern, protect=[path])
+path = model_with("loaded_prismatic.yaml", [R.format(0), R.format(1.5), P44 + ", compliance: 1e-6, mass: 3"])
+case("predict:compliance of a prismatic joint carrying a mass", predict_model(path), "", rc_ok=True)  # m/N along its axis
+# options with no effect in the combination: each refused naming the option it needs or excludes
+I44 = ["import", E, "-o", "o44.csv"] + six
+for label, argv, pattern in [
+        ("import --angle-unit without --orientation", I44 + ["--angle-unit", "rad"], r"--angle-unit requires --orientation"),
+        ("import --orientation-std without --orientation", I44 + ["--orientation-std", "a,b,c"], r"--orientation-std requires --orientation"),
+        ("monitor --fd with --replay", ["monitor", "--replay", LOG, "--fd"], r"--fd requires --can"),
+        ("monitor --duration-s with --replay", ["monitor", "--replay", LOG, "--duration-s", "5"], r"--duration-s requires --can"),
+        ("identify --mount without --hand-eye", ["identify", "--model", puma, "--data", D, "--out", "o44.yaml", "--mount", "world"],
+         r"--mount requires --hand-eye"),
+        ("identify --prior with --no-prior", ["identify", "--model", puma, "--data", D, "--out", "o44.yaml", "--prior", "a2=1mm",
+                                              "--no-prior"], r"--no-prior excludes --prior|--prior excludes --no-prior"),
+        ("identify --max-rejected-fraction with --no-robust", ["identify", "--model", puma, "--data", D, "--out", "o44.yaml",
+                                                               "--max-rejected-fraction", "0.1", "--no-robust"], r"excludes --no-robust|--no-robust excludes"),
+        ("identify --start with --method first-order", ["identify", "--model", puma, "--data", D, "--out", "o44.yaml", "--start", "cpa",
+                                                        "--method", "first-order"], r"--start is where --method full starts: not with --method first-order"),
+        ("session --sweep-deg without --discover", ["session", "--model", arid, "--sweep-deg", "30", "--journal", "x44.journal"],
+         r"--sweep-deg requires --discover"),
+        ("session --poses with --plan", ["session", "--model", arid, "--poses", "5", "--plan", Q, "--journal", "x44.journal"],
+         r"--poses excludes --plan|--plan excludes --poses"),
+        ("session --validation with --validation-plan", ["session", "--model", arid, "--validation", "3", "--validation-plan", Q,
+                                                         "--journal", "x44.journal"], r"excludes --validation"),
+        ("session --squares without --can", ["session", "--model", arid, "--squares", "4", "--journal", "x44.journal"], r"--squares requires --can"),
+        ("blobs --threshold with --colour-table", ["blobs", "dots.pgm", "--colour-table", "beacon.kcct", "--threshold", "100"],
+         r"excludes --threshold|--threshold excludes"),
+        ("correct --seed with --joints", ["correct", "--model", puma, "--joints", Q, "--seed", "0,0,0,0,0,0"], r"--seed excludes --joints|--joints excludes --seed"),
+        ("camera calibrate --camera-name without --format ros", ["camera", "calibrate", "--board", "chessboard:9x6:0.03", "v0.png",
+                                                                 "-o", "c44.yaml", "--camera-name", "wrist"], r"--camera-name is a ROS file's: it needs --format ros")]:
+    case(f"{argv[0]}:{label}", argv, pattern)
+# time stamps within their type: 2^64 s, one second past the 64-bit microsecond clock, 30 digits
+for label, stamp in [("2^64 s", "18446744073709551616.000000"), ("just past the clock", "18446744073709.000000"),
+                     ("30 digits", "9" * 30 + ".000001")]:
+    with open(f"stamp_{len(stamp)}_{stamp[:3]}.log", "w") as f:
+        f.write("(1436509052.249713) vcan0 123#DEADBEEF\n(" + stamp + ") vcan0 123#00\n")
+    case(f"monitor:candump time stamp {label}", ["monitor", "--replay", f"stamp_{len(stamp)}_{stamp[:3]}.log"],
+         r":2: timestamp .* s is beyond the 64-bit microsecond clock")
+with open("stamp_max.log", "w") as f:
+    f.write("(18446744073708.999999) vcan0 123#00\n")
+case("monitor:candump time stamp at the clock's end", ["monitor", "--replay", "stamp_max.log"], r"monitor: 1 frames", rc_ok=True)
+# exports as spreadsheets write them: quoted decimal commas with ',', tabs with quoted numbers, and
+# the ambiguous refused saying why (both marks in a ',' file, a thousands separator, unquoted commas)
+with open("exact.csv") as f:
+    exact_rows = list(csv.reader(f))
+def export_with(name, sep, quote_all, decimal):
+    with open(name, "w") as f:
+        for i, r in enumerate(exact_rows):
+            cells = [c.replace(".", decimal) if i else c for c in r]
+            f.write(sep.join(f'"{c}"' if quote_all or (decimal == "," and sep == "," and "," in c) else c for c in cells) + "\n")
+export_with("q44_comma.csv", ",", True, ",")
+export_with("q44_tab.csv", "\t", False, ",")
+export_with("q44_mixed_quotes.csv", ",", False, ",")
+for name in ["q44_comma.csv", "q44_tab.csv", "q44_mixed_quotes.csv"]:
+    case(f"import:decimal commas in {name}", ["import", name, "-o", name + ".out"] + six, r"decimal comma", rc_ok=True)
+with open("q44_both.csv", "w") as f:
+    f.write(",".join(exact_rows[0]) + "\n" + ",".join(exact_rows[1]) + "\n" +
+            ",".join(f'"{c.replace(".", ",")}"' for c in exact_rows[2]) + "\n")
+case("import:',' file with both decimal marks", ["import", "q44_both.csv", "-o", "o44.csv"] + six,
+     r"q44_both\.csv:3:[0-9]+: .*decimal comma \(line 3\) and with a decimal point \(line 2\)")
+with open("q44_thousands.csv", "w") as f:
+    f.write(";".join(exact_rows[0]) + "\n" + ";".join(["1.234,5"] + exact_rows[1][1:]) + "\n")
+case("import:thousands separator", ["import", "q44_thousands.csv", "-o", "o44.csv"] + six, r"has both '\.' and ','")
+with open("q44_unquoted.csv", "w") as f:
+    f.write(",".join(exact_rows[0]) + "\n" + ",".join(c.replace(".", ",") for c in exact_rows[1]) + "\n")
+case("import:unquoted decimal commas with ','", ["import", "q44_unquoted.csv", "-o", "o44.csv"] + six,
+     r"decimal commas in a ',' separated file must be quoted")
+# messages: a still tolerance that leaves joints still, a camera file that is not one
+case("discover:--still-tolerance above every step", ["discover", "--data", "sweeps.csv", "-o", "o44.yaml", "--still-tolerance", "0.6"],
+     r"--still-tolerance 0\.6 leaves joint 1 still in every row")
+for label, path in [("a robot model", puma), ("a platform geometry", "platform.yaml"), ("a plan's constraints", "plan_constraints.yaml")]:
+    case(f"platform:load --camera with {label}", ["platform", "load", "--can", "kincal-none0", "--camera", path],
+         re.escape(os.path.basename(path)) + r": not a camera file")
+
+
+
+# --- issue #44: URDFs and URScript programs as tools write them. What no URDF tool takes is refused
+# with file:line (a cycle anywhere, a second parent, a name twice, a second root), CAD exporters'
+# limits 0 and 0 read as none with a warning, and --original / --urscript keep every byte but the
+# values they write, whatever the line ends, byte-order mark, tabs and separators.
+def urdf44(extra, name=None):
+    """A two-joint arm base -> a -> b (lines 1-4), then `extra` from line 5 on."""
+    text = ('<robot name="r44">\n<link name="base"/><link name="a"/><link name="b"/>\n'
+            '<joint name="j1" type="revolute"><parent link="base"/><child link="a"/><limit lower="-1" upper="1" effort="1" '
+            'velocity="1"/></joint>\n<joint name="j2" type="continuous"><parent link="a"/><child link="b"/></joint>\n' + extra +
+            "</robot>\n")
+    if name:
+        with open(name, "w") as f:
+            f.write(text)
+    return text
+def fixed44(name, parent, child):
+    return f'<joint name="{name}" type="fixed"><parent link="{parent}"/><child link="{child}"/></joint>\n'
+CD = '<link name="c"/><link name="d"/>\n'
+for label, extra, ends, pattern in [
+        ("cycle c-d off the chain", CD + fixed44("x1", "c", "d") + fixed44("x2", "d", "c"), [], r":7: joint 'x2' closes a cycle of links \(c <- d <- c"),
+        ("a link its own parent", CD + fixed44("x1", "b", "c") + fixed44("x2", "d", "d"), [], r":7: joint 'x2' closes a cycle of links \(d <- d,"),
+        ("cycle through the base link", fixed44("x1", "b", "base"), ["--base-link", "base"], r":5: joint 'x1' closes a cycle of links"),
+        ("cycle of three below a stray link", CD + '<link name="e"/>\n' + fixed44("x1", "e", "c") + fixed44("x2", "c", "d") +
+         fixed44("x3", "d", "e"), ["--tip-link", "b"], r":9: joint 'x3' closes a cycle of links \(c <- e <- d <- c"),
+        ("a chain link with a side parent", '<link name="c"/>\n' + fixed44("x1", "base", "c") + fixed44("x2", "c", "b"), [],
+         r":7: link 'b' is the child of joint 'x2' and of joint 'j2' \(line 4\)"),
+        ("a side link with two parents", '<link name="c"/>\n' + fixed44("x1", "a", "c") + fixed44("x2", "b", "c"), [],
+         r":7: link 'c' is the child of joint 'x2' and of joint 'x1' \(line 6\)"),
+        ("a chain link with two chain parents", '<joint name="j3" type="continuous"><parent link="base"/><child link="b"/></joint>\n',
+         [], r":5: link 'b' is the child of joint 'j3' and of joint 'j2'"),
+        ("a side joint named as a chain joint", CD + fixed44("x1", "b", "c") + fixed44("j2", "c", "d"), [],
+         r":7: joint 'j2' defined twice \(first on line 4\)"),
+        ("two side joints of one name", CD + fixed44("x1", "b", "c") + fixed44("x1", "b", "d"), [], r":7: joint 'x1' defined twice \(first on line 6\)"),
+        ("a joint written twice", fixed44("k", "b", "c") + '<link name="c"/>\n' + fixed44("k", "b", "c"), [],
+         r":7: joint 'k' defined twice \(first on line 5\)"),
+        ("a chain link twice", '<link name="a"><inertial><mass value="2"/></inertial></link>\n', [], r":5: link 'a' defined twice \(first on line 2\)"),
+        ("a side link twice", CD + fixed44("x1", "b", "c") + fixed44("x2", "b", "d") + '<link name = "d" ></link>\n', [],
+         r":8: link 'd' defined twice \(first on line 5\)"),
+        ("the base link twice", "<link name='base'/>\n", ["--base-link", "base"], r":5: link 'base' defined twice \(first on line 2\)"),
+        ("a stray link", '<link name="c"/>\n', ["--base-link", "base"], r":5: link 'c' is the child of no joint, as is link 'base'"),
+        ("a second tree", CD + fixed44("x1", "c", "d"), [], r":5: link 'c' is the child of no joint, as is link 'base'"),
+        ("a misspelt joint type off the chain", '<link name="c"/>\n<joint name="x1" type="Revolute"><parent link="b"/>'
+         '<child link="c"/></joint>\n', [], r":6: joint 'x1' is of type 'Revolute', which URDF does not have")]:
+    path = "s44_" + re.sub(r"\W", "_", label) + ".urdf"
+    urdf44(extra, path)
+    case(f"urdf:URDF with {label}", ["urdf", "--model", path] + ends, re.escape(path) + pattern, protect=[path])
+# CAD exporters' limits 0 and 0: no limits given, a warning at each <limit>; the chain is planned and predicted
+with open("q44_2.csv", "w") as f:
+    f.write("q1,q2\n0.1,0.2\n-0.5,1.5\n")
+for label, limit in [("both written", '<limit lower="0" upper="0" effort="0" velocity="0"/>'),
+                     ("upper alone", '<limit upper="0" effort="0" velocity="0"/>'),
+                     ("0.0 and -0", "<limit effort='0' lower='0.0' velocity='0' upper='-0'/>")]:
+    path = "cad44_" + re.sub(r"\W", "_", label) + ".urdf"
+    text = urdf44("").replace('<limit lower="-1" upper="1" effort="1" velocity="1"/>', "\n" + limit)
+    text = text.replace('type="continuous"><parent link="a"/><child link="b"/>',
+                        'type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 1 0"/><origin xyz="0 0 0.3"/>' + limit)
+    with open(path, "w", newline="\r\n") as f:
+        f.write('<?xml version="1.0" encoding="utf-8"?>\n<!-- This URDF was automatically created by a CAD exporter -->\n' + text)
+    case(f"predict:URDF with limits 0 and 0, {label}", ["predict", "--model", path, "--joints", "q44_2.csv", "-o", "-"],
+         rf"(?=.*warning: {re.escape(path)}:6: joint 'j1': limits 0 and 0 read as no limits given)"
+         rf"(?=.*{re.escape(path)}:7: joint 'j2': limits 0 and 0)(?=.*x,y,z)", rc_ok=True, protect=[path])
+    case(f"plan:URDF with limits 0 and 0, {label}", ["plan", "--model", path, "-n", "6", "--pool", "30", "-o", "-"],
+         r"warning: .*limits 0 and 0", rc_ok=True, protect=[path])
+
+
+def same_but(name, argv, original, written, differs):
+    """Runs argv in its own directory; `written` must equal `original` but where differs(text) blanks it."""
+    counts[name.split(":")[0]] += 1
+    number = len(pending)
+
+    def go():
+        d = os.path.join(work, "c44", str(number))
+        os.makedirs(d)
+        write_bytes(os.path.join(d, "in"), original)
+        if check_run(name, [kincal] + argv, None, True, d, 300) is None:
+            return
+        with open(os.path.join(d, written), "rb") as f:
+            out = f.read()
+        if differs(out) != differs(original) or b"\r\r" in out:
+            fail(f"{name}: not byte for byte:\n{original[:300]!r}\n{out[:300]!r}")
+    pending.append((name, go))
+
+
+with open(ur10_urdf, "rb") as f:
+    ur10_lf = f.read()
+crlf = ur10_lf.replace(b"\n", b"\r\n")
+mixed = b"".join(line + (b"\r\n" if i % 2 else b"\n") for i, line in enumerate(ur10_lf.split(b"\n")[:-1]))
+# the same model back in: every byte kept, but kincal's comment line (after the declaration)
+without_comment = lambda t: re.sub(rb"\r?\n<!-- kincal: [^\n]*-->", b"", t, count=1)
+for label, variant in [("CRLF", crlf), ("mixed line ends", mixed), ("CRLF, no final line end", crlf[:-2]),
+                       ("a byte-order mark", b"\xef\xbb\xbf" + crlf), ("tabs", ur10_lf.replace(b"\n  ", b"\n\t").replace(b'0 0 ', b'0\t0\t'))]:
+    same_but(f"urdf:--original with {label} kept byte for byte",
+             ["urdf", "--model", ur10_urdf, "--tip-link", "ft_frame", "--original", "in", "-o", "o.urdf"], variant, "o.urdf",
+             without_comment)
+# URScript: only the target values change, whatever the line ends, mark, tabs and separators
+program44 = (b"def p():\r\n\t# home\r\n\tmovej([0.1,-0.4,0.3,0.2,-0.5,0.7], a=1.4, v=1.05)\n"
+             b"\tservoj([ 0.2 ,\t-0.3, 0.2, 0.1, -0.6, 0.5 ], t=0.008)\r\n  movej( [0.12, -0.41, 0.31, 0.21, -0.51, 0.71] )\r\nend")
+numbers_blanked = lambda t: re.sub(rb"-?[0-9][0-9.e+-]*", b"#", t)
+for label, variant in [("CRLF, LF and tabs", program44), ("a byte-order mark", b"\xef\xbb\xbf" + program44),
+                       ("a final line end", program44 + b"\r\n")]:
+    same_but(f"correct:--urscript with {label} kept byte for byte", C + ["--urscript", "in", "-o", "o.script"], variant,
+             "o.script", numbers_blanked)
 
 table_cases()
 only = re.compile(os.environ.get("KINCAL_HOSTILE_ONLY", ""))  # a developer's filter of the table's cases by name

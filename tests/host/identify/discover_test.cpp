@@ -176,3 +176,25 @@ TEST_CASE("discover: a joint that never moved alone is named") {
     CHECK(std::string(e.what()).find("joint 2 has none") != std::string::npos);
   }
 }
+
+// Issue #44: a still tolerance above a joint's every step is named as such, not as a missing sweep.
+TEST_CASE("discover: a still tolerance that leaves a joint still in every row is named") {
+  std::mt19937_64 rng(17);
+  const RobotModel truth = robot("stanford_rrp.yaml");
+  const std::vector<double> home = {0.1, 1.6, 0.8};
+  const model::Dataset d =
+      simulation::measure(truth, simulation::single_joint_sweeps(home, readings(truth, home, 8, 0.5, nullptr)), rng,
+                          1e-9, false, 0.0, false);
+  identify::DiscoverOptions options;
+  options.cpa.still_tolerance = 1.5;  // joint 1's steps: 0.37 rad in its sweep, 1.31 rad to and from home
+  try {
+    (void)identify::discover(d, options);
+    FAIL("no error");
+  } catch (const model::InputError& e) {
+    INFO(e.what());
+    CHECK(std::string(e.what()).find("--still-tolerance 1.5 leaves joint 1 still in every row: its reading changes by "
+                                     "at most 1.3") != std::string::npos);
+  }
+  options.cpa.still_tolerance = 0.01;  // below every step: discovered as without one
+  CHECK(identify::discover(d, options).fits.size() == 3);
+}

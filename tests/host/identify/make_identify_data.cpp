@@ -4,6 +4,7 @@
 //   meas.csv       40 random configurations with the sigma column
 //   validate.csv   30 held-out configurations
 //   sweeps.csv     10 readings per joint, one joint at a time (for cpa)
+//   mirrored.csv   meas.csv with x and y exchanged (a left-handed device frame)
 //   bad_row.csv    meas.csv with a short row on line 4
 //   bad_model.yaml the nominal model with an unknown convention
 // (the folder is created if needed)
@@ -12,6 +13,7 @@
 #include <iostream>
 #include <random>
 #include <string>
+#include <utility>
 
 #include "host/model/model_file.hpp"
 #include "tests/host/identify/simulation.hpp"
@@ -33,8 +35,12 @@ int main(int argc, char** argv) {
     model::write_dataset(f, d);
     return static_cast<bool>(f);
   };
-  bool ok = write("meas.csv", simulation::measure(truth, sim::random_configurations(nominal, 40, rng), rng, 1e-4, false,
-                                                  0.0, true));
+  const model::Dataset measured =
+      simulation::measure(truth, sim::random_configurations(nominal, 40, rng), rng, 1e-4, false, 0.0, true);
+  bool ok = write("meas.csv", measured);
+  model::Dataset mirrored = measured;
+  for (model::Measurement& r : mirrored.rows) std::swap(r.position.x(), r.position.y());
+  ok = ok && write("mirrored.csv", mirrored);
   ok = ok && write("validate.csv", simulation::measure(truth, sim::random_configurations(nominal, 30, rng), rng, 1e-4,
                                                        false, 0.0, false));
   std::vector<std::vector<double>> sweeps;

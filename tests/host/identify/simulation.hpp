@@ -15,6 +15,7 @@
 
 #include "host/identify/problem.hpp"
 #include "host/model/dataset.hpp"
+#include "host/model/model_file.hpp"
 #include "host/model/robot_model.hpp"
 #include "host/sim/robot.hpp"
 
@@ -129,6 +130,49 @@ inline SaggingSweeps sagging_sweeps(const model::RobotModel& nominal, std::uint6
   s.train = measure(sweeps(nominal, home, per_joint, 0.8));
   s.held_out = measure(sim::random_configurations(nominal, 100, rng));
   return s;
+}
+
+// A service robot's arm (issue #41's class): a prismatic torso lift and a 7-joint arm (shoulder
+// pan and lift, upper-arm roll, elbow, forearm roll, wrist flex and roll), in a motion-capture
+// frame, the marker 12 cm off the flange and off the last axis. Plausible dimensions, no maker's.
+inline model::RobotModel service_arm() {
+  return model::parse_model(
+      "name: service-arm\n"
+      "angles: deg\n"
+      "base:\n"
+      "  translation: [0.4, -0.2, 0.05]\n"
+      "  rpy: [0, 0, 30]\n"
+      "joints:\n"
+      "  - {type: prismatic, convention: dh, d: 0.75, theta: 0, a: 0.05, alpha: 0, limits: [0, 0.35]}\n"
+      "  - {type: revolute, convention: dh, d: 0.1, theta: 0, a: 0.1, alpha: -90, limits: [-100, 100]}\n"
+      "  - {type: revolute, convention: dh, d: 0, theta: 0, a: 0, alpha: 90, limits: [-60, 80]}\n"
+      "  - {type: revolute, convention: dh, d: 0.35, theta: 0, a: 0, alpha: -90, limits: [-160, 160]}\n"
+      "  - {type: revolute, convention: dh, d: 0, theta: 0, a: 0, alpha: 90, limits: [-130, -5]}\n"
+      "  - {type: revolute, convention: dh, d: 0.32, theta: 0, a: 0, alpha: -90, limits: [-160, 160]}\n"
+      "  - {type: revolute, convention: dh, d: 0, theta: 0, a: 0, alpha: 90, limits: [-120, -5]}\n"
+      "  - {type: revolute, convention: dh, d: 0.08, theta: 0, a: 0, alpha: 0, limits: [-170, 170]}\n"
+      "tool:\n"
+      "  point: [0.03, 0.02, 0.12]\n",
+      "service-arm");
+}
+
+// An arm of a given error class measured at random configurations: the truth drawn around
+// `nominal` (sim::perturbed with `errors`), `rows` noisy position rows (noise_m per axis, no
+// sigma column: the noise is for identify to estimate), and `held_out` further configurations
+// to judge a model against the truth.
+struct ArmCase {
+  model::RobotModel truth;
+  model::Dataset train;
+  std::vector<std::vector<double>> held_out;
+};
+inline ArmCase simulated_arm(const model::RobotModel& nominal, const sim::ErrorScale& errors, double noise_m, int rows,
+                             std::uint64_t seed, int held_out = 200) {
+  std::mt19937_64 rng(seed);
+  ArmCase c;
+  c.truth = sim::perturbed(nominal, rng, errors);
+  c.train = measure(c.truth, sim::random_configurations(nominal, rows, rng), rng, noise_m, false, 0.0, false);
+  c.held_out = sim::random_configurations(nominal, held_out, rng);
+  return c;
 }
 
 // RMS distance between two models' tool points over configurations.

@@ -218,3 +218,50 @@ TEST_CASE("the real UR10 export's Timestamp column as the id: one value for ever
   CHECK(r.data.rows[0].id == "2,02011E+13");  // a spreadsheet rounded the stamps: they tell no row apart
   CHECK(r.distinct_ids == 1);
 }
+
+// Issue #44: exports as spreadsheets write them -- quoted fields, either separator, either
+// decimal mark, detected together; what is ambiguous is refused saying why.
+TEST_CASE("quoted decimal commas in a ',' separated export read; ambiguous marks are refused") {
+  model::ImportOptions o = two_joint_options();
+  const auto read = [&](const std::string& text) {
+    std::istringstream in(text);
+    return model::import_measurements(in, "x.csv", o);
+  };
+  // A tracker export: ',' separators, every number quoted with a decimal comma.
+  const model::ImportResult quoted =
+      read("\"J 1\",\"J 2\",\"X\",\"Y\",\"Z\"\n\"1,5\",\"2\",\"-21,140068\",\"4,25\",\"5\"\n");
+  CHECK(quoted.separator == ',');
+  CHECK(quoted.decimal_comma);
+  CHECK(quoted.data.rows[0].q[0] == doctest::Approx(1.5 * kDeg));
+  CHECK(quoted.data.rows[0].position.x() == doctest::Approx(-0.021140068));
+  CHECK(quoted.data.rows[0].position.y() == doctest::Approx(0.00425));
+  // The same rows as with decimal points, and as with ';' and tabs (quoted or not).
+  const model::ImportResult points = read("J 1,J 2,X,Y,Z\n1.5,2,-21.140068,4.25,5\n");
+  CHECK(!points.decimal_comma);
+  for (const std::string& text : {std::string("J 1;J 2;X;Y;Z\n1,5;2;-21,140068;4,25;5\n"),
+                                  std::string("J 1\tJ 2\tX\tY\tZ\n\"1,5\"\t2\t\"-21,140068\"\t4,25\t5\n"),
+                                  std::string("J 1,J 2,X,Y,Z\n\"1,5\",2,\"-21,140068\",\"4,25\",5\n")}) {
+    INFO(text);
+    const model::ImportResult r = read(text);
+    CHECK(r.decimal_comma);
+    CHECK(r.data.rows[0].q == points.data.rows[0].q);
+    CHECK(r.data.rows[0].position == points.data.rows[0].position);
+  }
+  // A header name holding a ',' in quotes does not make ',' the separator of a ';' file.
+  o.position = {"X, mm", "Y", "Z"};
+  CHECK(read("J 1;J 2;\"X, mm\";Y;Z\n1;2;3,5;4;5\n").separator == ';');
+  o.position = {"X", "Y", "Z"};
+  // Unquoted decimal commas in a ',' separated file split the numbers: the message says so.
+  CHECK(error_of("J 1,J 2,X,Y,Z\n1,5,2,-21,140068,4,25,5\n", o)
+            .starts_with("x.csv:2:6: expected 5 fields as in the header, found 8 (decimal commas in a ',' separated "
+                         "file must be quoted"));
+  // Both marks in one ',' separated file: the comma may be a thousands separator.
+  CHECK(error_of("J 1,J 2,X,Y,Z\n1.5,2,3,4,5\n\"1,5\",2,3,4,5\n", o) ==
+        "x.csv:3:1: column 'J 1': '1,5': this ',' separated file writes numbers with a decimal comma (line 3) and "
+        "with a decimal point (line 2), so a comma may be a thousands separator: export with one decimal mark");
+  // Both marks in one number: a thousands separator, either way round.
+  CHECK(error_of("J 1;J 2;X;Y;Z\n1.234,5;2;3;4;5\n", o) ==
+        "x.csv:2:1: column 'J 1': '1.234,5' has both '.' and ',' (a thousands separator?): export the numbers "
+        "without one");
+  CHECK(error_of("J 1,J 2,X,Y,Z\n\"1,234.5\",2,3,4,5\n", o).find("has both '.' and ','") != std::string::npos);
+}

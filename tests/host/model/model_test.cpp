@@ -341,3 +341,57 @@ TEST_CASE("URDF: composing the joint origins gives the model's tool pose") {
     CHECK(urdf.find("<calibration") == std::string::npos);
   }
 }
+
+// Issue #44: every value of a model file means something or is refused naming its place.
+TEST_CASE("model files: names unique, angles in their unit, every number in its physical range") {
+  const std::string s = kSmall;
+  const auto with = [&](const char* from, const char* to) {
+    return error_of(std::regex_replace(s, std::regex(from), to));
+  };
+  const auto refused = [](const std::string& error, const std::string& place, const std::string& what) {
+    INFO(error);
+    CHECK(error.starts_with(place));
+    CHECK(error.find(what) != std::string::npos);
+  };
+  // Two joints of one name, given or a given name equal to another's default j<i>: both named.
+  const std::string named = std::regex_replace(s, std::regex("type: revolute"), "name: arm, type: revolute");
+  refused(error_of(std::regex_replace(named, std::regex("type: prismatic"), "name: arm, type: prismatic")),
+          "m.yaml:5:", "joint 2's name 'arm' is joint 1's name too (line 4)");
+  refused(with("type: revolute", "name: j2, type: revolute"), "m.yaml:5:", "joint 2's name 'j2' is joint 1's name too");
+  // Degrees without 'angles: deg': alpha 90 in radians is 14 turns.
+  refused(with("angles: deg\n", ""), "m.yaml:3:",
+          "joint 1 alpha: 90 rad is more than a turn: are the file's angles "
+          "degrees? then say 'angles: deg'");
+  refused(with("angles: deg\n", "angles: rad\n"), "m.yaml:4:", "say 'angles: deg'");
+  refused(with("theta: 10", "theta: 400"), "m.yaml:5:", "joint 2 theta: 400 deg is more than a turn");
+  refused(with("\\[-90, 90\\]", "[-9000, 90]"), "m.yaml:4:", "joint 1 lower limit: -9000 deg is more than 8 turns");
+  CHECK(with("\\[-90, 90\\]", "[-720, 720]") == "no error");  // a wrist's two turns either way
+  // Lengths: metres, at most 100 m (a length in millimetres is refused).
+  refused(with("d: 0.1", "d: 100.5"),
+          "m.yaml:4:", "joint 1 d: 100.5 is outside [-100, 100] (m: is it in millimetres?)");
+  refused(with("point: \\[0, 0, 0.05\\]", "point: [0, 0, 150]"), "m.yaml:7:", "tool point: 150 is outside");
+  // Scale near 1, masses and compliances physically possible.
+  refused(with("alpha: 0\\}", "alpha: 0, scale: 57.2958}"), "m.yaml:5:", "joint 2 scale: 57.2958 is outside [0.5, 2]");
+  refused(with("alpha: 0\\}", "alpha: 0, scale: 1e300}"), "m.yaml:5:", "scale: 1e300 is outside");
+  CHECK(with("alpha: 0\\}", "alpha: 0, scale: 1.02}") == "no error");
+  refused(with("alpha: 0\\}", "alpha: 0, mass: 1e300}"), "m.yaml:5:", "joint 2 mass: 1e300 kg is more than 1e+05 kg");
+  refused(with("alpha: 0\\}", "alpha: 0, mass: 3, compliance: 5}"),
+          "m.yaml:5:", "joint 2 compliance: 5 is outside [0, 1] (m/N: 1 N would move the joint by a metre)");
+  // A compliance with no mass to carry can do nothing; on a prismatic joint that carries one it
+  // is a deflection in m/N along the axis, which the model evaluates.
+  refused(with("alpha: 0\\}", "alpha: 0, compliance: 1e-6}"),
+          "m.yaml:5:", "joint 2 compliance: neither the links this joint moves nor a payload have a mass");
+  refused(with("alpha: 90, ", "alpha: 90, compliance: 1e-6, "), "m.yaml:4:", "joint 1 compliance: neither");
+  CHECK(with("alpha: 0\\}", "alpha: 0, mass: 3, compliance: 1e-6}") == "no error");
+  CHECK(error_of(s + "payload: {mass: 2}\n") == "no error");
+  CHECK(error_of(std::regex_replace(s, std::regex("alpha: 90, "), "alpha: 90, compliance: 1e-6, ") +
+                 "payload: {mass: 2}\n") == "no error");
+  refused(error_of(s + "gravity: [0, 0, -9806.65]\n"), "m.yaml:8:", "gravity: 9806.65 m/s^2 is more than");
+  refused(error_of(s + "priors: {a1: 0.001, a01: 0.002}\n"),
+          "m.yaml:8:", "priors: 'a01' names the parameter that 'a1' (line 8) names");
+  refused(error_of(s + "calibration: {measurements: 1e300}\n"), "m.yaml:8:", "measurements: 1e300 is outside");
+  // Every robot the project ships still reads.
+  for (const char* name :
+       {"puma560.yaml", "ur5.yaml", "ur10.yaml", "stanford_rrp.yaml", "arid_prrr.yaml", "heavy6r.yaml"})
+    CHECK(model::load_model(robot_file(name)).joint_count() >= 3);
+}

@@ -5,6 +5,7 @@
 #include <urdf_parser/urdf_parser.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -13,12 +14,14 @@
 #include <random>
 #include <regex>
 #include <sstream>
+#include <string_view>
 
 #include "host/model/axes.hpp"
 #include "host/model/model_file.hpp"
 #include "host/model/ur_kinematics.hpp"
 #include "host/model/urdf.hpp"
 #include "host/model/urdf_chain.hpp"
+#include "host/model/urdf_text.hpp"
 
 namespace {
 
@@ -178,19 +181,24 @@ void round_trip(const std::string& name, const std::string& text, const UrdfChai
 
   const RobotModel calibrated = perturbed(nominal, 3);
   const CalibratedUrdf out = write_calibrated_urdf(text, name, ends, calibrated);
-  // When the tip link is a movable joint's child, the calibrated tool has no place in the URDF
-  // (a note says so): the rest is compared, the tool taken as it is at q = 0.
-  const bool tool_written = chain.joints.back().type == UrdfJointType::fixed;
-  CHECK(out.notes.size() == (tool_written ? 0u : 1u));
+  // The calibrated tool is the measured point (issue #42): no joint of the URDF takes it, a note
+  // says how far it is from the tip link; the rest is compared, the tool taken as it is at q = 0.
+  CHECK(out.notes.size() == 1u);
   const UrdfdomChain written(out.text, chain.base_link, chain.tip_link);
   const std::vector<double> zeros(static_cast<std::size_t>(calibrated.joint_count()), 0.0);
   const Transform tip_T_tool =
-      tool_written ? Transform{}
-                   : (out.device_T_base_link * written.pose(zeros)).inverse() * forward_kinematics(calibrated, zeros);
+      (out.device_T_base_link * written.pose(zeros)).inverse() * forward_kinematics(calibrated, zeros);
   const Gap g_cal = worst_gap(written, calibrated, out.device_T_base_link, true, 4, tip_T_tool);
   CHECK(g_cal.position_m < 1e-9);
   CHECK(g_cal.rotation_rad < 1e-9);
   CHECK(without_origin_attributes(without_kincal_comment(out.text)) == without_origin_attributes(text));
+  // Asked for, the measured point is a link of its own, and the calibrated tool is exactly there.
+  const CalibratedUrdf marked = write_calibrated_urdf(text, name, ends, calibrated, "kincal_measured_point");
+  CHECK(marked.notes.empty());
+  const Gap g_marked = worst_gap(UrdfdomChain(marked.text, chain.base_link, "kincal_measured_point"), calibrated,
+                                 marked.device_T_base_link, true, 5);
+  CHECK(g_marked.position_m < 1e-9);
+  CHECK(g_marked.rotation_rad < 1e-9);
 
   // Same names; meshes, inertias and everything off the chain kept.
   const urdf::ModelInterfaceSharedPtr before = urdf::parseURDF(text);
@@ -346,7 +354,8 @@ TEST_CASE("urdf: UR10 from its description, calibrated and written back with mes
   CHECK(worst > 1e-4);
 
   // The file is the original but for one comment line after the declaration and the <origin>
-  // lines of the six joints and the tool joint: formatting, comments and everything else kept.
+  // lines of the six joints: formatting, comments and everything else kept -- the probe's fixed
+  // joint tool0-tracker_probe too, though the calibrated tool (the measured point) moved.
   const auto lines = [](const std::string& t) {
     std::vector<std::string> result;
     std::istringstream stream(t);
@@ -366,7 +375,7 @@ TEST_CASE("urdf: UR10 from its description, calibrated and written back with mes
     CHECK(in[i].find("<origin") != std::string::npos);
     CHECK(written[i].find("<origin xyz=") != std::string::npos);
   }
-  CHECK(changed == 7);
+  CHECK(changed == 6);
 }
 
 TEST_CASE("urdf: <inertial> masses deflect the UR10 under gravity as UR's DH-frame table (ur10.yaml) does") {
@@ -508,14 +517,19 @@ TEST_CASE("urdf: bad input is refused naming the file, the line and what is wron
         "bad.urdf:6: xyz '0 0,5 0' is not three finite numbers");
   CHECK(error(head + "<joint name=\"j1\" type=\"fixed\"><parent link=\"a\"/><child link=\"x\"/></joint></robot>") ==
         "bad.urdf:5: joint 'j1' names link 'x', which is not defined");
-  CHECK(error(head + j1 + "</robot>", {"a", "c"}) == "bad.urdf:4: link 'c' is not below link 'a'");
+  CHECK(error(head + j1 + "<joint name=\"j2\" type=\"fixed\"><parent link=\"b\"/><child link=\"c\"/></joint></robot>",
+              {"b", "a"}) == "bad.urdf:2: link 'a' is not below link 'b'");
   CHECK(error(head + "<joint name=\"j1\" type=\"fixed\"><parent link=\"a\"/><child link=\"b\"/>\n"
                      "<origin xyz=\"0 2e4 0\"/></joint></robot>") ==
         "bad.urdf:6: an origin 20000 m from its parent frame: more than 10000 m is not a robot's geometry");
   CHECK(error("<robot><link name=\"a\">\n</robot>").starts_with("bad.urdf:1: XML: Error=XML_ERROR_MISMATCHED_ELEMENT"));
-  CHECK(error(head + j1 + "</robot>") ==
-        "bad.urdf:1: the links form no single tree (roots: a, c): choose the chain's first link with --base-link");
-  CHECK(error(head + j1 + "</robot>", {"a", "nope"}) == "bad.urdf:1: no link named 'nope' (--tip-link)");
+  // A second root is refused whichever --base-link: check_urdf refuses it ("Two root links found").
+  for (const UrdfChainEnds& ends : {UrdfChainEnds{}, UrdfChainEnds{"a", "b"}, UrdfChainEnds{"a", "nope"}})
+    CHECK(error(head + j1 + "</robot>", ends) ==
+          "bad.urdf:4: link 'c' is the child of no joint, as is link 'a': a URDF's links form one tree (connect it "
+          "with a joint, or remove it)");
+  CHECK(error(head + j1 + "<joint name=\"j2\" type=\"fixed\"><parent link=\"b\"/><child link=\"c\"/></joint></robot>",
+              {"a", "nope"}) == "bad.urdf:1: no link named 'nope' (--tip-link)");
   // tinyxml2 stops at an end tag that closes nothing and ignores the rest: refused.
   CHECK(error(head + j1 + "</robot>\n</robot>\n<robot name=\"other\"/>") ==
         "bad.urdf:7: an end tag that closes no element: the rest of the file would be ignored");
@@ -710,4 +724,323 @@ TEST_CASE("urdf corpus: every chain of every real URDF reads exactly or is refus
   MESSAGE(exact << " chains read exactly, " << refused << " refused");
   CHECK(exact == 14);    // the arms' tool0 chains (but the IRB 5400's), mh5/sia10d/sia10f to link_t, kr210 Link1...
   CHECK(refused == 14);  // base frames (no movable joint) and chains through mimic joints
+}
+
+// Issue #44: URDFs as tools write them. `text` with every number of its <origin> elements' xyz
+// and rpy values replaced by '#': what --original must keep, the white space between the numbers
+// included.
+std::string origin_numbers_blanked(const std::string& text) {
+  std::string out = text;
+  for (const XmlElementSpan& e : map_xml_text(text).elements) {
+    if (e.name != "origin") continue;
+    for (const XmlAttributeSpan& a : e.attributes) {
+      if (a.name != "xyz" && a.name != "rpy") continue;
+      for (std::size_t p = a.value_begin; p < a.value_end; ++p)
+        if (std::string_view(" \t\r\n").find(text[p]) == std::string_view::npos) out[p] = '#';
+    }
+  }
+  // Runs of '#' to one, so that a number respelled with another length compares equal.
+  out.erase(std::unique(out.begin(), out.end(), [](char a, char b) { return a == '#' && b == '#'; }), out.end());
+  return out;
+}
+
+std::string replace_all(std::string text, std::string_view from, std::string_view to) {
+  for (std::size_t p = text.find(from); p != std::string::npos; p = text.find(from, p + to.size()))
+    text.replace(p, from.size(), to);
+  return text;
+}
+
+TEST_CASE("urdf --original: CRLF, mixed line ends, no final line end, a BOM, tabs: every byte kept but the origins") {
+  const std::string lf = read_text(std::string(KINCAL_ROBOTS_DIR) + "/ur10.urdf");
+  REQUIRE(lf.find('\r') == std::string::npos);
+  REQUIRE(lf.find('\t') == std::string::npos);
+  const UrdfChainEnds ends{"", "ft_frame"};
+  const RobotModel calibrated = perturbed(model_from_urdf(parse_urdf_chain(lf, "ur10.urdf", ends)), 21);
+  const std::string lf_out = write_calibrated_urdf(lf, "ur10.urdf", ends, calibrated).text;
+  // Tabs as indentation and between the numbers of every origin; a comment holding an origin.
+  std::string tabs = replace_all(replace_all(lf, "\n  ", "\n\t"), "<origin xyz=\"0 0 ", "<origin xyz=\"0\t0\t");
+  tabs = replace_all(tabs, "</robot>", "\t<!-- <origin xyz=\"1 2 3\"/> -->\n</robot>");
+  REQUIRE(tabs.find("xyz=\"0\t0\t") != std::string::npos);
+  std::string mixed;  // CRLF on every other line
+  for (std::size_t p = 0, n = 0; p < lf.size(); ++n) {
+    const std::size_t end = std::min(lf.find('\n', p), lf.size());
+    mixed += lf.substr(p, end - p) + (end == lf.size() ? "" : n % 2 == 0 ? "\r\n" : "\n");
+    p = end + 1;
+  }
+  struct Variant {
+    const char* name;
+    std::string text;
+    std::string (*undo)(const std::string&);  // the variant's output back to the LF file's
+  };
+  const std::string crlf = replace_all(lf, "\n", "\r\n");
+  REQUIRE(crlf.ends_with("</robot>\r\n"));
+  const std::vector<Variant> variants = {
+      {"CRLF", crlf, [](const std::string& t) { return replace_all(t, "\r\n", "\n"); }},
+      {"mixed", mixed, [](const std::string& t) { return replace_all(t, "\r\n", "\n"); }},
+      {"CRLF without a final line end", crlf.substr(0, crlf.size() - 2),
+       [](const std::string& t) { return replace_all(t, "\r\n", "\n") + "\n"; }},
+      {"BOM and CRLF", "\xEF\xBB\xBF" + crlf,
+       [](const std::string& t) { return replace_all(t.substr(3), "\r\n", "\n"); }},
+      {"tabs and a comment", tabs, nullptr},
+  };
+  const std::vector<double> q = {0.1, -1.2, 1.4, -0.3, 0.8, 2.0};
+  const RobotModel lf_back = model_from_urdf(parse_urdf_chain(lf_out, "out.urdf", ends));
+  for (const Variant& v : variants) {
+    CAPTURE(v.name);
+    const std::string out = write_calibrated_urdf(v.text, "ur10.urdf", ends, calibrated).text;
+    const std::string kept = without_kincal_comment(out);
+    // Only the numbers of the origins differ, and some do.
+    CHECK(origin_numbers_blanked(kept) == origin_numbers_blanked(v.text));
+    CHECK(kept != v.text);
+    CHECK(out.find("\r\r") == std::string::npos);
+    if (v.undo != nullptr) CHECK(v.undo(out) == lf_out);  // the same numbers as from the LF file
+    // The written file reads back to the calibrated kinematics whatever its spelling.
+    const RobotModel back = model_from_urdf(parse_urdf_chain(out, "out.urdf", ends));
+    CHECK(gap(forward_kinematics(back, q), forward_kinematics(lf_back, q)).position_m < 1e-12);
+  }
+  // CRLF: every line end of the output is CRLF, the comment's too; no final line end stays none.
+  const std::string crlf_out = write_calibrated_urdf(crlf, "ur10.urdf", ends, calibrated).text;
+  for (std::size_t p = crlf_out.find('\n'); p != std::string::npos; p = crlf_out.find('\n', p + 1))
+    REQUIRE(crlf_out[p - 1] == '\r');
+  CHECK(write_calibrated_urdf(variants[2].text, "ur10.urdf", ends, calibrated).text.ends_with("</robot>"));
+  // The tabs between the numbers of a changed origin are kept: every tab of the input is still there
+  // (kincal's comment has none). Which origins change: the movable joints' (issue #42: no fixed one).
+  const std::string tabs_out = write_calibrated_urdf(tabs, "ur10.urdf", ends, calibrated).text;
+  CHECK(std::count(tabs_out.begin(), tabs_out.end(), '\t') == std::count(tabs.begin(), tabs.end(), '\t'));
+  CHECK(tabs_out != tabs);
+}
+
+// A three-joint arm as a CAD exporter writes it: CRLF, its banner comment, every limit 0 and 0.
+std::string cad_arm(const std::string& limit_j2, const std::string& side = "") {
+  return "<?xml version=\"1.0\" encoding=\"utf-8\"?>\r\n"
+         "<!-- This URDF was automatically created by SolidWorks to URDF Exporter! -->\r\n"
+         "<robot\r\n  name=\"cad_arm\">\r\n"
+         "  <link name=\"base_link\"/>\r\n  <link name=\"l1\"/>\r\n  <link name=\"l2\"/>\r\n  <link name=\"l3\"/>\r\n"
+         "  <link name=\"side\"/>\r\n"
+         "  <joint name=\"j1\" type=\"revolute\">\r\n    <origin xyz=\"0 0 0.2\" rpy=\"0 0 0\"/>\r\n"
+         "    <parent link=\"base_link\"/>\r\n    <child link=\"l1\"/>\r\n    <axis xyz=\"0 0 1\"/>\r\n"
+         "    <limit lower=\"0\" upper=\"0\" effort=\"0\" velocity=\"0\"/>\r\n  </joint>\r\n"  // line 15
+         "  <joint name=\"j2\" type=\"revolute\">\r\n    <origin xyz=\"0 0 0.3\" rpy=\"1.5708 0 0\"/>\r\n"
+         "    <parent link=\"l1\"/>\r\n    <child link=\"l2\"/>\r\n    <axis xyz=\"0 0 1\"/>\r\n"
+         "    " +
+         limit_j2 +
+         "\r\n  </joint>\r\n"  // line 22
+         "  <joint name=\"j3\" type=\"prismatic\">\r\n    <origin xyz=\"0.4 0 0\" rpy=\"0 0 0\"/>\r\n"
+         "    <parent link=\"l2\"/>\r\n    <child link=\"l3\"/>\r\n    <axis xyz=\"1 0 0\"/>\r\n"
+         "    <limit lower=\"0.0\" upper=\"-0\" effort=\"0\" velocity=\"0\"/>\r\n  </joint>\r\n"  // line 29
+         "  <joint name=\"grip\" type=\"revolute\">\r\n    <parent link=\"base_link\"/>\r\n"
+         "    <child link=\"side\"/>\r\n    " +
+         (side.empty() ? "<limit lower=\"0\" upper=\"0\" effort=\"0\" velocity=\"0\"/>" : side) +
+         "\r\n  </joint>\r\n"
+         "</robot>";
+}
+
+TEST_CASE("urdf: CAD exporters' limits 0 and 0 are no limits given, with a warning naming the joint and file:line") {
+  // 0 and 0 spelled three ways: both written, upper alone (lower is URDF's 0), 0.0 and -0.
+  for (const std::string& limit : {std::string("<limit lower=\"0\" upper=\"0\" effort=\"0\" velocity=\"0\"/>"),
+                                   std::string("<limit upper=\"0\" effort=\"10\" velocity=\"1\"/>"),
+                                   std::string("<limit effort='0' lower='-0.0' velocity='0' upper='0e0'/>")}) {
+    CAPTURE(limit);
+    const std::string text = cad_arm(limit);
+    const UrdfChain chain = parse_urdf_chain(text, "arm.urdf", {"", "l3"});
+    REQUIRE(chain.joints.size() == 3);
+    for (const UrdfJoint& j : chain.joints) {
+      CHECK(j.lower == -std::numeric_limits<double>::infinity());
+      CHECK(j.upper == std::numeric_limits<double>::infinity());
+    }
+    // One warning per chain joint (none for the gripper joint off the chain), each at its <limit>.
+    REQUIRE(chain.warnings.size() == 3);
+    CHECK(chain.warnings[0] ==
+          "arm.urdf:15: joint 'j1': limits 0 and 0 read as no limits given (as CAD exporters write them); give the "
+          "joint's range if it has one");
+    CHECK(chain.warnings[1].starts_with("arm.urdf:22: joint 'j2': limits 0 and 0"));
+    CHECK(chain.warnings[2].starts_with("arm.urdf:29: joint 'j3': limits 0 and 0"));
+    // A model whose revolute joints turn freely (continuous) and whose prismatic joint is unbounded,
+    // as the rest of kincal reads a joint without limits: planning samples a turn, URDF out says
+    // "continuous".
+    const RobotModel m = model_from_urdf(chain);
+    for (const Joint& j : m.joints) CHECK((!std::isfinite(j.lower) && !std::isfinite(j.upper)));
+    const std::string written = write_urdf(m);
+    CHECK(written.find("name=\"j1\" type=\"continuous\"") != std::string::npos);
+    CHECK(written.find("name=\"j3\" type=\"prismatic\"") != std::string::npos);
+    // --original keeps the 0/0 text as it is: it is the exporter's, and only origins are written.
+    const std::string out = write_calibrated_urdf(text, "arm.urdf", {"", "l3"}, perturbed(m, 5)).text;
+    CHECK(origin_numbers_blanked(without_kincal_comment(out)) == origin_numbers_blanked(text));
+  }
+  // A range stays a range, and no warning.
+  const UrdfChain ranged = parse_urdf_chain(cad_arm("<limit lower=\"-2\" upper=\"2\" effort=\"0\" velocity=\"0\"/>"),
+                                            "arm.urdf", {"", "l3"});
+  CHECK(ranged.joints[1].lower == -2.0);
+  CHECK(ranged.warnings.size() == 2);
+  // Equal limits other than 0 and 0 still cannot move: refused on the chain.
+  CHECK_THROWS_WITH_AS(
+      parse_urdf_chain(cad_arm("<limit lower=\"0.5\" upper=\"0.5\" effort=\"0\" velocity=\"0\"/>"), "arm.urdf"),
+      "arm.urdf:22: joint 'j2': lower and upper limits are equal (0.5), so the joint cannot move: make it fixed, or "
+      "give its range",
+      InputError);
+}
+
+// Whether check_urdf (urdfdom) takes a text as a URDF.
+bool check_urdf_takes(const std::string& name, const std::string& text) {
+  return check_urdf_accepts(std::string(KINCAL_URDF_OUT_DIR) + "/structure/" + name + ".urdf", text);
+}
+
+TEST_CASE("urdf: what every URDF tool refuses is refused with file:line; what check_urdf takes, kincal takes") {
+  // A two-joint arm base -> a -> b (lines 1-4), then `extra` from line 5 on.
+  const auto urdf = [](const std::string& extra) {
+    return "<robot name=\"r\">\n<link name=\"base\"/><link name=\"a\"/><link name=\"b\"/>\n"
+           "<joint name=\"j1\" type=\"revolute\"><parent link=\"base\"/><child link=\"a\"/><limit lower=\"-1\" "
+           "upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>\n"
+           "<joint name=\"j2\" type=\"continuous\"><parent link=\"a\"/><child link=\"b\"/></joint>\n" +
+           extra + "</robot>\n";
+  };
+  const auto fixed = [](const std::string& name, const std::string& parent, const std::string& child) {
+    return "<joint name=\"" + name + "\" type=\"fixed\"><parent link=\"" + parent + "\"/><child link=\"" + child +
+           "\"/></joint>\n";
+  };
+  struct Case {
+    const char* name;
+    std::string text;
+    UrdfChainEnds ends;
+    std::string refusal;  // the whole message
+    bool check_urdf_refuses;
+  };
+  const std::string cd = "<link name=\"c\"/><link name=\"d\"/>\n";  // line 5
+  const std::vector<Case> cases = {
+      // Cycles: off the chain (urdfdom keeps the one root and takes the rest for a tree), a joint
+      // that is its own link's parent, a cycle with a branch below it, a cycle through the root.
+      {"cycle of two off the chain",
+       urdf(cd + fixed("x1", "c", "d") + fixed("x2", "d", "c")),
+       {},
+       "bad.urdf:7: joint 'x2' closes a cycle of links (c <- d <- c, each the child of the next): a URDF's links form "
+       "a tree",
+       false},
+      {"a link its own parent",
+       urdf(cd + fixed("x1", "b", "c") + fixed("x2", "d", "d")),
+       {},
+       "bad.urdf:7: joint 'x2' closes a cycle of links (d <- d, each the child of the next): a URDF's links form a "
+       "tree",
+       false},
+      {"cycle of three with a branch",
+       urdf(cd + "<link name=\"e\"/>\n" + fixed("x1", "e", "c") + fixed("x2", "c", "d") + fixed("x3", "d", "e") +
+            "<link name=\"f\"/>\n" + fixed("x4", "d", "f")),
+       {"base", "b"},
+       "bad.urdf:9: joint 'x3' closes a cycle of links (c <- e <- d <- c, each the child of the next): a URDF's links "
+       "form a tree",
+       false},
+      {"cycle through the root",
+       urdf(fixed("x1", "b", "base")),
+       {"base", "b"},
+       "bad.urdf:5: joint 'x1' closes a cycle of links (a <- base <- b <- a, each the child of the next): a URDF's "
+       "links form a tree",
+       true},
+      // Two parents (urdfdom keeps the last one).
+      {"a chain link child of a side link",
+       urdf("<link name=\"c\"/>\n" + fixed("x1", "base", "c") + fixed("x2", "c", "b")),
+       {},
+       "bad.urdf:7: link 'b' is the child of joint 'x2' and of joint 'j2' (line 4): a link has one parent in a URDF's "
+       "tree",
+       false},
+      {"a side link child of two side joints",
+       urdf("<link name=\"c\"/>\n" + fixed("x1", "a", "c") + fixed("x2", "b", "c")),
+       {},
+       "bad.urdf:7: link 'c' is the child of joint 'x2' and of joint 'x1' (line 6): a link has one parent in a URDF's "
+       "tree",
+       false},
+      {"a link child of two chain joints",
+       urdf("<joint name=\"j3\" type=\"continuous\"><parent link=\"base\"/>"
+            "<child link=\"b\"/></joint>\n"),
+       {},
+       "bad.urdf:5: link 'b' is the child of joint 'j3' and of joint 'j2' (line 4): a link has one parent in a URDF's "
+       "tree",
+       false},
+      // Duplicate joint names.
+      {"a side joint named as a chain joint",
+       urdf(cd + fixed("x1", "b", "c") + fixed("j1", "c", "d")),
+       {},
+       "bad.urdf:7: joint 'j1' defined twice (first on line 3)",
+       true},
+      {"two side joints of one name",
+       urdf(cd + fixed("x1", "b", "c") + fixed("x1", "b", "d")),
+       {},
+       "bad.urdf:7: joint 'x1' defined twice (first on line 6)",
+       true},
+      {"the same joint twice",
+       urdf(fixed("j0", "b", "c") + "<link name=\"c\"/>\n" + fixed("j0", "b", "c")),
+       {},
+       "bad.urdf:7: joint 'j0' defined twice (first on line 5)",
+       true},
+      // Duplicate link names.
+      {"a link twice, empty and with content",
+       urdf("<link name=\"b\"><inertial><mass value=\"1\"/></inertial></link>\n"),
+       {},
+       "bad.urdf:5: link 'b' defined twice (first on line 2)",
+       true},
+      {"a side link twice",
+       urdf(cd + fixed("x1", "b", "c") + "<link name=\"c\"></link>\n"),
+       {},
+       "bad.urdf:7: link 'c' defined twice (first on line 5)",
+       true},
+      {"the base link twice",
+       urdf("<link name = 'base' />\n"),
+       {"base", "b"},
+       "bad.urdf:5: link 'base' defined twice (first on line 2)",
+       true},
+      // A second root, whichever --base-link.
+      {"a stray link",
+       urdf("<link name=\"c\"/>\n"),
+       {"base", "b"},
+       "bad.urdf:5: link 'c' is the child of no joint, as is link 'base': a URDF's links form one tree (connect it "
+       "with a joint, or remove it)",
+       true},
+      {"a second tree",
+       urdf(cd + fixed("x1", "c", "d")),
+       {},
+       "bad.urdf:5: link 'c' is the child of no joint, as is link 'base': a URDF's links form one tree (connect it "
+       "with a joint, or remove it)",
+       true},
+      // No robot name; a joint type URDF does not have, off the chain.
+      {"a robot without a name",
+       "<robot>\n<link name=\"a\"/></robot>",
+       {},
+       "bad.urdf:1: <robot> without a 'name' attribute, which URDF requires",
+       true},
+      {"a misspelt type off the chain",
+       urdf("<link name=\"c\"/>\n<joint name=\"x1\" type=\"revolut\"><parent link=\"b\"/><child link=\"c\"/>"
+            "<limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>\n"),
+       {},
+       "bad.urdf:6: joint 'x1' is of type 'revolut', which URDF does not have (revolute, continuous, prismatic, fixed, "
+       "floating, planar)",
+       true},
+  };
+  for (const Case& c : cases) {
+    const std::string name = c.name;
+    CAPTURE(name);
+    CHECK_THROWS_WITH_AS(parse_urdf_chain(c.text, "bad.urdf", c.ends), c.refusal.c_str(), InputError);
+    // What check_urdf refuses, kincal refuses; a cycle or a second parent urdfdom's tree check misses.
+    CHECK(check_urdf_takes(c.name, c.text) == !c.check_urdf_refuses);
+  }
+  // What check_urdf takes is no structure kincal refuses: odd values off the chain are not looked at.
+  for (const auto& [name, extra] : std::vector<std::pair<const char*, std::string>>{
+           {"equal limits off the chain",
+            "<joint name=\"x1\" type=\"revolute\"><parent link=\"b\"/><child link=\"c\"/>"
+            "<limit lower=\"0.5\" upper=\"0.5\" effort=\"1\" velocity=\"1\"/></joint>\n"},
+           {"limits the wrong way off the chain",
+            "<joint name=\"x1\" type=\"prismatic\"><parent link=\"a\"/><child link=\"c\"/>"
+            "<limit lower=\"1\" upper=\"-1\" effort=\"1\" velocity=\"1\"/></joint>\n"},
+           {"a zero axis off the chain",
+            "<joint name=\"x1\" type=\"continuous\"><parent link=\"base\"/>"
+            "<child link=\"c\"/><axis xyz=\"0 0 0\"/></joint>\n"},
+           {"a floating joint off the chain",
+            "<joint name=\"x1\" type=\"floating\"><parent link=\"base\"/>"
+            "<child link=\"c\"/></joint>\n"}}) {
+    CAPTURE(name);
+    const std::string text = urdf("<link name=\"c\"/>\n" + extra);
+    CHECK(check_urdf_takes(name, text));
+    const UrdfChain chain = parse_urdf_chain(text, "ok.urdf", {"", "b"});
+    CHECK(chain.movable_count() == 2);
+    // On the chain, the same joint is refused at its own line.
+    CHECK_THROWS_WITH_AS(parse_urdf_chain(text, "ok.urdf", {"", "c"}), doctest::Contains("ok.urdf:6: joint 'x1'"),
+                         InputError);
+  }
 }

@@ -11,6 +11,7 @@
 
 #include "firmware/app/correction_chain.hpp"
 #include "firmware/app/kinematic_correction.hpp"
+#include "host/correct/correction_block.hpp"
 #include "host/model/model_file.hpp"
 #include "host/session/online_correction.hpp"
 #include "host/session/pose_plan.hpp"
@@ -133,7 +134,7 @@ TEST_CASE("correction block: the firmware reads back the chains the host identif
   identified.joints[1].parameters.a_m += 1e-3;
   identified.joints[2].offset += 2e-3;
   identified.flange_T_tool.translation.x() += 5e-4;
-  const shared::CorrectionParameters block = session::correction_block(start, identified);
+  const shared::CorrectionParameters block = correct::correction_block(start, identified);
   core::ChainModel<double> nominal;
   core::ParameterSet ids;
   core::ErrorVector<double> errors;
@@ -170,7 +171,7 @@ TEST_CASE("correction block with the joint map: the platform's correction puts t
   identified.joints[2].scale = 1.0 + 5e-4;
   identified.joints[1].compliance = 2e-5;
   identified.joints[2].compliance = 3e-5;
-  const shared::CorrectionParameters block = session::correction_block(start, identified);
+  const shared::CorrectionParameters block = correct::correction_block(start, identified);
   CHECK(block.joint_maps[2].coupled);
   CHECK(block.joint_maps[1].compliance_error == doctest::Approx(2e-5));
   shared::CorrectionParameters geometry_only = block;
@@ -212,11 +213,11 @@ TEST_CASE("correction block with the joint map: the platform's correction puts t
   // Coupling and masses are inputs: models that disagree on them are refused.
   model::RobotModel other = identified;
   other.joints[2].coupling.clear();
-  CHECK_THROWS_WITH_AS(session::correction_block(start, other), doctest::Contains("coupling or mass"),
+  CHECK_THROWS_WITH_AS(correct::correction_block(start, other), doctest::Contains("coupling or mass"),
                        model::InputError);
   other = identified;
   other.payload.mass_kg = 1.0;
-  CHECK_THROWS_WITH_AS(session::correction_block(start, other), doctest::Contains("payload or gravity"),
+  CHECK_THROWS_WITH_AS(correct::correction_block(start, other), doctest::Contains("payload or gravity"),
                        model::InputError);
 }
 

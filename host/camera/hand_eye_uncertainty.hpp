@@ -1,0 +1,42 @@
+// How well a hand-eye calibration is known from its own data (issue #43): a jackknife over the
+// views. Each used view is left out in turn and the hand-eye solved again (calibrate_hand_eye with
+// the same options); the spread of the n solutions, scaled by (n - 1) / n, is the covariance of
+// gripper_T_camera (Efron & Stein's jackknife variance).
+//
+// Why not the Jacobian of the reprojection error: that holds the gripper poses exact, as a robot's
+// are to a tenth of a millimetre. A motion capture's poses of a hand-held camera body (a few
+// millimetres and tenths of a degree, interpolated between samples 50 ms apart) carry most of the
+// error, and only a spread over the views sees it. On the shared AprilGrid/Vicon set
+// (tests/bench/aprilgrid_real_bench.cpp) the jackknife gives the numbers in the README's table.
+//
+// Rotation: each solution's rotation as the rotation vector of full^-1 * solution (rad, in the
+// full solution's camera frame); position: gripper_t_camera (m, gripper frame).
+// Errors: none of its own; a leave-one-out solve that throws (its subset fails a gate the whole
+// set passed) is not counted (`refused` says how many). Fewer than 3 solutions: counted = the
+// number, covariances zero.
+// Cost: one calibrate_hand_eye per used view.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "host/camera/hand_eye.hpp"
+
+namespace kincal::camera {
+
+struct HandEyeSpread {
+  int counted = 0, refused = 0;
+  Eigen::Matrix3d position_covariance_m2 = Eigen::Matrix3d::Zero();    // gripper_t_camera
+  Eigen::Matrix3d rotation_covariance_rad2 = Eigen::Matrix3d::Zero();  // rotation vector, see above
+};
+
+HandEyeSpread hand_eye_jackknife(const std::vector<HandEyeView>& views, const CameraModel& camera,
+                                 const HandEyeOptions& options, const HandEyeCalibration& full);
+
+// One line: "gripper_T_camera uncertainty (jackknife over N views): position sigma x y z mm,
+// rotation sigma x y z deg", or why there is none.
+std::string describe(const HandEyeSpread& spread);
+
+}  // namespace kincal::camera

@@ -1,0 +1,160 @@
+#include "host/identify/data_mistakes.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <set>
+#include <tuple>
+#include <utility>
+
+#include <Eigen/SVD>
+
+namespace kincal::identify {
+
+namespace {
+
+std::string number(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", v);
+  return text;
+}
+
+// The rows the fits use: every row, or kMistakeRows spread evenly over the file.
+std::vector<std::size_t> sampled_rows(std::size_t count) {
+  std::vector<std::size_t> rows;
+  const std::size_t n = std::min<std::size_t>(count, kMistakeRows);
+  for (std::size_t i = 0; i < n; ++i) rows.push_back(i * count / n);
+  return rows;
+}
+
+struct ToolPoses {
+  std::vector<model::Vector3> position_m;
+  std::vector<model::Matrix3> rotation;
+};
+
+// The nominal tool poses at the sampled rows, with joint columns j and k exchanged when j != k.
+ToolPoses tool_poses(const model::RobotModel& nominal, const model::Dataset& data, const std::vector<std::size_t>& rows,
+                     int j = 0, int k = 0) {
+  ToolPoses poses;
+  std::vector<double> q;
+  for (const std::size_t i : rows) {
+    q = data.rows[i].q;
+    if (j != k) std::swap(q[static_cast<std::size_t>(j)], q[static_cast<std::size_t>(k)]);
+    const model::Transform t = model::forward_kinematics(nominal, q);
+    poses.position_m.push_back(t.translation);
+    poses.rotation.push_back(t.rotation);
+  }
+  return poses;
+}
+
+// The alternation of the header: the registration (Kabsch with the determinant's sign chosen)
+// given the offset, then the offset given the registration, until the RMS settles.
+double fitted_rms(const ToolPoses& poses, const std::vector<model::Vector3>& measured, bool reflected) {
+  const std::size_t n = measured.size();
+  model::Vector3 offset = model::Vector3::Zero();  // of the measured point, in the tool frame
+  model::Vector3 measured_mean = model::Vector3::Zero();
+  for (const model::Vector3& m : measured) measured_mean += m;
+  measured_mean /= static_cast<double>(n);
+  double rms = std::numeric_limits<double>::infinity();
+  std::vector<model::Vector3> points(n);
+  for (int pass = 0; pass < 100; ++pass) {
+    model::Vector3 mean = model::Vector3::Zero();
+    for (std::size_t i = 0; i < n; ++i) mean += points[i] = poses.position_m[i] + poses.rotation[i] * offset;
+    mean /= static_cast<double>(n);
+    Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+    for (std::size_t i = 0; i < n; ++i) h += (points[i] - mean) * (measured[i] - measured_mean).transpose();
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+    const bool improper = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0;
+    d(2, 2) = improper != reflected ? -1.0 : 1.0;
+    const Eigen::Matrix3d r = svd.matrixV() * d * svd.matrixU().transpose();  // measured = r point + b
+    const model::Vector3 b = measured_mean - r * mean;
+    // The offset: r (p_i + R_i t) + b = m_i in least squares; r and R_i orthogonal, so the normal
+    // matrix is n I.
+    model::Vector3 sum = model::Vector3::Zero();
+    for (std::size_t i = 0; i < n; ++i)
+      sum += poses.rotation[i].transpose() * (r.transpose() * (measured[i] - b) - poses.position_m[i]);
+    offset = sum / static_cast<double>(n);
+    double squares = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+      squares += (r * (poses.position_m[i] + poses.rotation[i] * offset) + b - measured[i]).squaredNorm();
+    const double next = std::sqrt(squares / static_cast<double>(n));
+    if (!(next < rms * (1.0 - 1e-9))) return std::min(rms, next);
+    rms = next;
+  }
+  return rms;
+}
+
+std::vector<model::Vector3> measured_points(const model::Dataset& data, const std::vector<std::size_t>& rows) {
+  std::vector<model::Vector3> points;
+  for (const std::size_t i : rows) points.push_back(data.rows[i].position);
+  return points;
+}
+
+}  // namespace
+
+double registration_rms(const model::RobotModel& nominal, const model::Dataset& data, bool reflected) {
+  const std::vector<std::size_t> rows = sampled_rows(data.rows.size());
+  return fitted_rms(tool_poses(nominal, data, rows), measured_points(data, rows), reflected);
+}
+
+std::vector<std::string> frame_mistakes(const model::RobotModel& nominal, const model::Dataset& data) {
+  std::vector<std::string> found;
+  if (data.rows.size() < 6 || data.joint_count != nominal.joint_count()) return found;
+  const std::vector<std::size_t> rows = sampled_rows(data.rows.size());
+  const std::vector<model::Vector3> measured = measured_points(data, rows);
+  const ToolPoses poses = tool_poses(nominal, data, rows);
+  const double rotated = fitted_rms(poses, measured, false);
+  if (!(rotated > kMistakeFloor_m)) return found;
+  const double mirrored = fitted_rms(poses, measured, true);
+  if (mirrored * 5.0 < rotated)
+    found.push_back("the measured points are a mirror image of the model's: registered by a rotation they leave " +
+                    number(rotated * 1e3) + " mm RMS, by a reflection " + number(mirrored * 1e3) +
+                    " mm: likely two position columns swapped or an axis flipped (a left-handed device frame)");
+  // Two joint columns exchanged: the pair whose exchange fits best, if it fits far better.
+  std::tuple<double, int, int> best{rotated, 0, 0};
+  for (int j = 0; j < nominal.joint_count(); ++j)
+    for (int k = j + 1; k < nominal.joint_count(); ++k) {
+      if (nominal.joints[static_cast<std::size_t>(j)].type != nominal.joints[static_cast<std::size_t>(k)].type)
+        continue;
+      const double swapped = fitted_rms(tool_poses(nominal, data, rows, j, k), measured, false);
+      if (swapped < std::get<0>(best)) best = {swapped, j, k};
+    }
+  const auto [swapped, j, k] = best;
+  if (swapped * 5.0 < rotated)
+    found.push_back("the readings fit far better with joint columns " + std::to_string(j + 1) + " (" +
+                    nominal.joints[static_cast<std::size_t>(j)].name + ") and " + std::to_string(k + 1) + " (" +
+                    nominal.joints[static_cast<std::size_t>(k)].name + ") exchanged: " + number(swapped * 1e3) +
+                    " mm RMS against " + number(rotated * 1e3) + " mm as given: likely two joint columns swapped");
+  return found;
+}
+
+std::optional<std::string> unexplained_fit(double rms_m, double instrument_sigma_m) {
+  if (!(rms_m > kMistakeFloor_m)) return std::nullopt;
+  if (instrument_sigma_m > 0.0 && rms_m <= kMistakeNoiseRatio * instrument_sigma_m) return std::nullopt;
+  std::string what = "the calibrated model leaves " + number(rms_m * 1e3) + " mm RMS";
+  if (instrument_sigma_m > 0.0) what += ", " + number(rms_m / instrument_sigma_m) + " times the instrument's noise";
+  return what +
+         ": no arm deviates so far from its geometry, so the data do not fit this model -- likely a mirrored "
+         "or swapped position column, swapped joint columns, joints or positions in other units, another robot's "
+         "model, or the wrong --tip-link";
+}
+
+SharedRows training_rows_in(const model::Dataset& held_out, const model::Dataset& training) {
+  using Point = std::tuple<double, double, double>;
+  std::set<std::vector<double>> readings;
+  std::set<std::pair<std::vector<double>, Point>> rows;
+  for (const model::Measurement& r : training.rows) {
+    readings.insert(r.q);
+    rows.insert({r.q, {r.position.x(), r.position.y(), r.position.z()}});
+  }
+  SharedRows shared;
+  for (const model::Measurement& r : held_out.rows) {
+    shared.configurations += static_cast<int>(readings.count(r.q));
+    shared.rows += static_cast<int>(rows.count({r.q, {r.position.x(), r.position.y(), r.position.z()}}));
+  }
+  return shared;
+}
+
+}  // namespace kincal::identify

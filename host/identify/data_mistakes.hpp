@@ -1,0 +1,63 @@
+// Mistakes in a dataset that are made of plausible numbers (issue #41): checks that fit the data
+// rather than compare their scale, so they hold for any arm and any instrument.
+//
+//   mirror        the measuring device's frame is left-handed against the robot's (two position
+//                 columns swapped, an axis flipped at export): consecutive distances are kept, so
+//                 the scale checks (plausibility.hpp) pass, and a solve "converges" to a model error
+//                 of hundreds of mm. Found by registering the nominal tool points onto the measured
+//                 ones twice, once with a rotation and once with a reflection (each with the
+//                 measured point's offset from the tool estimated, as a reflector is rarely where
+//                 the nominal tool is): a reflection that fits far better is the finding.
+//   joint swap    two joint columns swapped: the readings permuted back fit far better.
+//
+// Both fits are point registrations (Kabsch/Umeyama without scale, alternated with the linear
+// least squares of the measured point's offset in the tool frame), O(rows) each; at most
+// kMistakeRows rows (spread evenly over the file) are used. A finding needs the as-given
+// registration to leave more than kMistakeFloor_m RMS -- far beyond what a real arm deviates from
+// its drawing (millimetres for a service arm) -- and the alternative to fit at least five times
+// better; data that cannot tell (a single sweep: points in a plane fit their mirror image
+// exactly) give no finding.
+//
+// After the solve:
+//   fit verdict   a calibrated model that still leaves more than kMistakeFloor_m RMS and more than
+//                 kMistakeNoiseRatio times the instrument noise explains nothing: the verdict says so
+//                 and names the likely causes, never "close to nominal".
+//   held out      validation rows that are training rows (the same readings and the same measured
+//                 point, bit for bit) do not judge a calibration; rows at training readings
+//                 measured anew judge repeatability more than the calibration between them.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "host/model/dataset.hpp"
+#include "host/model/robot_model.hpp"
+
+namespace kincal::identify {
+
+inline constexpr int kMistakeRows = 2000;
+inline constexpr double kMistakeFloor_m = 0.01;
+inline constexpr double kMistakeNoiseRatio = 100.0;
+
+// RMS (m) of the measured points about the nominal tool points (each moved by one offset in the
+// tool frame) after the best registration that is a rotation (`reflected` false) or a reflection.
+double registration_rms(const model::RobotModel& nominal, const model::Dataset& data, bool reflected);
+
+// The findings above, one sentence each with the numbers (empty: none). Part of
+// implausibilities() (plausibility.hpp).
+std::vector<std::string> frame_mistakes(const model::RobotModel& nominal, const model::Dataset& data);
+
+// A sentence when a calibrated model's RMS residual (m) is too large for any arm to leave (see
+// above), naming the likely causes; nothing otherwise. `instrument_sigma_m` 0: unknown.
+std::optional<std::string> unexplained_fit(double rms_m, double instrument_sigma_m);
+
+// How many of `held_out`'s rows are rows of `training`: the same readings and measured position
+// (`rows`), or the same readings only (`configurations`, counting those rows too).
+struct SharedRows {
+  int rows = 0;
+  int configurations = 0;
+};
+SharedRows training_rows_in(const model::Dataset& held_out, const model::Dataset& training);
+
+}  // namespace kincal::identify

@@ -1,0 +1,462 @@
+// The zoo benchmark (issues #41 and #42): kincal's identification defaults judged across robots
+// nobody here named (every serial chain of the shared URDF corpus, the project's UR10, a torso lift
+// + 6R), instruments (a tracker's reflector, a 6-DoF tracker, a mocap marker, a camera and a
+// board), error classes (precise industrial, service arm with joint compliance, a scaled or coupled
+// joint) and sizes (20, 40, 100, 300 rows), with planted mistakes, all simulated by the zoo's own
+// forward kinematics (zoo_chain.hpp), never kincal's.
+//
+// Each case runs the kincal CLI as a user would (identify with its defaults and --urdf, predict,
+// correct on 20 Cartesian TCP targets, export, urdf --original) and fits the oracle (the truth's
+// structure by plain least squares, zoo_oracle.hpp) on the same rows; held-out RMS against the true
+// measured point, their ratio, the files' usability, the flange's fixed joints in every URDF written
+// (issue #42) and the true arm at `correct`'s targets. A covering design, not the cross product: the
+// 4 instruments x 4 sizes x 3 error classes each once (48 clean cases; the third class alternates
+// between a scaled and a coupled joint), the robots in turn, and each of the 6 mistakes planted
+// twice on a clean case's data (12 cases).
+//
+// Usage: zoo_bench [--cases N] [--filter TEXT] [--work DIR] [--kincal PATH]
+//   --cases N: the first N cases of the design; --filter: only cases whose label (robot/instrument/
+//   class/size/mistake) contains TEXT; --work: the folder the cases' files are kept in.
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <limits>
+#include <set>
+#include <sstream>
+
+#include "zoo_command.hpp"
+#include "zoo_oracle.hpp"
+
+namespace fs = std::filesystem;
+using namespace zoo;
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+constexpr int kHeldOut = 200, kTargets = 20;
+constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+
+struct Robot {
+  std::string label;
+  Chain chain;
+};
+
+struct CaseSpec {
+  int index = 0;
+  const Robot* robot = nullptr;
+  Instrument instrument = Instrument::tracker_point;
+  ErrorClass error_class = ErrorClass::precise;
+  int size = 0;
+  Mistake mistake = Mistake::none;
+  unsigned seed = 0;
+  std::string label() const {
+    std::ostringstream s;
+    s << robot->label << '/' << name(instrument) << '/' << name(error_class) << '/' << size << '/' << name(mistake);
+    return s.str();
+  }
+};
+
+struct CaseResult {
+  double kincal_mm = kNone, oracle_mm = kNone, geometry_oracle_mm = kNone, flange_moved_mm = kNone, correct_mm = kNone,
+         joint_change_deg = kNone;
+  bool unusable = false, refused = false, mistake_caught = false;
+  std::vector<std::string> notes;  // what failed, or what caught the mistake
+};
+
+std::vector<Robot> zoo_robots(const std::string& corpus, const std::string& robots, const std::string& zoo) {
+  std::vector<std::string> paths;
+  for (const fs::directory_entry& e : fs::recursive_directory_iterator(corpus))
+    if (e.path().extension() == ".urdf") paths.push_back(e.path().string());
+  std::sort(paths.begin(), paths.end());
+  paths.push_back(robots + "/ur10.urdf");
+  paths.push_back(zoo + "/torso_lift_6r.urdf");
+  std::vector<Robot> out;
+  for (const std::string& p : paths) {
+    try {
+      Chain c = read_chain(p);
+      std::cout << "robot " << fs::path(p).stem().string() << ": " << c.joints.size() << " joints, " << c.root_link
+                << " -> " << c.flange_link << ", masses " << (c.masses_from_urdf ? "from the URDF" : "assumed") << '\n';
+      out.push_back(Robot{fs::path(p).stem().string(), std::move(c)});
+    } catch (const std::exception& e) {
+      std::cout << "robot skipped: " << e.what() << '\n';
+    }
+  }
+  return out;
+}
+
+std::vector<CaseSpec> design(const std::vector<Robot>& robots) {
+  const int sizes[] = {20, 40, 100, 300};
+  std::vector<CaseSpec> cases;
+  for (int k = 0; k < 48; ++k) {
+    CaseSpec c;
+    c.index = k;
+    c.robot = &robots[static_cast<std::size_t>(k) % robots.size()];
+    c.instrument = static_cast<Instrument>(k % 4);
+    c.size = sizes[(k / 4) % 4];
+    const int cls = (k / 16) % 3;
+    c.error_class = cls == 0   ? ErrorClass::precise
+                    : cls == 1 ? ErrorClass::service
+                               : (k % 2 == 0 ? ErrorClass::scaled : ErrorClass::coupled);
+    c.seed = 41000u + static_cast<unsigned>(k);
+    cases.push_back(c);
+  }
+  const Mistake mistakes[] = {Mistake::mirrored,          Mistake::joints_swapped, Mistake::positions_swapped,
+                              Mistake::validate_is_train, Mistake::mm_as_m,        Mistake::deg_as_rad};
+  for (int m = 0; m < 6; ++m)
+    for (int j = 0; j < 2; ++j) {
+      CaseSpec c = cases[static_cast<std::size_t>((7 * m + 25 * j + 3) % 48)];
+      c.index = static_cast<int>(cases.size());
+      c.mistake = mistakes[m];
+      cases.push_back(c);
+    }
+  return cases;
+}
+
+double rms_mm(const std::vector<Eigen::Vector3d>& errors) {
+  double sum = 0.0;
+  for (const Eigen::Vector3d& e : errors) sum += e.squaredNorm();
+  return errors.empty() ? kNone : 1e3 * std::sqrt(sum / static_cast<double>(errors.size()));
+}
+
+std::string lines_with(const std::string& text, const std::string& word) {
+  std::istringstream in(text);
+  std::string out;
+  for (std::string line; std::getline(in, line);) {
+    std::string lower = line;
+    std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char ch) { return std::tolower(ch); });
+    if (lower.find(word) != std::string::npos) out += line + '\n';
+  }
+  return out;
+}
+
+// A warning line with its numbers taken out, so that the same warning on other numbers compares equal.
+std::set<std::string> warnings(const std::string& err) {
+  std::set<std::string> out;
+  std::istringstream in(lines_with(err, "warning"));
+  for (std::string line; std::getline(in, line);) {
+    std::string shape;
+    for (char ch : line)
+      if (!std::isdigit(static_cast<unsigned char>(ch)) && ch != '.' && ch != '-') shape += ch;
+    out.insert(shape);
+  }
+  return out;
+}
+
+void print_failure(const CommandRun& run) {
+  std::cout << "  command: " << run.command_line << "\n  exit " << run.exit_code << ", stderr:\n";
+  std::istringstream in(run.err.substr(0, 3000));
+  for (std::string line; std::getline(in, line);) std::cout << "    " << line << '\n';
+}
+
+struct Context {
+  std::string kincal, work;
+};
+
+struct CaseData {
+  Truth truth;
+  std::vector<Row> train, held_out;
+  std::vector<std::vector<double>> targets;
+};
+
+CaseData simulate(const CaseSpec& c) {
+  std::mt19937 rng(c.seed);
+  const Chain& chain = c.robot->chain;
+  CaseData d{make_truth(chain, c.instrument, c.error_class, rng), {}, {}, {}};
+  d.train = measure(chain, d.truth, configurations(chain, d.truth, c.size, rng), rng);
+  d.held_out = measure(chain, d.truth, configurations(chain, d.truth, kHeldOut, rng), rng);
+  d.targets = configurations(chain, d.truth, kTargets, rng);
+  return d;
+}
+
+CommandRun identify(const Context& ctx, const CaseSpec& c, const std::string& dir, const std::string& data,
+                    const std::string& validate) {
+  return run_command(
+      {ctx.kincal, "identify", "--model", c.robot->chain.urdf_path, "--tip-link", c.robot->chain.flange_link, "--data",
+       data, "--validate", validate, "--out", "m.yaml", "--urdf", "m.urdf"},
+      dir, "identify");
+}
+
+double heldout_rms_kincal(const std::string& dir, const CaseData& d) {
+  const auto columns = read_csv_columns(dir + "/pred.csv");
+  const auto x = columns.find("x"), y = columns.find("y"), z = columns.find("z");
+  if (x == columns.end() || y == columns.end() || z == columns.end() || x->second.size() != d.held_out.size())
+    return kNone;
+  std::vector<Eigen::Vector3d> e;
+  for (std::size_t r = 0; r < d.held_out.size(); ++r)
+    e.push_back(Eigen::Vector3d(x->second[r], y->second[r], z->second[r]) - d.held_out[r].truth.translation());
+  return rms_mm(e);
+}
+
+double heldout_rms_oracle(const Chain& chain, const CaseData& d, unsigned seed, bool geometry_only) {
+  std::mt19937 rng(seed);
+  const OracleFit fit = fit_oracle(chain, d.truth, d.train, rng, geometry_only);
+  std::vector<Eigen::Vector3d> e;
+  for (const Row& r : d.held_out)
+    e.push_back(measured_truth(chain, fit.estimate, r.q).translation() - r.truth.translation());
+  return rms_mm(e);
+}
+
+// The TCP (the flange link) at nominal poses of `targets`, in the device frame (the true
+// registration); x,y,z (+ orientation for pose instruments) and the nominal readings as seeds.
+std::string targets_csv(const Chain& chain, const CaseData& d) {
+  const bool pose = measures_pose(d.truth.instrument);
+  std::ostringstream out;
+  out.precision(12);
+  out << "x,y,z" << (pose ? ",qw,qx,qy,qz" : "");
+  for (std::size_t j = 1; j <= chain.joints.size(); ++j) out << ",q" << j;
+  out << '\n';
+  for (const std::vector<double>& q : d.targets) {
+    const Pose goal = d.truth.device_T_root * forward(chain, ChainErrors(chain.joints.size()), q);
+    out << goal.translation().x() << ',' << goal.translation().y() << ',' << goal.translation().z();
+    if (pose) {
+      Eigen::Quaterniond o(goal.linear());
+      if (o.w() < 0) o.coeffs() *= -1.0;
+      out << ',' << o.w() << ',' << o.x() << ',' << o.y() << ',' << o.z();
+    }
+    for (double v : q) out << ',' << v;
+    out << '\n';
+  }
+  return out.str();
+}
+
+// The true arm at correct's joint targets of the targets it reached: its TCP against the nominal
+// goal (mm RMS), and the largest change of a revolute joint (deg).
+void judge_correct(const Chain& chain, const CaseData& d, const std::string& dir, CaseResult& r) {
+  const auto columns = read_csv_columns(dir + "/corrected.csv");
+  const std::vector<std::string> outcome = read_csv_fields(dir + "/corrected.csv")["outcome"];
+  std::vector<Eigen::Vector3d> e;
+  double largest = 0.0;
+  for (std::size_t t = 0; t < d.targets.size(); ++t) {
+    if (t < outcome.size() && outcome[t] != "reached") continue;  // refused and named: counted apart
+    std::vector<double> q;
+    for (std::size_t j = 1; j <= chain.joints.size(); ++j) {
+      const auto col = columns.find("q" + std::to_string(j));
+      if (col == columns.end() || col->second.size() != d.targets.size() || !std::isfinite(col->second[t])) return;
+      q.push_back(col->second[t]);
+      if (!chain.joints[j - 1].prismatic) largest = std::max(largest, std::abs(q.back() - d.targets[t][j - 1]) / kDeg);
+    }
+    const Pose goal = d.truth.device_T_root * forward(chain, ChainErrors(chain.joints.size()), d.targets[t]);
+    e.push_back((d.truth.device_T_root * forward(chain, d.truth.errors, q)).translation() - goal.translation());
+  }
+  r.correct_mm = rms_mm(e);
+  r.joint_change_deg = largest;
+}
+
+// The largest change (mm) of a fixed joint's origin beyond the chain's last moving joint between the
+// original URDF and a written one; a joint missing from the written one is noted.
+double flange_moved_mm(const Chain& chain, const std::string& written_path, CaseResult& r) {
+  const std::string last = chain.joints.back().name;
+  const auto before = fixed_joints_beyond_chain(chain.urdf_text, last);
+  std::vector<std::pair<std::string, Pose>> after;
+  try {
+    after = fixed_joints_beyond_chain(read_text(written_path), last);
+  } catch (const std::exception& e) {
+    r.notes.push_back(fs::path(written_path).filename().string() + ": " + e.what());
+    return kNone;
+  }
+  double moved = 0.0;
+  for (const auto& [name, origin] : before) {
+    const auto it = std::find_if(after.begin(), after.end(), [&](const auto& a) { return a.first == name; });
+    if (it == after.end()) {
+      r.notes.push_back(fs::path(written_path).filename().string() + " lost fixed joint " + name);
+      continue;
+    }
+    moved = std::max(moved, 1e3 * (it->second.translation() - origin.translation()).norm());
+  }
+  return moved;
+}
+
+// Runs a command on identify's output; a refusal (exit 1) makes the output unusable.
+bool run_on_output(const std::vector<std::string>& argv, const std::string& dir, const std::string& step,
+                   CaseResult& r) {
+  const CommandRun run = run_command(argv, dir, step);
+  if (run.exit_code == 0) return true;
+  r.refused = true;
+  if (step == "correct" && run.exit_code == 3) {
+    const std::string lines = lines_with(run.err, "not reached:");
+    r.notes.push_back("correct: " + std::to_string(std::count(lines.begin(), lines.end(), '\n')) + " of " +
+                      std::to_string(kTargets) + " targets not reached (exit 3)");
+  } else {
+    r.unusable = true;
+    r.notes.push_back(step + " refused identify's file (exit " + std::to_string(run.exit_code) + ")");
+  }
+  print_failure(run);
+  return run.exit_code == 3;
+}
+
+CaseResult run_clean(const Context& ctx, const CaseSpec& c, const CaseData& d, const std::string& dir) {
+  const Chain& chain = c.robot->chain;
+  CaseResult r;
+  r.oracle_mm = heldout_rms_oracle(chain, d, c.seed + 7u, false);
+  r.geometry_oracle_mm =
+      c.error_class == ErrorClass::precise ? r.oracle_mm : heldout_rms_oracle(chain, d, c.seed + 7u, true);
+  if (c.error_class == ErrorClass::service && !chain.masses_from_urdf)
+    r.notes.push_back("sag from assumed masses: the URDF has none");
+  if (c.error_class == ErrorClass::coupled) r.notes.push_back("a coupling: no URDF carries one");
+  const CommandRun id = identify(ctx, c, dir, "train.csv", "held_out.csv");
+  if (id.exit_code != 0) {
+    r.refused = true;
+    r.notes.push_back("identify exit " + std::to_string(id.exit_code));
+    print_failure(id);
+    return r;
+  }
+  const std::string k = ctx.kincal, flange = chain.flange_link;
+  if (run_on_output({k, "predict", "--model", "m.yaml", "--joints", "held_out.csv", "-o", "pred.csv"}, dir, "predict",
+                    r))
+    r.kincal_mm = heldout_rms_kincal(dir, d);
+  write_text(dir + "/targets.csv", targets_csv(chain, d));
+  if (run_on_output(
+          {k, "correct", "--model", "m.yaml", "--poses", "targets.csv", "--frame", "device", "-o", "corrected.csv"},
+          dir, "correct", r))
+    judge_correct(chain, d, dir, r);
+  run_on_output({k, "export", "--format", "joint-offsets", "--model", "m.yaml", "-o", "offsets.csv"}, dir,
+                "export-offsets", r);
+  if (c.robot->label == "ur10")
+    run_on_output({k, "export", "--format", "ur-kinematics", "--model", "m.yaml", "-o", "ur.yaml"}, dir, "export-ur",
+                  r);
+  const bool original = run_on_output(
+      {k, "urdf", "--model", "m.yaml", "--original", chain.urdf_path, "--tip-link", flange, "-o", "original.urdf"}, dir,
+      "urdf-original", r);
+  r.flange_moved_mm = flange_moved_mm(chain, dir + "/m.urdf", r);
+  if (original) r.flange_moved_mm = std::max(r.flange_moved_mm, flange_moved_mm(chain, dir + "/original.urdf", r));
+  return r;
+}
+
+CaseResult run_mistake(const Context& ctx, const CaseSpec& c, const std::string& dir,
+                       const std::set<std::string>& clean_warnings) {
+  CaseResult r;
+  const bool same = c.mistake == Mistake::validate_is_train;
+  const CommandRun id = identify(ctx, c, dir, "train.csv", same ? "train.csv" : "held_out.csv");
+  if (id.exit_code != 0) {
+    r.mistake_caught = true;
+    r.notes.push_back("refused: " + lines_with(id.err, "identify").substr(0, 200));
+    return r;
+  }
+  for (const std::string& w : warnings(id.err))
+    if (!clean_warnings.count(w)) {
+      r.mistake_caught = true;
+      r.notes.push_back("warned: " + w.substr(0, 200));
+      return r;
+    }
+  r.notes.push_back("MISSED: identify exit 0, no new warning on stderr");
+  return r;
+}
+
+std::string fixed(double v, int precision) {
+  if (!std::isfinite(v)) return "-";
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(precision) << v;
+  return s.str();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"zoo benchmark (issues #41, #42)"};
+  int max_cases = 1000;
+  std::string filter, work = (fs::temp_directory_path() / "kincal_zoo").string(), kincal = KINCAL_CLI;
+  app.add_option("--cases", max_cases, "run the first N cases of the design");
+  app.add_option("--filter", filter, "run the cases whose label (robot/instrument/class/size/mistake) holds TEXT");
+  app.add_option("--work", work, "folder for the cases' files (kept)");
+  app.add_option("--kincal", kincal, "the kincal command");
+  CLI11_PARSE(app, argc, argv);
+  work = fs::absolute(work).string();
+
+  const std::vector<Robot> robots = zoo_robots(ZOO_URDF_CORPUS_DIR, ZOO_ROBOTS_DIR, ZOO_SOURCE_DIR);
+  const std::vector<CaseSpec> all = design(robots);
+  std::vector<CaseSpec> cases;
+  for (const CaseSpec& c : all)
+    if (c.index < max_cases && c.label().find(filter) != std::string::npos) cases.push_back(c);
+  std::cout << "cases: " << cases.size() << " of " << all.size() << " (" << robots.size()
+            << " robots; 48 clean: 4 instruments x 4 sizes x 3 error classes; 12 mistakes) + " << kHeldOut
+            << " held-out rows and " << kTargets << " TCP targets each\n";
+
+  std::vector<std::pair<CaseSpec, CaseResult>> results;
+  for (const CaseSpec& c : cases) {
+    const std::string dir = work + "/case" + std::to_string(c.index);
+    fs::create_directories(dir);
+    std::cout << "case " << c.index << " " << c.label() << '\n' << std::flush;
+    const CaseData d = simulate(c);
+    write_text(dir + "/held_out.csv", dataset_csv(c.robot->chain, d.truth, d.held_out, "h", Mistake::none));
+    CaseResult r;
+    if (c.mistake == Mistake::none) {
+      write_text(dir + "/train.csv", dataset_csv(c.robot->chain, d.truth, d.train, "t", Mistake::none));
+      r = run_clean(Context{kincal, work}, c, d, dir);
+    } else {
+      // The clean twin's warnings, to tell a warning about the mistake from the ones it always gives.
+      const std::string twin = work + "/case" + std::to_string(c.index) + "-clean";
+      fs::create_directories(twin);
+      write_text(twin + "/held_out.csv", dataset_csv(c.robot->chain, d.truth, d.held_out, "h", Mistake::none));
+      write_text(twin + "/train.csv", dataset_csv(c.robot->chain, d.truth, d.train, "t", Mistake::none));
+      const CommandRun clean = identify(Context{kincal, work}, c, twin, "train.csv", "held_out.csv");
+      write_text(dir + "/train.csv", dataset_csv(c.robot->chain, d.truth, d.train, "t", c.mistake));
+      r = run_mistake(Context{kincal, work}, c, dir, warnings(clean.err));
+    }
+    results.emplace_back(c, r);
+  }
+
+  // The per-case table, then the figures.
+  std::cout << "\nper case: robot/instrument/class/rows/mistake, kincal held-out mm, oracle mm, ratio, geometry-only "
+               "oracle mm (what a URDF carries), kincal over it, flange moved mm, correct mm / prediction, largest "
+               "joint change deg, what failed\n";
+  std::vector<double> ratios, geometry_ratios, correct_ratios;
+  double flange = 0.0, joint_change = 0.0;
+  int unusable = 0, false_refusals = 0, missed = 0, mistakes = 0, clean = 0;
+  std::string worst_case, worst_correct_case;
+  double worst = 0.0, worst_correct = 0.0;
+  for (const auto& [c, r] : results) {
+    const double ratio = r.kincal_mm / r.oracle_mm, correct_ratio = r.correct_mm / r.kincal_mm;
+    std::string what;
+    for (const std::string& n : r.notes) what += (what.empty() ? "" : "; ") + n;
+    std::cout << "ZOO " << std::setw(3) << c.index << ' ' << std::left << std::setw(52) << c.label() << std::right
+              << std::setw(9) << fixed(r.kincal_mm, 4) << std::setw(9) << fixed(r.oracle_mm, 4) << std::setw(8)
+              << fixed(ratio, 2) << std::setw(9) << fixed(r.geometry_oracle_mm, 4) << std::setw(8)
+              << fixed(r.kincal_mm / r.geometry_oracle_mm, 2) << std::setw(9) << fixed(r.flange_moved_mm, 2)
+              << std::setw(9) << fixed(correct_ratio, 2) << std::setw(8) << fixed(r.joint_change_deg, 2) << "  " << what
+              << '\n';
+    if (c.mistake != Mistake::none) {
+      ++mistakes;
+      missed += r.mistake_caught ? 0 : 1;
+      continue;
+    }
+    ++clean;
+    unusable += r.unusable ? 1 : 0;
+    false_refusals += r.refused ? 1 : 0;
+    if (std::isfinite(ratio)) {
+      ratios.push_back(ratio);
+      if (ratio > worst) worst = ratio, worst_case = c.label();
+    }
+    if (std::isfinite(r.kincal_mm / r.geometry_oracle_mm))
+      geometry_ratios.push_back(r.kincal_mm / r.geometry_oracle_mm);
+    if (std::isfinite(correct_ratio)) {
+      correct_ratios.push_back(correct_ratio);
+      if (correct_ratio > worst_correct) worst_correct = correct_ratio, worst_correct_case = c.label();
+    }
+    if (std::isfinite(r.flange_moved_mm)) flange = std::max(flange, r.flange_moved_mm);
+    if (std::isfinite(r.joint_change_deg)) joint_change = std::max(joint_change, r.joint_change_deg);
+  }
+  std::sort(ratios.begin(), ratios.end());
+  std::sort(geometry_ratios.begin(), geometry_ratios.end());
+  const auto median = [](const std::vector<double>& v) {
+    return v.empty() ? kNone : 0.5 * (v[(v.size() - 1) / 2] + v[v.size() / 2]);
+  };
+  std::cout << "\nclean cases " << clean << " (" << ratios.size() << " with a held-out ratio), mistake cases "
+            << mistakes << "; worst ratio: " << worst_case << "; worst correct: " << worst_correct_case << '\n';
+  std::cout << "FIGURE zoo_worst_heldout_over_oracle " << fixed(ratios.empty() ? kNone : ratios.back(), 3) << " ratio\n"
+            << "FIGURE zoo_median_heldout_over_oracle " << fixed(median(ratios), 3) << " ratio\n"
+            << "FIGURE zoo_worst_heldout_over_geometry_oracle "
+            << fixed(geometry_ratios.empty() ? kNone : geometry_ratios.back(), 3) << " ratio\n"
+            << "FIGURE zoo_median_heldout_over_geometry_oracle " << fixed(median(geometry_ratios), 3) << " ratio\n"
+            << "FIGURE zoo_unusable_outputs " << unusable << " cases\n"
+            << "FIGURE zoo_false_refusals " << false_refusals << " cases\n"
+            << "FIGURE zoo_mistakes_missed " << missed << " cases\n"
+            << "FIGURE zoo_flange_moved_mm " << fixed(flange, 3) << " mm\n"
+            << "FIGURE zoo_correct_worst_over_prediction " << fixed(correct_ratios.empty() ? kNone : worst_correct, 3)
+            << " ratio\n"
+            << "FIGURE zoo_correct_largest_joint_change_deg " << fixed(joint_change, 3) << " deg\n";
+  return 0;
+}

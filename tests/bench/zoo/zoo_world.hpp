@@ -1,0 +1,58 @@
+// The zoo's simulated world (issue #41): a truth (the URDF's chain with an error class, the
+// measuring device's registration, the measured point or frame on the flange), the instruments'
+// noise, reachable configurations, and the datasets in the format `kincal identify --data` reads
+// (README "Formats and frames"), with or without a planted mistake.
+#pragma once
+
+#include <random>
+#include <string>
+#include <vector>
+
+#include "zoo_chain.hpp"
+
+namespace zoo {
+
+enum class Instrument { tracker_point, tracker_6dof, mocap, camera };
+enum class ErrorClass { precise, service, scaled, coupled };
+enum class Mistake { none, mirrored, joints_swapped, positions_swapped, validate_is_train, mm_as_m, deg_as_rad };
+
+const char* name(Instrument i);
+const char* name(ErrorClass c);
+const char* name(Mistake m);
+bool measures_pose(Instrument i);
+
+struct Truth {
+  ChainErrors errors;
+  Pose device_T_root;    // the device frame: a tracker's, a mocap's or the camera's (z its line of sight)
+  Pose flange_T_marker;  // the reflector, marker, 6-DoF target or board: no link of the URDF
+  Instrument instrument = Instrument::tracker_point;
+  Eigen::Vector3d position_sigma_m;  // per axis of the device frame
+  double rotation_sigma_rad = 0.0;
+  Eigen::Vector3d workspace_centre_root;  // where the device looks
+  explicit Truth(std::size_t joints) : errors(joints) {}
+};
+
+// One reading: the controller's joint values, the noisy measurement and the truth it came from, in
+// the device frame.
+struct Row {
+  std::vector<double> q;
+  Pose measured, truth;
+};
+
+Truth make_truth(const Chain& chain, Instrument instrument, ErrorClass error_class, std::mt19937& rng);
+
+// n configurations within the joint limits with the flange above the base and the point in the
+// device's sight (a 40 deg cone for trackers, the field of view and a board facing the camera).
+std::vector<std::vector<double>> configurations(const Chain& chain, const Truth& truth, int n, std::mt19937& rng);
+
+// The true measured point/frame in the device frame (no noise).
+Pose measured_truth(const Chain& chain, const Truth& truth, const std::vector<double>& q);
+std::vector<Row> measure(const Chain& chain, const Truth& truth, const std::vector<std::vector<double>>& qs,
+                         std::mt19937& rng);
+
+// The dataset CSV (q1..qN,x,y,z[,qw,qx,qy,qz][,cxx..czz],id), ids `<id_prefix><row>`, with the
+// mistake written into it (validate_is_train changes no file).
+std::string dataset_csv(const Chain& chain, const Truth& truth, const std::vector<Row>& rows,
+                        const std::string& id_prefix, Mistake mistake);
+
+}  // namespace zoo
