@@ -10,12 +10,19 @@
 // only). Not thread-safe (the joint corrector's workspace).
 //
 // The joint-change limit (issue #42): a calibration moves a tool by millimetres, so its
-// correction moves joints by tenths of a degree. A target whose correction changes a joint by
-// more than the limit (from a joint target's own readings, or from the controller's solution of a
-// Cartesian target; with a starting point that is not that solution: from the seed) is reached
-// on a different branch or through a model that does not fit the arm -- a 105 degree swing, not a
-// correction. It is refused: outcome joint_change_limit, the readings left as they were (the
-// reference), the residual theirs, and the joint and its change named in the result.
+// correction moves joints by tenths of a degree -- except near a singularity (a wrist with q5
+// near 0, a wrist centre near axis 1), where a few millimetres or mrad take tens of degrees of
+// turns that cancel at the tool (the zoo's service-class arms: up to 30 degrees). A target whose
+// correction changes a joint by more than the limit from its reference is reached on a different
+// branch or through a model that does not fit the arm -- a 105 degree swing, not a correction --
+// unless the change is a singularity's turn: the limit scaled by how much less the change moves
+// the tool (first order, J dq) than the arm's most effective turn of its size (sigma_max |dq|),
+// and the tool, with the readings moved in a straight line, never off its straight way to the
+// goal by more than the correction's own size. Otherwise it is refused: outcome
+// joint_change_limit, the readings left as the reference, the residual theirs, and the joint and
+// its change named in the result. The reference: a joint target's own readings; a Cartesian
+// target's controller (nominal) solution from its seed, or the target's own seed reading (what the
+// user's controller goes to) when that solution lies beyond the limit from it.
 #pragma once
 
 #include <cstddef>
@@ -83,12 +90,25 @@ class TargetCorrector {
   JointCorrector joints_;
   CartesianSolver cartesian_;
   JointChangeLimit limit_;
-  bool orientation_ = true;  // joint targets: the tool's orientation corrected too
+  bool orientation_ = true;   // joint targets: the tool's orientation corrected too
+  double rotation_weight_m_;  // a radian weighs as this many metres (SolveOptions)
+
+  struct JointChange {
+    double over_limit = 0.0;  // the largest |q - reference| as a fraction of its joint's limit
+    int joint = 0;            // 0-based
+    double change = 0.0;      // rad or m
+  };
+  JointChange largest_change(const std::vector<double>& q, const std::vector<double>& reference) const;
 
   // Fills r's change fields against `reference`; refuses r (see the top) beyond the limit, with
   // its residual to `goal` (frame 0) on `arm`.
   void limit_change(TargetResult& r, const std::vector<double>& reference, const model::RobotModel& arm,
                     const model::Transform& goal, bool orientation) const;
+  // Whether q's change from `reference` (beyond the limit), which moves the tool by `correction`
+  // from `from` (pose_residual), is a singularity's turn rather than a swing (see the top).
+  bool singular_turn(const std::vector<double>& q, const std::vector<double>& reference, const model::RobotModel& arm,
+                     const model::Transform& from, const Eigen::Matrix<double, 6, 1>& correction,
+                     bool orientation) const;
 };
 
 // One line for a run: counts by outcome, how joint targets were corrected (the platform's step

@@ -12,13 +12,15 @@
 
 namespace kincal::identify {
 
-namespace {
-
-std::string number(double v) {
+std::string finding_number(double v) {
   char text[32];
   std::snprintf(text, sizeof text, "%.4g", v);
   return text;
 }
+
+namespace {
+
+const auto number = finding_number;
 
 // The rows the fits use: every row, or kMistakeRows spread evenly over the file.
 std::vector<std::size_t> sampled_rows(std::size_t count) {
@@ -50,13 +52,18 @@ ToolPoses tool_poses(const model::RobotModel& nominal, const model::Dataset& dat
 
 // The alternation of the header: the registration (Kabsch with the determinant's sign chosen)
 // given the offset, then the offset given the registration, until the RMS settles.
-double fitted_rms(const ToolPoses& poses, const std::vector<model::Vector3>& measured, bool reflected) {
-  const std::size_t n = measured.size();
+struct PointFit {
+  double rms_m = std::numeric_limits<double>::infinity();
   model::Vector3 offset = model::Vector3::Zero();  // of the measured point, in the tool frame
+};
+
+PointFit fitted(const ToolPoses& poses, const std::vector<model::Vector3>& measured, bool reflected) {
+  const std::size_t n = measured.size();
   model::Vector3 measured_mean = model::Vector3::Zero();
   for (const model::Vector3& m : measured) measured_mean += m;
   measured_mean /= static_cast<double>(n);
-  double rms = std::numeric_limits<double>::infinity();
+  PointFit fit;
+  model::Vector3 offset = fit.offset;
   std::vector<model::Vector3> points(n);
   for (int pass = 0; pass < 100; ++pass) {
     model::Vector3 mean = model::Vector3::Zero();
@@ -80,10 +87,17 @@ double fitted_rms(const ToolPoses& poses, const std::vector<model::Vector3>& mea
     for (std::size_t i = 0; i < n; ++i)
       squares += (r * (poses.position_m[i] + poses.rotation[i] * offset) + b - measured[i]).squaredNorm();
     const double next = std::sqrt(squares / static_cast<double>(n));
-    if (!(next < rms * (1.0 - 1e-9))) return std::min(rms, next);
-    rms = next;
+    if (!(next < fit.rms_m * (1.0 - 1e-9))) {
+      if (next < fit.rms_m) fit = {next, offset};
+      return fit;
+    }
+    fit = {next, offset};
   }
-  return rms;
+  return fit;
+}
+
+double fitted_rms(const ToolPoses& poses, const std::vector<model::Vector3>& measured, bool reflected) {
+  return fitted(poses, measured, reflected).rms_m;
 }
 
 std::vector<model::Vector3> measured_points(const model::Dataset& data, const std::vector<std::size_t>& rows) {
@@ -94,9 +108,11 @@ std::vector<model::Vector3> measured_points(const model::Dataset& data, const st
 
 }  // namespace
 
-double registration_rms(const model::RobotModel& nominal, const model::Dataset& data, bool reflected) {
+model::Vector3 measured_point_offset(const model::RobotModel& nominal, const model::Dataset& data) {
+  if (data.rows.size() < 6 || data.joint_count != nominal.joint_count()) return model::Vector3::Zero();
   const std::vector<std::size_t> rows = sampled_rows(data.rows.size());
-  return fitted_rms(tool_poses(nominal, data, rows), measured_points(data, rows), reflected);
+  const PointFit fit = fitted(tool_poses(nominal, data, rows), measured_points(data, rows), false);
+  return fit.offset.norm() <= kMaxMeasuredPointOffset_m ? fit.offset : model::Vector3::Zero();
 }
 
 std::vector<std::string> frame_mistakes(const model::RobotModel& nominal, const model::Dataset& data) {

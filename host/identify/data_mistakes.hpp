@@ -36,13 +36,20 @@
 
 namespace kincal::identify {
 
+// A number in a finding's sentence: 4 significant digits (plausibility.hpp's findings too).
+std::string finding_number(double v);
+
 inline constexpr int kMistakeRows = 2000;
 inline constexpr double kMistakeFloor_m = 0.01;
 inline constexpr double kMistakeNoiseRatio = 100.0;
 
-// RMS (m) of the measured points about the nominal tool points (each moved by one offset in the
-// tool frame) after the best registration that is a rotation (`reflected` false) or a reflection.
-double registration_rms(const model::RobotModel& nominal, const model::Dataset& data, bool reflected);
+// The measured point's offset from the nominal tool, in the tool frame, that the rotation
+// registration above fits (a reflector on the flange where the model's tool is the flange): what
+// a scale check (plausibility.hpp) adds to the nominal tool before comparing distances. Zero
+// with fewer than 6 rows, or beyond kMaxMeasuredPointOffset_m (no reflector or marker is
+// mounted so far: the data are more wrong than an offset, and the scale check must see it).
+inline constexpr double kMaxMeasuredPointOffset_m = 0.5;
+model::Vector3 measured_point_offset(const model::RobotModel& nominal, const model::Dataset& data);
 
 // The findings above, one sentence each with the numbers (empty: none). Part of
 // implausibilities() (plausibility.hpp).

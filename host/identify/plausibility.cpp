@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <numbers>
 #include <optional>
 #include <utility>
@@ -19,11 +18,7 @@ namespace {
 constexpr double kDegreesPerRadian = 180.0 / std::numbers::pi;
 constexpr double kMaxRange_m = 1000.0;  // beyond any laser tracker's or camera's range
 
-std::string number(double v) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.4g", v);
-  return text;
-}
+const auto number = finding_number;
 
 double median(std::vector<double> v) {
   const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
@@ -69,11 +64,14 @@ struct Predicted {
   std::vector<model::Matrix3> rotation;
 };
 
+// The nominal tool poses, the points moved by the measured point's offset from the tool
+// (data_mistakes.hpp): a reflector 100 mm off a flange that the model's tool is moves otherwise.
 Predicted predict(const model::RobotModel& m, const model::Dataset& data) {
+  const model::Vector3 offset = measured_point_offset(m, data);
   Predicted p;
   for (const model::Measurement& r : data.rows) {
     const model::Transform t = model::forward_kinematics(m, r.q);
-    p.position_m.push_back(t.translation);
+    p.position_m.push_back(t.translation + t.rotation * offset);
     p.rotation.push_back(t.rotation);
   }
   return p;

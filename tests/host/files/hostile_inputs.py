@@ -110,7 +110,8 @@ write_csv("deg.csv", header, [[v * 180 / math.pi for v in r[:6]] + r[6:] for r i
 write_csv("mm.csv", header, [r[:6] + [v * 1000 for v in r[6:9]] + r[9:] for r in noisy])
 write_csv("xyzw.csv", header, [r[:9] + [r[10], r[11], r[12], r[9]] for r in noisy])
 write_csv("huge.csv", header, [r[:6] + [1e308] + r[7:] for r in noisy])
-shutil.copy("d.csv", "held.csv")
+# held out: the same readings measured again (a copy of d.csv would be refused as training rows)
+write_csv("held.csv", header, [r[:6] + [v + random.gauss(0, 2e-4) for v in r[6:9]] + r[9:] for r in exact])
 os.link("d.csv", "d_link.csv")
 os.mkdir("sub")
 
@@ -140,6 +141,9 @@ case("identify:1e308", ident + ["--data", "huge.csv", "--out", "o.yaml"], r"fart
 case("identify:exact fit", ident + ["--data", "exact.csv", "--out", "o.yaml"], r"reproduces every measured point")
 case("identify:exact fit, --sigma", ident + ["--data", "exact.csv", "--out", "o.yaml", "--sigma", "1e-4"], r"wrote o\.yaml", rc_ok=True)
 case("identify:plausible", ident + ["--data", "d.csv", "--out", "o.yaml", "--validate", "held.csv"], r"wrote o\.yaml", rc_ok=True, protect=inputs)
+shutil.copy("d.csv", "d_copy.csv")
+case("identify:validate=training rows", ident + ["--data", "d.csv", "--out", "o.yaml", "--validate", "d_copy.csv"],
+     r"--validate d_copy\.csv: 40 of the 40 rows of d_copy\.csv are rows of d\.csv", protect=inputs)
 case("identify:not a dataset", ident + ["--data", puma, "--out", "o.yaml"], r"puma560\.yaml", protect=[puma])
 
 # --- predict, plan, urdf
