@@ -108,26 +108,22 @@ std::vector<model::Vector3> measured_points(const model::Dataset& data, const st
 
 }  // namespace
 
-model::Vector3 measured_point_offset(const model::RobotModel& nominal, const model::Dataset& data) {
-  if (data.rows.size() < 6 || data.joint_count != nominal.joint_count()) return model::Vector3::Zero();
-  const std::vector<std::size_t> rows = sampled_rows(data.rows.size());
-  const PointFit fit = fitted(tool_poses(nominal, data, rows), measured_points(data, rows), false);
-  return fit.offset.norm() <= kMaxMeasuredPointOffset_m ? fit.offset : model::Vector3::Zero();
-}
-
-std::vector<std::string> frame_mistakes(const model::RobotModel& nominal, const model::Dataset& data) {
-  std::vector<std::string> found;
-  if (data.rows.size() < 6 || data.joint_count != nominal.joint_count()) return found;
+FrameCheck frame_check(const model::RobotModel& nominal, const model::Dataset& data) {
+  FrameCheck out;
+  if (data.rows.size() < 6 || data.joint_count != nominal.joint_count()) return out;
   const std::vector<std::size_t> rows = sampled_rows(data.rows.size());
   const std::vector<model::Vector3> measured = measured_points(data, rows);
   const ToolPoses poses = tool_poses(nominal, data, rows);
-  const double rotated = fitted_rms(poses, measured, false);
-  if (!(rotated > kMistakeFloor_m)) return found;
+  const PointFit fit = fitted(poses, measured, false);
+  if (fit.offset.norm() <= kMaxMeasuredPointOffset_m) out.measured_point_offset = fit.offset;
+  const double rotated = fit.rms_m;
+  if (!(rotated > kMistakeFloor_m)) return out;
   const double mirrored = fitted_rms(poses, measured, true);
   if (mirrored * 5.0 < rotated)
-    found.push_back("the measured points are a mirror image of the model's: registered by a rotation they leave " +
-                    number(rotated * 1e3) + " mm RMS, by a reflection " + number(mirrored * 1e3) +
-                    " mm: likely two position columns swapped or an axis flipped (a left-handed device frame)");
+    out.mistakes.push_back(
+        "the measured points are a mirror image of the model's: registered by a rotation they leave " +
+        number(rotated * 1e3) + " mm RMS, by a reflection " + number(mirrored * 1e3) +
+        " mm: likely two position columns swapped or an axis flipped (a left-handed device frame)");
   // Two joint columns exchanged: the pair whose exchange fits best, if it fits far better.
   std::tuple<double, int, int> best{rotated, 0, 0};
   for (int j = 0; j < nominal.joint_count(); ++j)
@@ -139,11 +135,12 @@ std::vector<std::string> frame_mistakes(const model::RobotModel& nominal, const 
     }
   const auto [swapped, j, k] = best;
   if (swapped * 5.0 < rotated)
-    found.push_back("the readings fit far better with joint columns " + std::to_string(j + 1) + " (" +
-                    nominal.joints[static_cast<std::size_t>(j)].name + ") and " + std::to_string(k + 1) + " (" +
-                    nominal.joints[static_cast<std::size_t>(k)].name + ") exchanged: " + number(swapped * 1e3) +
-                    " mm RMS against " + number(rotated * 1e3) + " mm as given: likely two joint columns swapped");
-  return found;
+    out.mistakes.push_back("the readings fit far better with joint columns " + std::to_string(j + 1) + " (" +
+                           nominal.joints[static_cast<std::size_t>(j)].name + ") and " + std::to_string(k + 1) + " (" +
+                           nominal.joints[static_cast<std::size_t>(k)].name + ") exchanged: " + number(swapped * 1e3) +
+                           " mm RMS against " + number(rotated * 1e3) +
+                           " mm as given: likely two joint columns swapped");
+  return out;
 }
 
 std::optional<std::string> unexplained_fit(double rms_m, double instrument_sigma_m) {

@@ -43,17 +43,22 @@ inline constexpr int kMistakeRows = 2000;
 inline constexpr double kMistakeFloor_m = 0.01;
 inline constexpr double kMistakeNoiseRatio = 100.0;
 
-// The measured point's offset from the nominal tool, in the tool frame, that the rotation
-// registration above fits (a reflector on the flange where the model's tool is the flange): what
-// a scale check (plausibility.hpp) adds to the nominal tool before comparing distances. Zero
-// with fewer than 6 rows, or beyond kMaxMeasuredPointOffset_m (no reflector or marker is
-// mounted so far: the data are more wrong than an offset, and the scale check must see it).
+// What the fits above find, from one set of tool poses and one rotation registration:
+//   measured_point_offset  the measured point's offset from the nominal tool, in the tool frame,
+//                          that the rotation registration fits (a reflector on the flange where
+//                          the model's tool is the flange): what the scale checks (plausibility.hpp)
+//                          add to the nominal tool before comparing distances. Zero with fewer than
+//                          6 rows, or beyond kMaxMeasuredPointOffset_m (no reflector or marker is
+//                          mounted so far: the data are more wrong than an offset, and the scale
+//                          check must see it).
+//   mistakes               the findings above, one sentence each with the numbers (empty: none).
+// Part of implausibilities() (plausibility.hpp).
 inline constexpr double kMaxMeasuredPointOffset_m = 0.5;
-model::Vector3 measured_point_offset(const model::RobotModel& nominal, const model::Dataset& data);
-
-// The findings above, one sentence each with the numbers (empty: none). Part of
-// implausibilities() (plausibility.hpp).
-std::vector<std::string> frame_mistakes(const model::RobotModel& nominal, const model::Dataset& data);
+struct FrameCheck {
+  model::Vector3 measured_point_offset = model::Vector3::Zero();
+  std::vector<std::string> mistakes;
+};
+FrameCheck frame_check(const model::RobotModel& nominal, const model::Dataset& data);
 
 // A sentence when a calibrated model's RMS residual (m) is too large for any arm to leave (see
 // above), naming the likely causes; nothing otherwise. `instrument_sigma_m` 0: unknown.

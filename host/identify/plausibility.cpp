@@ -65,9 +65,9 @@ struct Predicted {
 };
 
 // The nominal tool poses, the points moved by the measured point's offset from the tool
-// (data_mistakes.hpp): a reflector 100 mm off a flange that the model's tool is moves otherwise.
-Predicted predict(const model::RobotModel& m, const model::Dataset& data) {
-  const model::Vector3 offset = measured_point_offset(m, data);
+// (frame_check, data_mistakes.hpp): a reflector 100 mm off a flange that the model's tool is moves
+// otherwise.
+Predicted predict(const model::RobotModel& m, const model::Dataset& data, const model::Vector3& offset) {
   Predicted p;
   for (const model::Measurement& r : data.rows) {
     const model::Transform t = model::forward_kinematics(m, r.q);
@@ -208,12 +208,13 @@ std::vector<std::string> implausibilities(const model::RobotModel& nominal, cons
   std::vector<std::string> found;
   if (data.joint_count != nominal.joint_count()) return found;  // check_joint_count says so
   check_joints(nominal, data, found);
-  const Predicted p = predict(nominal, data);
+  FrameCheck frame = frame_check(nominal, data);
+  const Predicted p = predict(nominal, data, frame.measured_point_offset);
   check_far_points(data, p, found);
   check_positions(data, p, found);
   check_orientations(data, p, found);
   check_exact_fit(data, p, options, found);
-  for (std::string& f : frame_mistakes(nominal, data)) found.push_back(std::move(f));
+  for (std::string& f : frame.mistakes) found.push_back(std::move(f));
   return found;
 }
 

@@ -56,17 +56,17 @@ TEST_CASE("a mirrored device frame and swapped joint columns are found on every 
       for (const int count : {20, 150}) {
         CAPTURE(count);
         const model::Dataset data = tracker_rows(nominal, rng, error_m, count);
-        CHECK(identify::frame_mistakes(nominal, data).empty());
+        CHECK(identify::frame_check(nominal, data).mistakes.empty());
         CHECK(identify::implausibilities(nominal, data).empty());
 
         model::Dataset mirrored = data;  // x and y exchanged at export
         for (model::Measurement& r : mirrored.rows) std::swap(r.position.x(), r.position.y());
-        const std::vector<std::string> found = identify::frame_mistakes(nominal, mirrored);
+        const std::vector<std::string> found = identify::frame_check(nominal, mirrored).mistakes;
         CHECK(mentions(found, "mirror image"));
         CHECK(mentions(identify::implausibilities(nominal, mirrored), "mirror image"));
         model::Dataset flipped = data;  // one axis flipped
         for (model::Measurement& r : flipped.rows) r.position.z() = -r.position.z();
-        CHECK(mentions(identify::frame_mistakes(nominal, flipped), "mirror image"));
+        CHECK(mentions(identify::frame_check(nominal, flipped).mistakes, "mirror image"));
 
         model::Dataset swapped = data;  // the first two joint columns of the same type exchanged
         int j = -1, k = -1;
@@ -77,7 +77,7 @@ TEST_CASE("a mirrored device frame and swapped joint columns are found on every 
         REQUIRE(k >= 0);
         for (model::Measurement& r : swapped.rows)
           std::swap(r.q[static_cast<std::size_t>(j)], r.q[static_cast<std::size_t>(k)]);
-        const std::vector<std::string> swap_found = identify::frame_mistakes(nominal, swapped);
+        const std::vector<std::string> swap_found = identify::frame_check(nominal, swapped).mistakes;
         // Exchanging two joints may move the tool by little (the Stanford arm's first two at
         // small readings): found, or nothing found -- never a mirror.
         CHECK_FALSE(mentions(swap_found, "mirror image"));
@@ -95,7 +95,7 @@ TEST_CASE("swapped joint columns of a six-axis arm are named") {
   const model::RobotModel nominal = robot("ur10.yaml");
   model::Dataset data = tracker_rows(nominal, rng, 1e-3, 60);
   for (model::Measurement& r : data.rows) std::swap(r.q[1], r.q[2]);
-  const std::vector<std::string> found = identify::frame_mistakes(nominal, data);
+  const std::vector<std::string> found = identify::frame_check(nominal, data).mistakes;
   CHECK(mentions(found, "joint columns 2 (" + nominal.joints[1].name + ") and 3 (" + nominal.joints[2].name + ")"));
   CHECK(mentions(found, "likely two joint columns swapped"));
 }
