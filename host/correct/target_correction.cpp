@@ -96,7 +96,7 @@ void TargetCorrector::limit_change(TargetResult& r, const std::vector<double>& r
   if (r.change_over_limit <= 1.0 || r.solution.outcome != Outcome::reached) return;
   const model::Transform from = model::forward_kinematics(arm, reference);
   const Eigen::Matrix<double, 6, 1> correction = pose_residual(goal, from);
-  if (!singular_turn(r.solution.q, reference, arm, from, correction, orientation)) {
+  if (!singular_turn(r.solution.q, reference, c.over_limit, arm, from, correction, orientation)) {
     r.solution.outcome = Outcome::joint_change_limit;
     r.solution.q = reference;
     r.solution.residual_m = correction.head<3>().norm();
@@ -105,7 +105,7 @@ void TargetCorrector::limit_change(TargetResult& r, const std::vector<double>& r
 }
 
 bool TargetCorrector::singular_turn(const std::vector<double>& q, const std::vector<double>& reference,
-                                    const model::RobotModel& arm, const model::Transform& from,
+                                    double over_limit, const model::RobotModel& arm, const model::Transform& from,
                                     const Eigen::Matrix<double, 6, 1>& correction, bool orientation) const {
   // First order, weighted as the solve: how much less the change moves the tool than the arm's
   // most effective turn of its size would. About 1 away from singularities (the limit stands);
@@ -116,7 +116,7 @@ bool TargetCorrector::singular_turn(const std::vector<double>& q, const std::vec
   for (std::size_t i = 0; i < reference.size(); ++i) dq(static_cast<Eigen::Index>(i)) = q[i] - reference[i];
   const double felt = (j * dq).norm();
   const double most = Eigen::JacobiSVD<Eigen::MatrixXd>(j).singularValues()(0) * dq.norm();
-  if (largest_change(q, reference).over_limit * felt > most) return false;
+  if (over_limit * felt > most) return false;
   // And in full: the tool's way from the reference to the solution, the readings moved in a
   // straight line (as a joint move goes), off the straight way to the goal by no more than the
   // correction's own size.

@@ -104,11 +104,12 @@ class TargetCorrector {
   // its residual to `goal` (frame 0) on `arm`.
   void limit_change(TargetResult& r, const std::vector<double>& reference, const model::RobotModel& arm,
                     const model::Transform& goal, bool orientation) const;
-  // Whether q's change from `reference` (beyond the limit), which moves the tool by `correction`
-  // from `from` (pose_residual), is a singularity's turn rather than a swing (see the top).
-  bool singular_turn(const std::vector<double>& q, const std::vector<double>& reference, const model::RobotModel& arm,
-                     const model::Transform& from, const Eigen::Matrix<double, 6, 1>& correction,
-                     bool orientation) const;
+  // Whether q's change from `reference` (over_limit times the limit, largest_change's), which
+  // moves the tool by `correction` from `from` (pose_residual), is a singularity's turn rather
+  // than a swing (see the top).
+  bool singular_turn(const std::vector<double>& q, const std::vector<double>& reference, double over_limit,
+                     const model::RobotModel& arm, const model::Transform& from,
+                     const Eigen::Matrix<double, 6, 1>& correction, bool orientation) const;
 };
 
 // One line for a run: counts by outcome, how joint targets were corrected (the platform's step
