@@ -111,14 +111,14 @@ struct Table {
   void decimal_mark(const std::string& text, std::size_t c, int line) {
     const bool comma = text.find(',') != std::string::npos;
     const bool point = text.find('.') != std::string::npos;
-    const std::string field = "column '" + files::excerpt(names[c]) + "': '" + files::excerpt(text) + "'";
+    const auto field = [&] { return "column '" + files::excerpt(names[c]) + "': '" + files::excerpt(text) + "'"; };
     if (comma && point)
-      fail_row(line, c, field + " has both '.' and ',' (a thousands separator?): export the numbers without one");
+      fail_row(line, c, field() + " has both '.' and ',' (a thousands separator?): export the numbers without one");
     if (comma && first_comma_line == 0) first_comma_line = line;
     if (point && separator == ',' && first_point_line == 0) first_point_line = line;
     if (separator == ',' && first_comma_line != 0 && first_point_line != 0)
       fail_row(line, c,
-               field + ": this ',' separated file writes numbers with a decimal comma (line " +
+               field() + ": this ',' separated file writes numbers with a decimal comma (line " +
                    std::to_string(first_comma_line) + ") and with a decimal point (line " +
                    std::to_string(first_point_line) +
                    "), so a comma may be a thousands separator: export with one decimal mark");
