@@ -101,28 +101,6 @@ std::pair<int, int> grid(const std::string& text, const std::string& value, int 
   return {c, r};
 }
 
-// Mean grey level in a small window around `centre` (clipped to the image).
-double mean_near(const cv::Mat& grey, cv::Point2f centre, float radius_px) {
-  const int r = std::max(1, static_cast<int>(radius_px));
-  const cv::Rect window(static_cast<int>(std::lround(centre.x)) - r, static_cast<int>(std::lround(centre.y)) - r,
-                        2 * r + 1, 2 * r + 1);
-  const cv::Rect clipped = window & cv::Rect(0, 0, grey.cols, grey.rows);
-  return clipped.area() > 0 ? cv::mean(grey(clipped))[0] : 128.0;
-}
-
-// See the header: for COLS + ROWS odd, put corner 0 next to the dark far-corner square.
-void orient_chessboard(const Board& board, const cv::Mat& grey, std::vector<cv::Point2f>& corners) {
-  if ((board.cols + board.rows) % 2 == 0) return;
-  const std::size_t n = corners.size(), cols = static_cast<std::size_t>(board.cols);
-  const cv::Point2f c0 = corners[0], c_last = corners[n - 1];
-  const cv::Point2f outside_first = c0 - 0.5f * (corners[1] - c0) - 0.5f * (corners[cols] - c0);
-  const cv::Point2f outside_last = c_last + 0.5f * (c_last - corners[n - 2]) + 0.5f * (c_last - corners[n - 1 - cols]);
-  const float radius = 0.15f * static_cast<float>(cv::norm(corners[1] - c0));
-  if (mean_near(grey, outside_first, radius) > mean_near(grey, outside_last, radius)) {
-    std::reverse(corners.begin(), corners.end());
-  }
-}
-
 // The smallest distance (px) between two neighbouring corners of the grid, diagonal neighbours
 // included: the scale of the smallest square in this view.
 double smallest_spacing_px(const std::vector<cv::Point2f>& corners, int cols, int rows) {
@@ -251,6 +229,19 @@ std::optional<double> interior_contrast(const cv::Mat& grey, const std::vector<c
   return c->value;
 }
 
+// See the header (step 4): for COLS + ROWS odd, turning the board half a turn maps square (a, b)
+// to (COLS - 2 - a, ROWS - 2 - b), which changes every square's parity, so the sign of the grid's
+// own parity contrast tells the two orientations apart; the corners are put so that the parity-0
+// squares (square (0, 0), between corners 0, 1, COLS and COLS + 1, and the one diagonally outside
+// corner 0) are the dark ones. All the grid's squares vote: two windows on the far corner squares
+// (the rule before) differed by one or two grey levels on OpenCV's right12.jpg and right14.jpg at
+// half size and turned those boards half a turn.
+void orient_chessboard(const Board& board, const cv::Mat& grey, std::vector<cv::Point2f>& corners) {
+  if ((board.cols + board.rows) % 2 == 0) return;
+  const std::optional<double> c = interior_contrast(grey, corners, board.cols, board.rows);
+  if (c && *c > 0) std::reverse(corners.begin(), corners.end());
+}
+
 // The grid's sides, as the messages name them (side indices as in ring_contrast_ratio).
 constexpr std::array<const char*, 4> kGridSides = {"first column", "last column", "first row", "last row"};
 
@@ -328,15 +319,36 @@ std::optional<cv::Size> confirmed_larger(const cv::Mat& grey, const std::vector<
   return whole;
 }
 
+// Whether two grids of `size` corners (numbered each its own way round, either perhaps turned
+// about its diagonal: `b_turned` gives b's size as rows x cols) are the same grid in the image:
+// their four outer corners coincide, as a set, within a quarter of the smallest square.
+bool same_grid(const std::vector<cv::Point2f>& a, const std::vector<cv::Point2f>& b, cv::Size size, bool b_turned) {
+  const auto outer = [](const std::vector<cv::Point2f>& g, cv::Size s) {
+    const auto at = [&](int i, int j) { return g[static_cast<std::size_t>(j * s.width + i)]; };
+    return std::array<cv::Point2f, 4>{at(0, 0), at(s.width - 1, 0), at(0, s.height - 1), at(s.width - 1, s.height - 1)};
+  };
+  const double tolerance_px = 0.25 * smallest_spacing_px(a, size.width, size.height);
+  const std::array<cv::Point2f, 4> oa = outer(a, size),
+                                   ob = outer(b, b_turned ? cv::Size(size.height, size.width) : size);
+  return std::all_of(oa.begin(), oa.end(), [&](cv::Point2f p) {
+    return std::any_of(ob.begin(), ob.end(), [&](cv::Point2f q) { return cv::norm(p - q) <= tolerance_px; });
+  });
+}
+
 // The larger board a grid of the given size lies in (step 3): nullopt when its squares do not
-// clearly continue (board_may_continue); else the smallest grid grown to the whole board when
-// that is confirmed (confirmed_larger), or `pattern` itself when the size cannot be measured.
+// clearly continue (board_may_continue), or when the smallest grid, grown, stops at this very
+// grid (the detector's own growth finds no squares beyond it: what alternated beyond it is
+// texture, as the windows of a building beside OpenCV's left03.jpg did); else the grown grid's
+// size when that is confirmed (confirmed_larger), or `pattern` itself when the size cannot be
+// measured.
 std::optional<cv::Size> larger_chessboard(const cv::Mat& grey, const std::vector<cv::Point2f>& corners,
                                           cv::Size pattern) {
   if (!board_may_continue(grey, corners, pattern.width, pattern.height)) return std::nullopt;
   std::vector<cv::Point2f> seed;
   cv::Mat meta;
   if (!cv::findChessboardCornersSB(grey, kGrowSeed, seed, kGrowFlags, meta)) return pattern;
+  const cv::Size grown(meta.cols, meta.rows), turned(pattern.height, pattern.width);
+  if ((grown == pattern || grown == turned) && same_grid(corners, seed, pattern, grown != pattern)) return std::nullopt;
   return confirmed_larger(grey, seed, meta.cols, meta.rows, pattern).value_or(pattern);
 }
 

@@ -66,7 +66,10 @@
 //       OpenCV's 26 sample views: at most 0.17 for the true 9x6 board, at least 0.77 for 8x6
 //       inside it), the board continues there. Its size is then measured by growing the
 //       smallest grid (3x3, the same detector and flag) to the whole board, when that holds the
-//       given size; else it is not named (counting rings further out by the same homography
+//       given size; when that growth stops at the very grid found (its four outer corners within
+//       a quarter square), nothing continues and the board is the given one (a building's
+//       windows beside OpenCV's left03.jpg pasted on it alternated like squares); else the size
+//       is not named (counting rings further out by the same homography
 //       named wrong sizes -- 10x4 for 9x4, 7x9 for 7x4 of the 9x6 board -- as the extrapolation
 //       leaves the squares). A side whose ring 2 leaves the image cannot be judged and counts
 //       as the board's edge.
@@ -74,8 +77,11 @@
 //     every size named is the board's (tests/host/camera/camera_real_test.cpp); the ring check
 //     alone let 4x3 pass in 9 of the 13 views.
 //  4. orientation: a chessboard looks the same turned by 180 degrees unless COLS + ROWS is odd
-//     (then its two far corner squares differ in colour); for such boards the corners are
-//     ordered so that the square diagonally outside corner 0 is the dark one, which keeps the
+//     (then its two far corner squares differ in colour, and turning it changes the colour of
+//     every square at a grid position); for such boards the corners are ordered so that the
+//     square diagonally outside corner 0 is the dark one -- told by the sign of the parity
+//     contrast of all the grid's own squares, not by the two far corner squares, which read
+//     within a grey level or two of each other on half-size views -- which keeps the
 //     board frame the same in every view (stereo and hand-eye need that). Boards with
 //     COLS + ROWS even stay ambiguous: use COLS + ROWS odd, or ChArUco.
 //  5. the given size not found (or refused by ring 1): the whole board the view shows is

@@ -44,9 +44,18 @@
 //       aprilgrid_real_mocap_hand_eye_position_std_mm, ..._rotation_std_deg   the jackknife
 //       (host/camera/hand_eye_uncertainty.hpp) of kincal's body_T_camera: sqrt of the covariance's
 //       trace, its uncertainty from the data
+//       The two residuals are computed by the same function on the same pose pairs, but they are not
+//       alike in what they favour: OpenCV's methods minimize (algebraically) this very AX = XB
+//       measure, and the best of five is picked by it; kincal's refinement minimizes the corners'
+//       reprojection through the chain (its X, W), a different objective. So each is also judged in
+//       the other's terms:
+//   aprilgrid_real_mocap_hand_eye_reprojection_rms_px, ..._opencv   the corners' RMS through the
+//       chain X^-1 H^-1 W on all views, kincal's X, W and OpenCV's X with W fitted to the corners
+//       the same way (fitted_target: X held); ..._rotation_kincal_vs_opencv_deg the two X apart
 //   aprilgrid_real_mocap_hand_eye_heldout_rms_px, ..._opencv   the judge of the two: body_T_camera
 //       and the board's place fitted on the even views predict the odd views' corners through the
-//       chain (and the other way round), RMS over the held-out corners (chain_heldout_rms_px)
+//       chain (and the other way round), RMS over the held-out corners (chain_heldout_rms_px);
+//       OpenCV's board place fitted to the corners with its X held (fitted_target), as kincal's is
 //   aprilgrid_real_mocap_time_offset_best_ms, ..._residual_at_best_offset_mm_opencv   the shift of
 //       the images' times (5 ms steps over +-200 ms) at which OpenCV's best method fits best: the
 //       two clocks' offset, if any
@@ -398,9 +407,63 @@ Eigen::Isometry3d mean_target(const MotionPairs& m, const Eigen::Isometry3d& x) 
   return w;
 }
 
+// The corners' reprojection errors (px; x and y of each corner) over views i of m through the
+// chain: the board at X^-1 H_i^-1 W in the camera.
+Eigen::VectorXd chain_residuals(const MotionPairs& m, const CameraModel& camera, const Eigen::Isometry3d& x,
+                                const Eigen::Isometry3d& w) {
+  std::vector<double> r;
+  for (std::size_t i = 0; i < m.h.size(); ++i) {
+    const BoardDetection& d = m.views_found[i].detection;
+    const Eigen::Isometry3d c = x.inverse() * m.h[i].inverse() * w;
+    cv::Mat rv, t, rm;
+    cv::eigen2cv(Eigen::Matrix3d(c.linear()), rm);
+    cv::Rodrigues(rm, rv);
+    cv::eigen2cv(Eigen::Vector3d(c.translation()), t);
+    std::vector<cv::Point2f> projected;
+    cv::projectPoints(d.board_m, rv, t, cv::Mat(camera.camera_matrix), camera.distortion_mat(), projected);
+    for (std::size_t j = 0; j < projected.size(); ++j) {
+      r.push_back(static_cast<double>(projected[j].x - d.image_px[j].x));
+      r.push_back(static_cast<double>(projected[j].y - d.image_px[j].y));
+    }
+  }
+  return Eigen::Map<Eigen::VectorXd>(r.data(), static_cast<Eigen::Index>(r.size()));
+}
+
+// base_T_target for a hand-eye X held fixed, fitted to the corners as kincal's refinement fits
+// its own (the reprojection through the chain, chain_residuals): Gauss-Newton from mean_target over a
+// turn and a shift of W (numeric derivatives), 20 steps at most, stopping when a step does not
+// lower the sum. What OpenCV's X is judged with,
+// so that both hand-eyes are judged through a board pose fitted the same way.
+Eigen::Isometry3d fitted_target(const MotionPairs& m, const CameraModel& camera, const Eigen::Isometry3d& x) {
+  Eigen::Isometry3d w = mean_target(m, x);
+  const auto moved = [&w](const Eigen::Matrix<double, 6, 1>& step) {
+    Eigen::Isometry3d out = w;
+    const Eigen::Vector3d turn = step.head<3>();
+    if (turn.norm() > 0)
+      out.linear() = w.linear() * Eigen::AngleAxisd(turn.norm(), turn.normalized()).toRotationMatrix();
+    out.translation() += step.tail<3>();
+    return out;
+  };
+  const auto residuals = [&](const Eigen::Isometry3d& at) { return chain_residuals(m, camera, x, at); };
+  for (int iteration = 0; iteration < 20; ++iteration) {
+    const Eigen::VectorXd r0 = residuals(w);
+    Eigen::MatrixXd j(r0.size(), 6);
+    for (Eigen::Index k = 0; k < 6; ++k) {
+      Eigen::Matrix<double, 6, 1> step = Eigen::Matrix<double, 6, 1>::Zero();
+      step(k) = 1e-6;
+      j.col(k) = (residuals(moved(step)) - r0) / 1e-6;
+    }
+    const Eigen::Matrix<double, 6, 1> step = -(j.transpose() * j).ldlt().solve(j.transpose() * r0);
+    const Eigen::Isometry3d next = moved(step);
+    if (residuals(next).squaredNorm() >= r0.squaredNorm()) break;
+    w = next;
+  }
+  return w;
+}
+
 // Held-out views through the chain: X, W fitted on the even views (by time) predict the odd views'
 // corners at X^-1 H^-1 W, and the other way round; RMS (px) over every held-out corner, for
-// kincal's calibrate_hand_eye and for OpenCV's best method (W from mean_target).
+// kincal's calibrate_hand_eye and for OpenCV's best method (its W from fitted_target).
 std::array<double, 2> chain_heldout_rms_px(const MotionPairs& m, const CameraModel& camera,
                                            const HandEyeOptions& options) {
   std::array<double, 2> sum{0, 0};
@@ -412,28 +475,14 @@ std::array<double, 2> chain_heldout_rms_px(const MotionPairs& m, const CameraMod
       to.h.push_back(m.h[i]);
       to.c.push_back(m.c[i]);
       to.views.push_back(m.views_found[i]);
+      to.views_found.push_back(m.views_found[i]);
     }
     const HandEyeCalibration k = calibrate_hand_eye(fit.views, camera, options);
     const Eigen::Isometry3d cv_x = opencv_hand_eye(fit.h, fit.c, false).gripper_T_camera;
-    const std::array<std::pair<Eigen::Isometry3d, Eigen::Isometry3d>, 2> chains = {
-        std::pair{k.gripper_T_camera, k.base_T_target}, std::pair{cv_x, mean_target(fit, cv_x)}};
-    for (std::size_t i = 0; i < held.h.size(); ++i) {
-      const BoardDetection& d = held.views[i].detection;
-      corners += d.image_px.size();
-      for (std::size_t which = 0; which < 2; ++which) {
-        const Eigen::Isometry3d c = chains[which].first.inverse() * held.h[i].inverse() * chains[which].second;
-        cv::Mat r, t, rm;
-        cv::eigen2cv(Eigen::Matrix3d(c.linear()), rm);
-        cv::Rodrigues(rm, r);
-        cv::eigen2cv(Eigen::Vector3d(c.translation()), t);
-        std::vector<cv::Point2f> projected;
-        cv::projectPoints(d.board_m, r, t, cv::Mat(camera.camera_matrix), camera.distortion_mat(), projected);
-        for (std::size_t j = 0; j < projected.size(); ++j) {
-          const cv::Point2f e = projected[j] - d.image_px[j];
-          sum[which] += static_cast<double>(e.dot(e));
-        }
-      }
-    }
+    const Eigen::VectorXd ours = chain_residuals(held, camera, k.gripper_T_camera, k.base_T_target);
+    sum[0] += ours.squaredNorm();
+    sum[1] += chain_residuals(held, camera, cv_x, fitted_target(fit, camera, cv_x)).squaredNorm();
+    corners += static_cast<std::size_t>(ours.size() / 2);
   }
   const double n = static_cast<double>(corners);
   return {std::sqrt(sum[0] / n), std::sqrt(sum[1] / n)};
@@ -458,6 +507,21 @@ void hand_eye(const std::vector<std::string>& stamps, const std::vector<BoardDet
   figure("aprilgrid_real_mocap_hand_eye_residual_mm_opencv", cv_best.residual[1] * 1e3, "mm");
   figure("aprilgrid_real_mocap_hand_eye_rotation_deg", ours[0] * 180 / std::numbers::pi, "deg");
   figure("aprilgrid_real_mocap_hand_eye_rotation_deg_opencv", cv_best.residual[0] * 180 / std::numbers::pi, "deg");
+  // Like for like in the other objective: both hand-eyes' corner reprojection through the chain on
+  // the same views, each with its board pose fitted to the corners the same way (kincal's is its
+  // refinement's; OpenCV's by fitted_target with its X held).
+  const auto rms = [](const Eigen::VectorXd& r) {
+    return std::sqrt(r.squaredNorm() / static_cast<double>(r.size() / 2));
+  };
+  figure("aprilgrid_real_mocap_hand_eye_reprojection_rms_px",
+         rms(chain_residuals(m, camera, k.gripper_T_camera, k.base_T_target)), "px");
+  figure("aprilgrid_real_mocap_hand_eye_reprojection_rms_px_opencv",
+         rms(chain_residuals(m, camera, cv_best.gripper_T_camera, fitted_target(m, camera, cv_best.gripper_T_camera))),
+         "px");
+  figure("aprilgrid_real_mocap_hand_eye_rotation_kincal_vs_opencv_deg",
+         Eigen::AngleAxisd(k.gripper_T_camera.linear() * cv_best.gripper_T_camera.linear().transpose()).angle() * 180 /
+             std::numbers::pi,
+         "deg");
   figure("aprilgrid_real_mocap_hand_eye_kincal_vs_opencv_mm",
          (k.gripper_T_camera.translation() - cv_best.gripper_T_camera.translation()).norm() * 1e3, "mm");
 
