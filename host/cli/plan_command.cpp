@@ -27,6 +27,7 @@ struct PlanArgs {
   int count = 30, pool = 1000;
   std::uint64_t seed = 1;
   bool orientation = false;
+  std::string criterion = "prediction";
 };
 
 // A figure of the summary: "%.<digits>g", or "n/a" for NaN and infinities (a ratio of zeros, a
@@ -46,8 +47,11 @@ void constraint_lines(std::ostream& out, const PlanArgs& a, const model::RobotMo
   for (const identify::ConstraintOutcome& c : r.constraints) {
     out << "# constraint " << identify::describe(c.constraint, o.constraints, m) << ": rejected " << c.rejected
         << " of " << r.considered;
-    if (c.active)
+    if (c.active && r.criterion == identify::PlanCriterion::d_optimal)
       out << "; active: a candidate it alone rejects would raise O1 " << figure(c.index_gain, 4) << "x";
+    else if (c.active)
+      out << "; active: a candidate it alone rejects would lower the predicted position rms " << figure(c.index_gain, 4)
+          << "x";
     else if (c.constraint == identify::Constraint::joint_ranges && a.candidates.empty())
       out << "; the candidates are drawn within the ranges";
     else
@@ -65,7 +69,13 @@ std::string summary(const PlanArgs& a, const model::RobotModel& m, const identif
   const identify::PlanOptions defaults;
   std::ostringstream out;
   out << "# kincal plan: " << a.count << " configurations of " << m.name << " for " << r.identified.size()
-      << " identifiable parameters (" << r.held_fixed.size() << " held fixed)\n";
+      << " identifiable parameters (" << r.held_fixed.size() << " held fixed)\n"
+      << "# criterion: "
+      << (r.criterion == identify::PlanCriterion::prediction
+              ? "prediction (the mean predicted position variance over the candidates)"
+              : "d-optimal (O1)");
+  if (r.lever_m > 0.0) out << "; rotation rows weighted by the joints' lever arm, " << figure(r.lever_m, 3) << " m";
+  out << '\n';
   if (r.random_full_rank == 0) {
     out << "# observability index O1: planned " << figure(r.index, 6) << "; none of " << defaults.random_sets
         << " random plans of " << a.count << " of the " << r.feasible
@@ -130,6 +140,8 @@ int run_plan(const PlanArgs& a) {
     options.pool = a.pool;
     options.seed = a.seed;
     options.orientation = a.orientation;
+    options.criterion =
+        a.criterion == "d-optimal" ? identify::PlanCriterion::d_optimal : identify::PlanCriterion::prediction;
     options.progress = [](int sweep, std::size_t done, std::size_t total) {
       std::cerr << "kincal plan: exchange sweep " << sweep << ": " << done << " of " << total << " configurations\n";
     };
@@ -192,6 +204,10 @@ void add_plan_command(CLI::App& app, int& status) {
   cmd->add_option("--angles", a->constraint_options.angles, "the unit of --joint-range and --sight angles: rad or deg")
       ->check(CLI::IsMember({"rad", "deg"}));
   cmd->add_flag("--orientation", a->orientation, "plan for pose measurements (tool frame) instead of points");
+  cmd->add_option("--criterion", a->criterion,
+                  "prediction (default: the least mean predicted position variance over the candidates) or "
+                  "d-optimal (the largest O1)")
+      ->check(CLI::IsMember({"prediction", "d-optimal"}));
   cmd->add_option("-o,--out", a->out, "output CSV q1..qN (default or '-': standard output)");
   cmd->callback([a, &status] { status = run_plan(*a); });
 }

@@ -2,22 +2,34 @@
 // random choices of the same size? The shared laser-tracker set read through kincal import's
 // reader, the fixed held-out set of 500 rows (tests/host/model/ur10_realdata.hpp, as
 // realdata_ur10_bench), the other 995 rows' joint readings as the candidates. 30 rows chosen by
-// the plan (pose measurements, as identify uses the set), identified with the default options:
+// the plan (pose measurements, as identify uses the set), identified with the default options,
+// judged by the position RMS over the 500 held-out rows. A plan depends on its seed (the
+// exchange's random start: different local optima of nearly the same criterion, 0.465 to 0.477 mm
+// held out), so the plan's figures are means over the plans of seeds 1..5 (issue #41: one seed's
+// plan measured the draw as much as the planner); the random choices' mean over 50 draws
+// (its standard error about 0.003 mm, 0.06 of the share below; 20 draws gave 0.005):
 //   realdata_ur10_plan_heldout_rms_mm        held-out position RMS of the planned 30 rows
-//   realdata_ur10_random30_heldout_rms_mm    mean over 20 random 30-row choices (seeds 1..20)
+//   realdata_ur10_plan_heldout_worst_mm      the worst of the five plans
+//   realdata_ur10_random30_heldout_rms_mm    mean over 50 random 30-row choices (seeds 1..50)
+//   realdata_ur10_random30_heldout_sem_mm    its standard error
 //   realdata_ur10_plan_share_of_achievable   (random-30 - plan-30) / (random-30 - all 995
 //                                            candidates): how much of what more rows could gain a
 //                                            30-row plan gains (issue #41: >= 0.6; it replaces the
 //                                            withdrawn plan/random ratio, whose 0.9 was below what
 //                                            the data allow)
-//   realdata_ur10_random30_better_than_plan  how many of the 20 random choices beat the plan
-//   realdata_ur10_plan_index_over_random     O1 of the plan over the random choices' mean (the
-//                                            nominal model's Jacobian, what the plan maximizes)
-//   realdata_ur10_plan_positions_heldout_rms_mm   the same plan made for positions only
+//   realdata_ur10_random30_better_than_plan  how many of the 50 random choices beat the plans' mean
+//   realdata_ur10_plan_index_over_random     O1 of the plan over the random choices' mean (seed 1)
+//   realdata_ur10_plan_prediction_over_random  the predicted position rms (the criterion the plan
+//                                            minimizes, plan.hpp) over the random choices' (seed 1)
+//   realdata_ur10_plan_seconds               one plan's run time (mean of the five)
+//   realdata_ur10_plan_dopt_heldout_rms_mm   the same with --criterion d-optimal (seeds 1..5)
+//   realdata_ur10_plan_positions_heldout_rms_mm   the plan made for positions only (seeds 1..5)
 //   realdata_ur10_all_candidates_over_random  all 995 candidate rows identified, over the random
 //                                            30-row mean: about the least any 30-row choice can
 //                                            reach, the arm's unexplained error being the floor
 #include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <random>
 #include <string>
@@ -45,18 +57,35 @@ double heldout_rms_m(const model::RobotModel& nominal, const model::Dataset& all
   return identify::accuracy(r.model, held_out).rms_m;
 }
 
-// The rows the plan chooses among the training candidates.
-std::vector<int> planned_rows(const model::RobotModel& nominal, const model::Dataset& all,
-                              const std::vector<int>& train, bool orientation, double& index_ratio) {
-  identify::PlanOptions o;
-  o.count = kRows;
-  o.orientation = orientation;
-  for (int r : train) o.candidates.push_back(all.rows[static_cast<std::size_t>(r)].q);
-  const identify::PlanResult plan = identify::plan_configurations(nominal, o);
-  index_ratio = plan.index / plan.random_index_mean;
-  std::vector<int> rows;
-  for (std::size_t k : plan.chosen) rows.push_back(train[k]);
-  return rows;
+// The plans of seeds 1..kPlanSeeds among the training candidates, identified and judged.
+struct PlanOutcome {
+  double mean_rms_m = 0.0, worst_rms_m = 0.0, seconds = 0.0;
+  identify::PlanResult first;  // seed 1's plan
+};
+
+constexpr int kPlanSeeds = 5;
+
+PlanOutcome planned(const model::RobotModel& nominal, const model::Dataset& all, const std::vector<int>& train,
+                    const model::Dataset& held_out, bool orientation, identify::PlanCriterion criterion) {
+  PlanOutcome out;
+  for (int seed = 1; seed <= kPlanSeeds; ++seed) {
+    identify::PlanOptions o;
+    o.count = kRows;
+    o.orientation = orientation;
+    o.criterion = criterion;
+    o.seed = static_cast<std::uint64_t>(seed);
+    for (int r : train) o.candidates.push_back(all.rows[static_cast<std::size_t>(r)].q);
+    const auto start = std::chrono::steady_clock::now();
+    identify::PlanResult plan = identify::plan_configurations(nominal, o);
+    out.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / kPlanSeeds;
+    std::vector<int> rows;
+    for (std::size_t k : plan.chosen) rows.push_back(train[k]);
+    const double rms = heldout_rms_m(nominal, all, rows, held_out);
+    out.mean_rms_m += rms / kPlanSeeds;
+    out.worst_rms_m = std::max(out.worst_rms_m, rms);
+    if (seed == 1) out.first = std::move(plan);
+  }
+  return out;
 }
 
 }  // namespace
@@ -67,32 +96,39 @@ int main() {
   const realdata::Split split = realdata::split_rows(static_cast<int>(all.rows.size()), 500);
   const model::Dataset held_out = realdata::subset(all, split.held_out);
 
-  double index_ratio = 0.0, positions_index_ratio = 0.0;
-  const double plan_rms =
-      heldout_rms_m(nominal, all, planned_rows(nominal, all, split.train_order, true, index_ratio), held_out);
-  const double positions_rms = heldout_rms_m(
-      nominal, all, planned_rows(nominal, all, split.train_order, false, positions_index_ratio), held_out);
+  const PlanOutcome plan =
+      planned(nominal, all, split.train_order, held_out, true, identify::PlanCriterion::prediction);
+  const PlanOutcome dopt = planned(nominal, all, split.train_order, held_out, true, identify::PlanCriterion::d_optimal);
+  const PlanOutcome positions =
+      planned(nominal, all, split.train_order, held_out, false, identify::PlanCriterion::prediction);
 
-  double random_sum = 0.0;
-  int better = 0;
-  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+  constexpr int kDraws = 50;
+  std::vector<double> random_rms;
+  for (std::uint64_t seed = 1; seed <= kDraws; ++seed) {
     std::vector<int> rows = split.train_order;
     std::mt19937_64 rng(seed);
     std::shuffle(rows.begin(), rows.end(), rng);
     rows.resize(kRows);
-    const double rms = heldout_rms_m(nominal, all, rows, held_out);
-    random_sum += rms;
-    better += rms < plan_rms ? 1 : 0;
+    random_rms.push_back(heldout_rms_m(nominal, all, rows, held_out));
   }
-  const double random_mean = random_sum / 20.0;
+  double random_mean = 0.0, random_var = 0.0;
+  for (double r : random_rms) random_mean += r / kDraws;
+  for (double r : random_rms) random_var += (r - random_mean) * (r - random_mean) / (kDraws - 1);
+  const auto better =
+      std::count_if(random_rms.begin(), random_rms.end(), [&](double r) { return r < plan.mean_rms_m; });
   const double all_rms = heldout_rms_m(nominal, all, split.train_order, held_out);
-  figure("realdata_ur10_plan_heldout_rms_mm", plan_rms * 1e3, "mm");
+  figure("realdata_ur10_plan_heldout_rms_mm", plan.mean_rms_m * 1e3, "mm");
+  figure("realdata_ur10_plan_heldout_worst_mm", plan.worst_rms_m * 1e3, "mm");
   figure("realdata_ur10_random30_heldout_rms_mm", random_mean * 1e3, "mm");
-  figure("realdata_ur10_plan_share_of_achievable", (random_mean - plan_rms) / (random_mean - all_rms), "ratio");
-  figure("realdata_ur10_random30_better_than_plan", better, "of_20");
-  figure("realdata_ur10_plan_index_over_random", index_ratio, "ratio");
-  figure("realdata_ur10_plan_positions_heldout_rms_mm", positions_rms * 1e3, "mm");
-  figure("realdata_ur10_plan_positions_index_over_random", positions_index_ratio, "ratio");
+  figure("realdata_ur10_random30_heldout_sem_mm", std::sqrt(random_var / kDraws) * 1e3, "mm");
+  figure("realdata_ur10_plan_share_of_achievable", (random_mean - plan.mean_rms_m) / (random_mean - all_rms), "ratio");
+  figure("realdata_ur10_random30_better_than_plan", static_cast<double>(better), "of_50");
+  figure("realdata_ur10_plan_index_over_random", plan.first.index / plan.first.random_index_mean, "ratio");
+  figure("realdata_ur10_plan_prediction_over_random", plan.first.prediction_rms / plan.first.random_prediction_rms,
+         "ratio");
+  figure("realdata_ur10_plan_seconds", plan.seconds, "s");
+  figure("realdata_ur10_plan_dopt_heldout_rms_mm", dopt.mean_rms_m * 1e3, "mm");
+  figure("realdata_ur10_plan_positions_heldout_rms_mm", positions.mean_rms_m * 1e3, "mm");
   figure("realdata_ur10_all_candidates_heldout_rms_mm", all_rms * 1e3, "mm");
   figure("realdata_ur10_all_candidates_over_random", all_rms / random_mean, "ratio");
   return 0;

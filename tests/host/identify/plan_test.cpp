@@ -3,6 +3,7 @@
 // (checked here from the kinematics, not through violated_constraints), infeasible sets refused
 // naming the constraint, and the constraints file's errors naming the key and line.
 #include "host/identify/plan.hpp"
+#include "host/identify/identify.hpp"
 #include "host/identify/plan_constraints.hpp"
 #include "host/model/model_file.hpp"
 
@@ -362,4 +363,105 @@ TEST_CASE("the constraints as options: read as the file's keys; errors name the 
   options.joint_ranges = {f.joint_ranges[0]};
   CHECK_THROWS_WITH_AS(identify::combine_plan_constraints(from_file, "c.yaml", options),
                        "the command line and c.yaml both give a range of q2: give it in one place", model::InputError);
+}
+
+namespace {
+
+// The prediction criterion of `plan` recomputed from its definition (plan.hpp), without the
+// planner's scaling and updates: rows weighted by the pool's mean spreads of the joints' error
+// (every UR10 joint is revolute), V = K K^T at each planned configuration, A the pool's mean of
+// P^T P, L identify's default priors against a model error of 0.25 mm;
+// sqrt(tr(A (M + L)^-1 (N + L) (M + L)^-1)).
+double prediction_rms_of(const model::RobotModel& m, const identify::ParameterIds& ids,
+                         const std::vector<std::vector<double>>& pool, const std::vector<std::vector<double>>& plan,
+                         int rows) {
+  const model::RobotModel start = identify::reparameterize_for_identification(m, 0.1, nullptr);
+  double position = 0.0, orientation = 0.0;
+  for (const auto& q : pool) {
+    const Eigen::MatrixXd k = model::joint_jacobian(m, q);
+    position += k.topRows(3).squaredNorm();
+    orientation += k.bottomRows(3).squaredNorm();
+  }
+  Eigen::VectorXd w(rows);
+  w.head(3).setConstant(std::sqrt(3.0 * static_cast<double>(pool.size()) / position));
+  if (rows == 6) w.tail(3).setConstant(std::sqrt(3.0 * static_cast<double>(pool.size()) / orientation));
+  const auto p = static_cast<Eigen::Index>(ids.size());
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(p, p), info = a;
+  const Eigen::VectorXd sigmas = identify::prior_sigmas(identify::PriorOptions{}, ids, 6, "test");
+  for (Eigen::Index c = 0; c < p; ++c) info(c, c) = std::pow(0.25e-3 * w(0) / sigmas(c), 2);
+  Eigen::MatrixXd noise = info;
+  for (const auto& q : pool) {
+    const Eigen::MatrixXd position_rows = w(0) * model::parameter_jacobian(start, q, ids).topRows(3);
+    a += position_rows.transpose() * position_rows / static_cast<double>(pool.size());
+  }
+  for (const auto& q : plan) {
+    const Eigen::MatrixXd j = w.asDiagonal() * model::parameter_jacobian(start, q, ids).topRows(rows);
+    const Eigen::MatrixXd k = w.asDiagonal() * model::joint_jacobian(m, q).topRows(rows);
+    info += j.transpose() * j;
+    noise += j.transpose() * k * k.transpose() * j;
+  }
+  const Eigen::MatrixXd inverse = info.inverse();
+  return std::sqrt((a * inverse * noise * inverse).trace());
+}
+
+}  // namespace
+
+TEST_CASE("the prediction criterion: its value recomputed, and no single exchange improves the plan") {
+  const model::RobotModel m = ur10();
+  std::mt19937_64 rng(11);
+  identify::PlanOptions o;
+  o.count = 12;
+  o.random_sets = 10;
+  o.orientation = true;
+  o.candidates = random_configurations(m, 80, rng);
+  const identify::PlanResult r = identify::plan_configurations(m, o);
+  CHECK(r.criterion == identify::PlanCriterion::prediction);
+  const double rms = prediction_rms_of(m, r.identified, o.candidates, r.configurations, 6);
+  CHECK(r.prediction_rms == doctest::Approx(rms).epsilon(1e-6));
+  CHECK(r.prediction_rms < r.random_prediction_rms);
+  // The rotation rows' weight: the joints' lever arm over the candidates.
+  double position = 0.0, orientation = 0.0;
+  for (const auto& q : o.candidates) {
+    position += model::joint_jacobian(m, q).topRows(3).squaredNorm();
+    orientation += model::joint_jacobian(m, q).bottomRows(3).squaredNorm();
+  }
+  CHECK(r.lever_m == doctest::Approx(std::sqrt(position / orientation)).epsilon(1e-9));
+  // A local optimum of the criterion as defined: every exchange of a planned configuration for
+  // another candidate leaves the recomputed rms as it is or larger.
+  int worse = 0;
+  for (std::size_t i = 0; i < r.configurations.size(); ++i)
+    for (std::size_t c = 0; c < o.candidates.size(); c += 3) {
+      if (std::find(r.chosen.begin(), r.chosen.end(), c) != r.chosen.end()) continue;
+      std::vector<std::vector<double>> exchanged = r.configurations;
+      exchanged[i] = o.candidates[c];
+      worse += prediction_rms_of(m, r.identified, o.candidates, exchanged, 6) < rms * (1.0 - 1e-6) ? 1 : 0;
+    }
+  CHECK(worse == 0);
+  // The D-optimal plan of the same candidates predicts worse by this criterion.
+  o.criterion = identify::PlanCriterion::d_optimal;
+  const identify::PlanResult d = identify::plan_configurations(m, o);
+  CHECK(d.criterion == identify::PlanCriterion::d_optimal);
+  CHECK(d.prediction_rms ==
+        doctest::Approx(prediction_rms_of(m, d.identified, o.candidates, d.configurations, 6)).epsilon(1e-6));
+  CHECK(d.prediction_rms > r.prediction_rms);
+}
+
+TEST_CASE("the prediction criterion with as few configurations as the parameters allow") {
+  // Positions only: 3 rows a configuration, so a plan without one of its configurations has fewer
+  // rows than parameters (the exchange's direct evaluation).
+  const model::RobotModel m = ur10();
+  std::mt19937_64 rng(5);
+  identify::PlanOptions o;
+  o.random_sets = 10;
+  o.candidates = random_configurations(m, 60, rng);
+  o.count = 40;
+  const auto p = static_cast<int>(identify::plan_configurations(m, o).identified.size());
+  o.count = (p + 2) / 3;
+  CAPTURE(p);
+  const identify::PlanResult r = identify::plan_configurations(m, o);
+  REQUIRE(r.configurations.size() == static_cast<std::size_t>(o.count));
+  CHECK(r.lever_m == 0.0);
+  CHECK(std::isfinite(r.prediction_rms));
+  CHECK(r.prediction_rms ==
+        doctest::Approx(prediction_rms_of(m, r.identified, o.candidates, r.configurations, 3)).epsilon(1e-6));
 }
