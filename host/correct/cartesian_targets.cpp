@@ -17,12 +17,21 @@ model::Transform CartesianSolver::in_base(const model::Transform& target) const 
 
 CartesianSolution CartesianSolver::solve(const model::Transform& target, bool orientation,
                                          std::span<const double> seed) const {
-  const model::Transform goal = in_base(target);
   CartesianSolution out;
-  out.nominal = solve_pose(nominal_, goal, orientation, seed, options_);
-  const std::span<const double> start = out.nominal.outcome == Outcome::reached ? out.nominal.q : seed;
-  out.calibrated = solve_pose(calibrated_, goal, orientation, start, options_);
+  out.nominal = solve_nominal(target, orientation, seed);
+  out.calibrated =
+      solve_calibrated(target, orientation, out.nominal.outcome == Outcome::reached ? out.nominal.q : seed);
   return out;
+}
+
+Solution CartesianSolver::solve_nominal(const model::Transform& target, bool orientation,
+                                        std::span<const double> start) const {
+  return solve_pose(nominal_, in_base(target), orientation, start, options_);
+}
+
+Solution CartesianSolver::solve_calibrated(const model::Transform& target, bool orientation,
+                                           std::span<const double> start, std::span<const double> reference) const {
+  return solve_pose(calibrated_, in_base(target), orientation, start, options_, reference);
 }
 
 }  // namespace kincal::correct

@@ -9,9 +9,10 @@
 // would give for the target, in the same branch), and the calibrated solve starts from that
 // nominal solution, so the corrected readings are the nominal ones moved by the calibration.
 // Both solves are pose_solver.hpp's (damped, limits respected, bounded iterations); when the
-// nominal solve does not reach the target the calibrated one starts from the seed.
-// A point target leaves the orientation free: a 6-joint arm then has three spare degrees of
-// freedom and the solve moves the least it can from its start (the damped step's minimum norm).
+// nominal solve does not reach the target the calibrated one starts from the seed. Each returns,
+// of the readings that reach the target, the ones nearest its start (pose_solver.hpp): a point
+// target (orientation free: a 6-joint arm has three spare degrees of freedom) or a 7-joint arm
+// gets the smallest change from the seed, never turns that cancel at the tool.
 #pragma once
 
 #include <span>
@@ -37,6 +38,11 @@ class CartesianSolver {
 
   // `target` in the frame given at construction; seed.size() == joint_count (std::invalid_argument).
   CartesianSolution solve(const model::Transform& target, bool orientation, std::span<const double> seed) const;
+  // Each solve alone, from `start` and nearest `reference` (empty: the start). solve() is the
+  // nominal one from the seed, then the calibrated one from its solution.
+  Solution solve_nominal(const model::Transform& target, bool orientation, std::span<const double> start) const;
+  Solution solve_calibrated(const model::Transform& target, bool orientation, std::span<const double> start,
+                            std::span<const double> reference = {}) const;
 
   // The calibrated model without its base registration: solutions are evaluated on it, in frame 0.
   const model::RobotModel& calibrated_arm() const { return calibrated_; }

@@ -1,5 +1,6 @@
 #include "host/correct/correction_block.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -55,15 +56,26 @@ shared::CorrectionParameters correction_block(const model::RobotModel& controlle
     d.beta_rad = lb.parameters.beta_rad - la.parameters.beta_rad;
     m.error = values(d, name + " error");
   }
-  // The joint map: coupling and the gravity inputs are the model file's (never identified: the
-  // models must agree on them); scale and compliance as nominal + identified error.
+  // The joint map: the block carries one coupling row and one set of masses per joint; scale and
+  // compliance as nominal + identified error. An identified coupling (geometry+couplings) has no
+  // place in it. Identified masses (geometry+sag, on an arm whose model has none) are exact in it
+  // when the controller's model has no compliance: its masses then act on nothing.
+  const bool controller_sags = std::any_of(controller.joints.begin(), controller.joints.end(),
+                                           [](const model::Joint& j) { return j.compliance.value_or(0.0) != 0.0; });
   for (int j = 0; j < n; ++j) {
     const model::Joint& ja = controller.joints[static_cast<std::size_t>(j)];
     const model::Joint& jb = identified.joints[static_cast<std::size_t>(j)];
     const std::string name = "joint " + std::to_string(j + 1);
-    if (ja.coupling != jb.coupling || ja.mass_kg != jb.mass_kg || ja.centre_of_mass_m != jb.centre_of_mass_m)
+    if (ja.coupling != jb.coupling)
       throw model::InputError("correction block: " + name +
-                              " differs in coupling or mass between the models (they are inputs, never identified)");
+                              "'s coupling row differs between the models (an identified coupling): the block carries "
+                              "the controller's row only; correct on the PC (kincal correct) instead");
+    const bool masses_differ = ja.mass_kg != jb.mass_kg || ja.centre_of_mass_m != jb.centre_of_mass_m;
+    if (masses_differ && controller_sags)
+      throw model::InputError("correction block: " + name +
+                              "'s mass differs between the models while the controller's model has a compliance: the "
+                              "block carries one set of masses");
+    const model::Joint& gravity = masses_differ ? jb : ja;
     shared::JointMapValues& m = block.joint_maps[static_cast<std::size_t>(j)];
     m.coupled = !ja.coupling.empty();
     for (std::size_t k = 0; k < ja.coupling.size(); ++k) {
@@ -80,9 +92,9 @@ shared::CorrectionParameters correction_block(const model::RobotModel& controlle
     m.scale_error = to_float(jb.scale.value_or(1.0) - scale, name + " scale error");
     m.compliance = to_float(compliance, name + " compliance");
     m.compliance_error = to_float(jb.compliance.value_or(0.0) - compliance, name + " compliance error");
-    m.mass_kg = to_float(ja.mass_kg, name + " mass");
+    m.mass_kg = to_float(gravity.mass_kg, name + " mass");
     for (int k = 0; k < 3; ++k)
-      m.centre_of_mass_m[static_cast<std::size_t>(k)] = to_float(ja.centre_of_mass_m(k), name + " centre of mass");
+      m.centre_of_mass_m[static_cast<std::size_t>(k)] = to_float(gravity.centre_of_mass_m(k), name + " centre of mass");
   }
   if (controller.payload.mass_kg != identified.payload.mass_kg ||
       controller.payload.centre_of_mass_m != identified.payload.centre_of_mass_m ||

@@ -15,7 +15,9 @@
 // registration belongs to the measuring device, not to the arm. The joint map (block format 3):
 // each joint's coupling row, the controller's scale and compliance (absent: 1 and 0) and
 // identified - controller, the link masses and centres of mass, payload and gravity; coupling,
-// masses, payload and gravity must be the same in both models (inputs, not identified).
+// payload and gravity must be the same in both models (an identified coupling has no place in the
+// block), and the masses too unless the controller's model has no compliance (then the identified
+// masses, geometry+sag's, go in: the controller's act on nothing).
 //
 // Errors: model::InputError when the models do not match (joint count, type, convention), have
 // more joints than the protocol carries (shared::kJoints), or a value does not fit a float.

@@ -72,7 +72,7 @@ JointCorrection JointCorrector::correct(std::span<const double> readings) {
     }
   }
   out.refined = true;
-  out.solution = solve_pose(calibrated_, out.goal, options_.orientation, start, options_.solve);
+  out.solution = solve_pose(calibrated_, out.goal, options_.orientation, start, options_.solve, readings);
   return out;
 }
 

@@ -12,8 +12,8 @@
 // platform_step.hpp) -- so the PC and the platform give the same readings to within float rounding. Where that step
 // leaves more than accept_m / accept_rad at the tool (measured in double on the host models), or refuses (a step above
 // 0.05 rad), correct() goes on with the damped Newton solve of pose_solver.hpp on the calibrated model, from the
-// platform's readings (or from r). Without a block (models the block cannot carry) the Newton solve does it all;
-// platform_step() says which.
+// platform's readings (or from r), to the readings nearest r that reach the goal. Without a block (models the block
+// cannot carry) the Newton solve does it all; platform_step() says which.
 //
 // Costs: the platform step a few microseconds, each Newton iteration one FK and one Jacobian.
 // Not thread-safe: correct() uses the object's float workspace (one object per thread).

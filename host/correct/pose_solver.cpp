@@ -71,91 +71,168 @@ Eigen::Matrix<double, 6, 1> pose_residual(const model::Transform& goal, const mo
   return e;
 }
 
-Solution solve_pose(const model::RobotModel& model, const model::Transform& goal, bool orientation,
-                    std::span<const double> seed, const SolveOptions& o) {
-  const int n = model.joint_count();
-  if (static_cast<int>(seed.size()) != n)
-    throw std::invalid_argument("solve_pose: the seed has " + std::to_string(seed.size()) +
-                                " readings for a model of " + std::to_string(n) + " joints");
-  const auto lower = [&](int i) { return model.joints[static_cast<std::size_t>(i)].lower; };
-  const auto upper = [&](int i) { return model.joints[static_cast<std::size_t>(i)].upper; };
-  Solution s;
-  s.q.assign(seed.begin(), seed.end());
-  for (int i = 0; i < n; ++i)
-    s.q[static_cast<std::size_t>(i)] = std::clamp(s.q[static_cast<std::size_t>(i)], lower(i), upper(i));
-  const double w = o.rotation_weight_m;
-  const Eigen::Index rows = orientation ? 6 : 3;
-  Evaluation at = evaluate(model, goal, orientation, s.q, w);
-  double lambda = o.initial_damping;
-  Eigen::MatrixXd jw;
-  Eigen::VectorXd ew, gradient;
-  std::vector<bool> held(static_cast<std::size_t>(n), false);
-  const auto weighted_system = [&] {
-    jw = model::joint_jacobian(model, s.q).topRows(rows);
-    ew = at.e.head(rows);
-    if (orientation) {
-      jw.bottomRows(3) *= w;
-      ew.tail(3) *= w;
-    }
-    gradient = jw.transpose() * ew;  // the descent direction of the cost (up to a factor 2)
-    for (int i = 0; i < n; ++i) {
-      const double qi = s.q[static_cast<std::size_t>(i)], g = gradient(i);
-      held[static_cast<std::size_t>(i)] = (qi <= lower(i) && g < 0.0) || (qi >= upper(i) && g > 0.0);
-    }
-  };
-  weighted_system();
-  while (!reached(at, o) && s.iterations < o.max_iterations && lambda < 1e8) {
-    ++s.iterations;
-    Eigen::MatrixXd a = jw.transpose() * jw;
-    Eigen::VectorXd b = gradient;
-    for (int i = 0; i < n; ++i) {
-      if (!held[static_cast<std::size_t>(i)]) continue;
+namespace {
+
+// One solve's fixed data: the goal, the weights and the joints' units (S of the header).
+struct Problem {
+  const model::RobotModel& model;
+  const model::Transform& goal;
+  bool orientation;
+  const SolveOptions& o;
+  Eigen::VectorXd scale;  // S's diagonal
+  Eigen::Index rows() const { return orientation ? 6 : 3; }
+  double lower(Eigen::Index i) const { return model.joints[static_cast<std::size_t>(i)].lower; }
+  double upper(Eigen::Index i) const { return model.joints[static_cast<std::size_t>(i)].upper; }
+};
+
+// Where the solve stands: readings, residual and the weighted system at them.
+struct State {
+  std::vector<double> q;
+  Evaluation at;
+  Eigen::MatrixXd jw;            // W^1/2 J S
+  Eigen::VectorXd ew, gradient;  // W^1/2 e, and Js^T W e (the cost's descent direction, up to 2)
+  std::vector<bool> held;        // at a limit the descent pushes against
+};
+
+void linearize(const Problem& p, State& s) {
+  const Eigen::Index n = p.scale.size();
+  s.jw = model::joint_jacobian(p.model, s.q).topRows(p.rows()) * p.scale.asDiagonal();
+  s.ew = s.at.e.head(p.rows());
+  if (p.orientation) {
+    s.jw.bottomRows(3) *= p.o.rotation_weight_m;
+    s.ew.tail(3) *= p.o.rotation_weight_m;
+  }
+  s.gradient = s.jw.transpose() * s.ew;
+  s.held.assign(static_cast<std::size_t>(n), false);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double qi = s.q[static_cast<std::size_t>(i)], g = s.gradient(i);
+    s.held[static_cast<std::size_t>(i)] = (qi <= p.lower(i) && g < 0.0) || (qi >= p.upper(i) && g > 0.0);
+  }
+}
+
+// q + S du, clamped into the limits.
+std::vector<double> moved(const Problem& p, const std::vector<double>& q, const Eigen::VectorXd& du) {
+  std::vector<double> out = q;
+  for (Eigen::Index i = 0; i < du.size(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    out[k] = std::clamp(out[k] + p.scale(i) * du(i), p.lower(i), p.upper(i));
+  }
+  return out;
+}
+
+// The damped steps of the header from s until reached, `budget` iterations or lambda above 1e8;
+// counts the iterations into `iterations`.
+void descend(const Problem& p, State& s, int budget, int& iterations) {
+  double lambda = p.o.initial_damping;
+  linearize(p, s);
+  for (int k = 0; k < budget && !reached(s.at, p.o) && lambda < 1e8; ++k) {
+    ++iterations;
+    Eigen::MatrixXd a = s.jw.transpose() * s.jw;
+    Eigen::VectorXd b = s.gradient;
+    for (Eigen::Index i = 0; i < b.size(); ++i) {
+      if (!s.held[static_cast<std::size_t>(i)]) continue;
       a.row(i).setZero();
       a.col(i).setZero();
       b(i) = 0.0;
     }
     a.diagonal().array() += lambda * lambda;
-    const Eigen::VectorXd step = a.ldlt().solve(b);
-    std::vector<double> trial = s.q;
-    for (int i = 0; i < n; ++i) {
-      const auto k = static_cast<std::size_t>(i);
-      trial[k] = std::clamp(trial[k] + step(i), lower(i), upper(i));
-    }
-    const Evaluation next = evaluate(model, goal, orientation, trial, w);
-    if (next.cost < at.cost) {
+    std::vector<double> trial = moved(p, s.q, a.ldlt().solve(b));
+    const Evaluation next = evaluate(p.model, p.goal, p.orientation, trial, p.o.rotation_weight_m);
+    if (next.cost < s.at.cost) {
       s.q = std::move(trial);
-      at = next;
+      s.at = next;
       lambda = std::max(lambda / 3.0, 1e-12);
-      weighted_system();
+      linearize(p, s);
     } else {
       lambda *= 10.0;
     }
   }
-  s.residual_m = at.e.head<3>().norm();
-  s.residual_rad = at.e.tail<3>().norm();
-  if (reached(at, o)) {
-    s.outcome = Outcome::reached;
-    return s;
+}
+
+// |S^-1 (q - reference)|.
+double distance(const Problem& p, const std::vector<double>& q, std::span<const double> reference) {
+  double sum = 0.0;
+  for (Eigen::Index i = 0; i < p.scale.size(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    sum += std::pow((q[k] - reference[k]) / p.scale(i), 2);
   }
-  if ((model.base_T_frame0.inverse() * goal).translation.norm() > reach_bound(model)) {
-    s.outcome = Outcome::out_of_reach;
-    return s;
+  return std::sqrt(sum);
+}
+
+// The walk of the header toward the reference from a reached s.
+void approach(const Problem& p, State& s, std::span<const double> reference, int& iterations) {
+  const Eigen::Index n = p.scale.size();
+  for (int step = 0; step < p.o.max_nearest_steps; ++step) {
+    linearize(p, s);
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(s.jw, Eigen::ComputeFullV);
+    const Eigen::VectorXd& sigma = svd.singularValues();
+    Eigen::Index rank = 0;
+    while (rank < sigma.size() && sigma(rank) > 1e-9 * sigma(0)) ++rank;
+    if (rank == n) return;  // no readings near these reach the goal but these
+    Eigen::VectorXd r(n);
+    for (Eigen::Index i = 0; i < n; ++i)
+      r(i) = (reference[static_cast<std::size_t>(i)] - s.q[static_cast<std::size_t>(i)]) / p.scale(i);
+    const Eigen::MatrixXd null = svd.matrixV().rightCols(n - rank);
+    Eigen::VectorXd du = null * (null.transpose() * r);
+    const double before = distance(p, s.q, reference);
+    bool kept = false;
+    for (int half = 0; half <= 5 && !kept; ++half, du *= 0.5) {
+      if (du.norm() <= 1e-12 * std::max(1.0, before)) return;
+      State trial;
+      trial.q = moved(p, s.q, du);
+      trial.at = evaluate(p.model, p.goal, p.orientation, trial.q, p.o.rotation_weight_m);
+      descend(p, trial, p.o.max_iterations, iterations);
+      if (!reached(trial.at, p.o) || distance(p, trial.q, reference) >= before) continue;
+      s = std::move(trial);
+      kept = true;
+    }
+    if (!kept) return;
   }
-  if (std::find(held.begin(), held.end(), true) != held.end()) {
-    s.outcome = Outcome::joint_limit;
-    return s;
+}
+
+// The outcome of a solve that did not reach the goal (header).
+Outcome not_reached(const Problem& p, const State& s) {
+  if ((p.model.base_T_frame0.inverse() * p.goal).translation.norm() > reach_bound(p.model))
+    return Outcome::out_of_reach;
+  if (std::find(s.held.begin(), s.held.end(), true) != s.held.end()) return Outcome::joint_limit;
+  // How much of the residual the joints can still move along, first order: |Js^T W e| against
+  // its largest possible value |W^1/2 Js| |W^1/2 e|. Near 0: a stationary point off the goal.
+  const double largest = Eigen::JacobiSVD<Eigen::MatrixXd>(s.jw).singularValues()(0);
+  if (largest * s.ew.norm() <= 0.0 || s.gradient.norm() < p.o.stall_cosine * largest * s.ew.norm()) {
+    const model::Vector3 origin = p.model.base_T_frame0.translation;
+    const double tool_distance = (model::forward_kinematics(p.model, s.q).translation - origin).norm();
+    return (p.goal.translation - origin).norm() > tool_distance ? Outcome::out_of_reach : Outcome::singularity;
   }
-  // How much of the residual the joints can still move along, first order: |J^T W e| against
-  // its largest possible value |W^1/2 J| |W^1/2 e|. Near 0: a stationary point off the goal.
-  const double largest = Eigen::JacobiSVD<Eigen::MatrixXd>(jw).singularValues()(0);
-  if (largest * ew.norm() <= 0.0 || gradient.norm() < o.stall_cosine * largest * ew.norm()) {
-    const model::Vector3 origin = model.base_T_frame0.translation;
-    const double tool_distance = (model::forward_kinematics(model, s.q).translation - origin).norm();
-    s.outcome = (goal.translation - origin).norm() > tool_distance ? Outcome::out_of_reach : Outcome::singularity;
-    return s;
-  }
-  s.outcome = Outcome::not_converged;
-  return s;
+  return Outcome::not_converged;
+}
+
+}  // namespace
+
+Solution solve_pose(const model::RobotModel& model, const model::Transform& goal, bool orientation,
+                    std::span<const double> seed, const SolveOptions& o, std::span<const double> reference) {
+  const int n = model.joint_count();
+  if (static_cast<int>(seed.size()) != n || (!reference.empty() && static_cast<int>(reference.size()) != n))
+    throw std::invalid_argument("solve_pose: the seed has " + std::to_string(seed.size()) + " readings" +
+                                (reference.empty() ? "" : ", the reference " + std::to_string(reference.size())) +
+                                ", for a model of " + std::to_string(n) + " joints");
+  if (reference.empty()) reference = seed;
+  Problem p{model, goal, orientation, o, Eigen::VectorXd::Ones(n)};
+  for (int i = 0; i < n; ++i)
+    if (model.joints[static_cast<std::size_t>(i)].type == core::JointType::prismatic)
+      p.scale(i) = o.prismatic_m_per_rad;
+  State s;
+  s.q = moved(p, std::vector<double>(seed.begin(), seed.end()), Eigen::VectorXd::Zero(n));
+  s.at = evaluate(model, goal, orientation, s.q, o.rotation_weight_m);
+  Solution out;
+  descend(p, s, o.max_iterations, out.iterations);
+  // A goal with as many rows as joints has isolated solutions (but exactly at a singularity): no
+  // walk (its SVD would cost as much as the solve).
+  if (reached(s.at, o) && p.rows() < n) approach(p, s, reference, out.iterations);
+  out.q = s.q;
+  out.residual_m = s.at.e.head<3>().norm();
+  out.residual_rad = s.at.e.tail<3>().norm();
+  out.outcome = reached(s.at, o) ? Outcome::reached : not_reached(p, s);
+  return out;
 }
 
 }  // namespace kincal::correct

@@ -6,15 +6,17 @@
 #include <map>
 
 #include <Eigen/Geometry>
-#include <Eigen/SVD>
 
 namespace kincal::correct {
 
 namespace {
 
-// Steps of the way from a target's reference readings to its correction at which the tool is
-// checked (singular_turn): a 180 degree swing is looked at every 11 degrees.
-constexpr int kLimitPathSteps = 16;
+// The solves' joint units weigh a prismatic joint's metres against a revolute joint's radians as
+// the limits do, so that the nearest readings they find are the smallest change by the limits.
+JointCorrectionOptions in_limit_units(JointCorrectionOptions options, const JointChangeLimit& limit) {
+  options.solve.prismatic_m_per_rad = limit.prismatic_m / limit.revolute_rad;
+  return options;
+}
 
 }  // namespace
 
@@ -25,11 +27,10 @@ TargetCorrector::TargetCorrector(const model::RobotModel& nominal, const model::
       calibrated_(calibrated),
       frame_(frame),
       covariance_(std::move(covariance)),
-      joints_(nominal, calibrated, options),
-      cartesian_(nominal, calibrated, frame, options.solve),
+      joints_(nominal, calibrated, in_limit_units(options, limit)),
+      cartesian_(nominal, calibrated, frame, in_limit_units(options, limit).solve),
       limit_(limit),
-      orientation_(options.orientation),
-      rotation_weight_m_(options.solve.rotation_weight_m) {
+      orientation_(options.orientation) {
   nominal_arm_.base_T_frame0 = model::Transform{};  // commands are in the robot's base frame
 }
 
@@ -53,17 +54,16 @@ std::vector<TargetResult> TargetCorrector::correct(const std::vector<Target>& ta
         model::fail_at(source, t.line,
                        "a Cartesian target with no seed reading: give q1..qN columns, a joint target before it, or "
                        "--seed");
-      const CartesianSolution c = cartesian_.solve(t.pose, t.orientation, start);
-      r.solution = c.calibrated;
+      const Solution nominal = cartesian_.solve_nominal(t.pose, t.orientation, start);
+      r.nominal = nominal.outcome == Outcome::reached ? nominal.q : start;
+      // The reference: the target's own seed reading (what the user's controller goes to) when it
+      // has one, else the controller's solution; the calibrated solve starts from the controller's
+      // solution (a program and a table with the same seeds get the same readings) and returns the
+      // readings nearest the reference.
+      const std::vector<double>& reference = t.q.empty() ? r.nominal : t.q;
+      r.solution = cartesian_.solve_calibrated(t.pose, t.orientation, r.nominal, reference);
+      limit_change(r, reference, cartesian_.calibrated_arm(), cartesian_.in_base(t.pose), t.orientation);
       r.command = model::forward_kinematics(nominal_arm_, r.solution.q);
-      r.nominal = c.nominal.outcome == Outcome::reached ? c.nominal.q : start;
-      // The reference: the controller's solution, unless the target's own seed (the reading the
-      // user's controller goes to) is farther from it than the limit -- then the seed.
-      const bool seed_reference = !t.q.empty() && largest_change(r.nominal, t.q).over_limit > 1.0;
-      limit_change(r, seed_reference ? t.q : r.nominal, cartesian_.calibrated_arm(), cartesian_.in_base(t.pose),
-                   t.orientation);
-      if (r.solution.outcome == Outcome::joint_change_limit)
-        r.command = model::forward_kinematics(nominal_arm_, r.solution.q);
     }
     if (covariance_)
       r.spread =
@@ -94,49 +94,11 @@ void TargetCorrector::limit_change(TargetResult& r, const std::vector<double>& r
   r.change_joint = c.joint;
   r.change = c.change;
   if (r.change_over_limit <= 1.0 || r.solution.outcome != Outcome::reached) return;
-  const model::Transform from = model::forward_kinematics(arm, reference);
-  const Eigen::Matrix<double, 6, 1> correction = pose_residual(goal, from);
-  if (!singular_turn(r.solution.q, reference, c.over_limit, arm, from, correction, orientation)) {
-    r.solution.outcome = Outcome::joint_change_limit;
-    r.solution.q = reference;
-    r.solution.residual_m = correction.head<3>().norm();
-    r.solution.residual_rad = orientation ? correction.tail<3>().norm() : 0.0;
-  }
-}
-
-bool TargetCorrector::singular_turn(const std::vector<double>& q, const std::vector<double>& reference,
-                                    double over_limit, const model::RobotModel& arm, const model::Transform& from,
-                                    const Eigen::Matrix<double, 6, 1>& correction, bool orientation) const {
-  // First order, weighted as the solve: how much less the change moves the tool than the arm's
-  // most effective turn of its size would. About 1 away from singularities (the limit stands);
-  // large where the change is a singularity's turn (the limit is scaled by it).
-  Eigen::MatrixXd j = model::joint_jacobian(arm, reference).topRows(orientation ? 6 : 3);
-  if (orientation) j.bottomRows(3) *= rotation_weight_m_;
-  Eigen::VectorXd dq(static_cast<Eigen::Index>(reference.size()));
-  for (std::size_t i = 0; i < reference.size(); ++i) dq(static_cast<Eigen::Index>(i)) = q[i] - reference[i];
-  const double felt = (j * dq).norm();
-  const double most = Eigen::JacobiSVD<Eigen::MatrixXd>(j).singularValues()(0) * dq.norm();
-  if (over_limit * felt > most) return false;
-  // And in full: the tool's way from the reference to the solution, the readings moved in a
-  // straight line (as a joint move goes), off the straight way to the goal by no more than the
-  // correction's own size.
-  const auto weighted = [&](Eigen::Matrix<double, 6, 1> e) {
-    if (!orientation) e.tail<3>().setZero();
-    return e.head<3>().norm() + rotation_weight_m_ * e.tail<3>().norm();
-  };
-  const double angle = correction.tail<3>().norm();  // pose_residual's rotation rows: angle times axis
-  const model::Vector3 axis = angle > 0.0 ? model::Vector3(correction.tail<3>() / angle) : model::Vector3::UnitZ();
-  double off_line = 0.0;
-  std::vector<double> at(reference.size());
-  for (int k = 1; k < kLimitPathSteps; ++k) {
-    const double s = static_cast<double>(k) / kLimitPathSteps;
-    for (std::size_t i = 0; i < at.size(); ++i) at[i] = reference[i] + s * (q[i] - reference[i]);
-    model::Transform line;
-    line.translation = from.translation + s * correction.head<3>();
-    line.rotation = Eigen::AngleAxisd(s * angle, axis).toRotationMatrix() * from.rotation;
-    off_line = std::max(off_line, weighted(pose_residual(line, model::forward_kinematics(arm, at))));
-  }
-  return off_line <= weighted(correction);
+  const Eigen::Matrix<double, 6, 1> correction = pose_residual(goal, model::forward_kinematics(arm, reference));
+  r.solution.outcome = Outcome::joint_change_limit;
+  r.solution.q = reference;
+  r.solution.residual_m = correction.head<3>().norm();
+  r.solution.residual_rad = orientation ? correction.tail<3>().norm() : 0.0;
 }
 
 std::string summary_line(const std::vector<TargetResult>& results) {

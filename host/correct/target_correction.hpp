@@ -9,20 +9,17 @@
 // given (prediction_spread.hpp: base parameters counted for Cartesian targets in the device frame
 // only). Not thread-safe (the joint corrector's workspace).
 //
-// The joint-change limit (issue #42): a calibration moves a tool by millimetres, so its
-// correction moves joints by tenths of a degree -- except near a singularity (a wrist with q5
-// near 0, a wrist centre near axis 1), where a few millimetres or mrad take tens of degrees of
-// turns that cancel at the tool (the zoo's service-class arms: up to 30 degrees). A target whose
-// correction changes a joint by more than the limit from its reference is reached on a different
-// branch or through a model that does not fit the arm -- a 105 degree swing, not a correction --
-// unless the change is a singularity's turn: the limit scaled by how much less the change moves
-// the tool (first order, J dq) than the arm's most effective turn of its size (sigma_max |dq|),
-// and the tool, with the readings moved in a straight line, never off its straight way to the
-// goal by more than the correction's own size. Otherwise it is refused: outcome
+// The joint-change limit (issue #42): a calibration moves a tool by millimetres and tenths of a
+// degree, so its correction moves joints by about as much. The solves return the readings nearest
+// the reference that reach the target (pose_solver.hpp: the smallest change, a prismatic joint's
+// metres weighed against radians as the limits are), so a redundant arm's turns that cancel at
+// the tool never arise. A target whose smallest correction still changes a joint by more than the
+// limit from its reference -- a model that does not fit the arm, another branch, a target near a
+// singularity where millimetres take tens of degrees -- is refused, never "reached": outcome
 // joint_change_limit, the readings left as the reference, the residual theirs, and the joint and
 // its change named in the result. The reference: a joint target's own readings; a Cartesian
-// target's controller (nominal) solution from its seed, or the target's own seed reading (what the
-// user's controller goes to) when that solution lies beyond the limit from it.
+// target's own seed reading (what the user's controller goes to) when it has one, else the
+// controller's (nominal) solution from the seed before it.
 #pragma once
 
 #include <cstddef>
@@ -90,8 +87,7 @@ class TargetCorrector {
   JointCorrector joints_;
   CartesianSolver cartesian_;
   JointChangeLimit limit_;
-  bool orientation_ = true;   // joint targets: the tool's orientation corrected too
-  double rotation_weight_m_;  // a radian weighs as this many metres (SolveOptions)
+  bool orientation_ = true;  // joint targets: the tool's orientation corrected too
 
   struct JointChange {
     double over_limit = 0.0;  // the largest |q - reference| as a fraction of its joint's limit
@@ -104,12 +100,6 @@ class TargetCorrector {
   // its residual to `goal` (frame 0) on `arm`.
   void limit_change(TargetResult& r, const std::vector<double>& reference, const model::RobotModel& arm,
                     const model::Transform& goal, bool orientation) const;
-  // Whether q's change from `reference` (over_limit times the limit, largest_change's), which
-  // moves the tool by `correction` from `from` (pose_residual), is a singularity's turn rather
-  // than a swing (see the top).
-  bool singular_turn(const std::vector<double>& q, const std::vector<double>& reference, double over_limit,
-                     const model::RobotModel& arm, const model::Transform& from,
-                     const Eigen::Matrix<double, 6, 1>& correction, bool orientation) const;
 };
 
 // One line for a run: counts by outcome, how joint targets were corrected (the platform's step

@@ -16,6 +16,7 @@
 #include "host/correct/joint_offsets.hpp"
 #include "host/correct/platform_step.hpp"
 #include "host/correct/prediction_spread.hpp"
+#include "host/correct/target_correction.hpp"
 #include "host/model/model_file.hpp"
 
 using namespace kincal;
@@ -225,6 +226,67 @@ TEST_CASE("solve_pose: out of reach, joint limits and a bad seed are reported, n
   CHECK(blocked.q[0] <= 0.2);
   CHECK(blocked.residual_m > 1e-3);
   CHECK_THROWS_AS(correct::solve_pose(m, far, false, std::vector<double>{0.0}), std::invalid_argument);
+}
+
+TEST_CASE("solve_pose: of the readings that reach a goal, the ones nearest the reference (issue #42)") {
+  // A point goal leaves a 6-joint arm three spare joints: started with the wrist turned 0.5 rad each
+  // way (turns that nearly cancel at the tool), the solve still ends nearest the reference.
+  const model::RobotModel m = robot("puma560.yaml");
+  const std::vector<double> reference = {0.1, -0.4, 0.3, 0.2, -0.5, 0.7};
+  model::Transform goal = model::forward_kinematics(m, reference);
+  const model::Vector3 correction(2e-3, -1e-3, 3e-3);
+  goal.translation += correction;
+  std::vector<double> seed = reference;
+  seed[3] += 0.5;
+  seed[5] -= 0.5;
+  const auto change = [&](const std::vector<double>& q) {
+    Eigen::VectorXd d(6);
+    for (int j = 0; j < 6; ++j) d(j) = q[static_cast<std::size_t>(j)] - reference[static_cast<std::size_t>(j)];
+    return d;
+  };
+  const correct::Solution s = correct::solve_pose(m, goal, false, seed, {}, reference);
+  REQUIRE(s.outcome == correct::Outcome::reached);
+  // The smallest change to first order is the minimum-norm one, J^+ e at the reference.
+  const Eigen::MatrixXd j = model::joint_jacobian(m, reference).topRows(3);
+  const Eigen::VectorXd least = j.completeOrthogonalDecomposition().solve(Eigen::Vector3d(correction));
+  CHECK(change(s.q).norm() <= 1.02 * least.norm());
+  CHECK(change(s.q).cwiseAbs().maxCoeff() < 0.02);
+  // Without the walk toward the reference the turns stay.
+  correct::SolveOptions no_walk;
+  no_walk.max_nearest_steps = 0;
+  const correct::Solution stays = correct::solve_pose(m, goal, false, seed, no_walk, reference);
+  REQUIRE(stays.outcome == correct::Outcome::reached);
+  CHECK(change(stays.q).cwiseAbs().maxCoeff() > 0.3);
+  // A full pose on a 6-joint arm away from singularities has one solution near the seed: not moved.
+  const correct::Solution pose = correct::solve_pose(m, model::forward_kinematics(m, reference), true, reference);
+  REQUIRE(pose.outcome == correct::Outcome::reached);
+  CHECK(change(pose.q).norm() < 1e-9);
+  CHECK_THROWS_AS(correct::solve_pose(m, goal, false, seed, {}, std::vector<double>{0.0}), std::invalid_argument);
+}
+
+TEST_CASE("target corrector: a target whose smallest correction exceeds the limit is refused and named") {
+  model::RobotModel start = robot("puma560.yaml");
+  start.base_T_frame0 = model::Transform{};
+  const model::RobotModel calibrated = perturbed(start, 2e-3, 2e-3, 6);
+  const std::vector<double> q = {0.1, -0.4, 0.3, 0.2, -0.5, 0.7};
+  model::Transform pose = model::forward_kinematics(start, q);
+  const std::vector<correct::Target> targets = {{2, false, q, {}, false}, {3, true, q, pose, true}};
+  correct::TargetCorrector within(start, calibrated, correct::TargetFrame::base, std::nullopt);
+  for (const correct::TargetResult& r : within.correct(targets, {}, "t.csv")) {
+    CHECK(r.solution.outcome == correct::Outcome::reached);
+    CHECK(r.change_over_limit > 0.0);
+    CHECK(r.change_over_limit <= 1.0);
+  }
+  correct::JointChangeLimit tight;
+  tight.revolute_rad = 1e-5;
+  correct::TargetCorrector beyond(start, calibrated, correct::TargetFrame::base, std::nullopt, {}, tight);
+  for (const correct::TargetResult& r : beyond.correct(targets, {}, "t.csv")) {
+    CHECK(r.solution.outcome == correct::Outcome::joint_change_limit);
+    CHECK(r.solution.q == q);  // the readings left as they were
+    CHECK(r.change_over_limit > 1.0);
+    CHECK(r.change == doctest::Approx(r.change_over_limit * tight.revolute_rad));
+    CHECK(r.solution.residual_m > 1e-4);  // the residual of the readings left
+  }
 }
 
 TEST_CASE("Cartesian targets: base and device frames give the same readings; the seed's wrist is kept") {
