@@ -34,11 +34,12 @@ std::uint64_t parse_seconds(const std::string& stamp, const std::string& text) {
   std::uint64_t value = 0;
   const char* end = text.data() + text.size();
   const auto [ptr, ec] = std::from_chars(text.data(), end, value, 10);
-  if (!text.empty() && ptr == end &&
-      (ec == std::errc::result_out_of_range || (ec == std::errc() && value > kMaxSeconds)))
+  const bool digits = !text.empty() && ptr == end;
+  if (digits && (ec == std::errc::result_out_of_range || (ec == std::errc() && value > kMaxSeconds)))
     throw CanError("timestamp '" + files::excerpt(stamp) + "': " + files::excerpt(text) +
                    " s is beyond the 64-bit microsecond clock (at most " + std::to_string(kMaxSeconds) + " s)");
-  return parse_unsigned(text, 10, "timestamp seconds");
+  if (!digits || ec != std::errc()) throw CanError("bad timestamp seconds '" + files::excerpt(text) + "'");
+  return value;
 }
 
 }  // namespace

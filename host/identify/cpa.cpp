@@ -498,11 +498,30 @@ void require_motion(const model::Dataset& data, const Sweep& s, bool use_orienta
   throw InputError(msg.str());
 }
 
+// A still tolerance at or above every step of a joint's reading leaves the joint still in every
+// row: said as such, rather than as the sweep that then cannot be found.
+void check_still_tolerance(const model::Dataset& data, double tolerance) {
+  if (!(tolerance > 0.0)) return;
+  for (std::size_t j = 0; j < static_cast<std::size_t>(data.joint_count); ++j) {
+    double largest = 0.0;
+    for (std::size_t i = 0; i + 1 < data.rows.size(); ++i)
+      largest = std::max(largest, std::abs(data.rows[i + 1].q[j] - data.rows[i].q[j]));
+    if (largest > 0.0 && largest <= tolerance) {
+      std::ostringstream msg;
+      msg << data.source << ": --still-tolerance " << tolerance << " leaves joint " << j + 1
+          << " still in every row: its reading changes by at most " << largest
+          << " (rad or m) from one row to the next; give a tolerance below its steps";
+      throw InputError(msg.str());
+    }
+  }
+}
+
 }  // namespace
 
 SweepAnalysis analyse_sweeps(const model::Dataset& data, std::span<const std::optional<core::JointType>> declared,
                              bool use_orientation, const CpaOptions& options) {
   const int n = data.joint_count;
+  check_still_tolerance(data, options.still_tolerance);
   const std::vector<Sweep> sweeps = find_sweeps(data, options.still_tolerance);
   SweepAnalysis result;
   std::vector<const Sweep*> chosen(static_cast<std::size_t>(n), nullptr);

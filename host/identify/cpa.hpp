@@ -113,7 +113,9 @@ struct SweepAnalysis {
 };
 
 // Throws model::InputError naming the joint without a sweep, or whose sweep's measured points (and
-// orientations, when used) move by less than 1 um (1 urad): such a sweep shows no axis.
+// orientations, when used) move by less than 1 um (1 urad): such a sweep shows no axis; and naming
+// the tolerance when options.still_tolerance is at or above every step of a joint that moves (it
+// leaves the joint still in every row).
 SweepAnalysis analyse_sweeps(const model::Dataset& data, std::span<const std::optional<core::JointType>> declared,
                              bool use_orientation, const CpaOptions& options);
 

@@ -47,24 +47,6 @@ model::AxisLine draw(const SweepFit& f, std::mt19937_64& rng) {
   return a;
 }
 
-// A still tolerance at or above every step of a joint's reading leaves the joint still in every
-// row: said as such, rather than as the sweep that then cannot be found.
-void check_still_tolerance(const model::Dataset& data, double tolerance) {
-  if (!(tolerance > 0.0)) return;
-  for (std::size_t j = 0; j < static_cast<std::size_t>(data.joint_count); ++j) {
-    double largest = 0.0;
-    for (std::size_t i = 0; i + 1 < data.rows.size(); ++i)
-      largest = std::max(largest, std::abs(data.rows[i + 1].q[j] - data.rows[i].q[j]));
-    if (largest > 0.0 && largest <= tolerance) {
-      std::ostringstream msg;
-      msg << data.source << ": --still-tolerance " << tolerance << " leaves joint " << j + 1
-          << " still in every row: its reading changes by at most " << largest
-          << " (rad or m) from one row to the next; give a tolerance below its steps";
-      throw model::InputError(msg.str());
-    }
-  }
-}
-
 }  // namespace
 
 DiscoverResult discover(const model::Dataset& data, const DiscoverOptions& options) {
@@ -73,7 +55,6 @@ DiscoverResult discover(const model::Dataset& data, const DiscoverOptions& optio
     throw model::InputError(data.source + ": " + std::to_string(data.joint_count) + " joint columns; at most " +
                             std::to_string(core::kMaxJoints) + " joints are supported");
   const std::vector<std::optional<core::JointType>> free_types(static_cast<std::size_t>(data.joint_count));
-  check_still_tolerance(data, options.cpa.still_tolerance);
   SweepAnalysis a = analyse_sweeps(data, free_types, data.has_orientation, options.cpa);
   DiscoverResult result;
   const RobotModel tmpl = discovery_template(data, a.fits, options.name);

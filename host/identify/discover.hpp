@@ -45,9 +45,7 @@ struct DiscoverResult {
   std::vector<std::string> notes;  // conventions, rejections, inconclusive types
 };
 
-// Throws InputError as analyse_sweeps (cpa.hpp), and naming the tolerance when
-// options.cpa.still_tolerance is at or above every step of a joint that moves (it leaves the joint
-// still in every row).
+// Throws InputError as analyse_sweeps (cpa.hpp).
 DiscoverResult discover(const model::Dataset& data, const DiscoverOptions& options);
 
 // What was found and how sure: per joint the type with its p-values, the axis, the range and the

@@ -18,21 +18,15 @@ namespace {
 
 constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 
-// The header's most frequent of ';', tab and ',' outside double quotes (a quoted name may hold
-// any of them).
+// The one of ';', tab and ',' that splits the header into the most fields as RFC 4180 quotes them
+// (split_quoted_fields: a quoted name may hold any of them).
 char detect_separator(const std::string& header) {
-  std::string unquoted;
-  bool quoted = false;
-  for (const char c : header) {
-    if (c == '"') quoted = !quoted;
-    if (!quoted) unquoted += c;
-  }
   char best = ',';
-  long most = 0;
+  std::size_t most = 1;  // one field: no separator, ","
   for (char c : {';', '\t', ','}) {
-    const long count = std::count(unquoted.begin(), unquoted.end(), c);
-    if (count > most) {
-      most = count;
+    const std::optional<std::vector<std::string>> fields = split_quoted_fields(header, c);
+    if (fields && fields->size() > most) {
+      most = fields->size();
       best = c;
     }
   }
