@@ -233,15 +233,19 @@ model::RobotModel choose_model(const IdentifyArgs& a, const model::RobotModel& n
   }
   if (static_cast<int>(data.rows.size()) < identify::kMinRowsForSelection) {
     how = "every parameter the model names, the default priors (" + std::to_string(data.rows.size()) +
-          " rows, fewer than " + std::to_string(identify::kMinRowsForSelection) + " for cross-validation)";
+          " rows, fewer than " + std::to_string(identify::kMinRowsForSelection) +
+          " for cross-validation: the larger candidates cannot be identified on a fold's rows)";
     std::cout << "model selection: off: " << how << '\n';
     return nominal;
   }
   // It fits every candidate once a fold: minutes on many thousands of rows (15,000 UR10 rows took
   // 90 s on two cores), so it says so first.
+  const int rows = static_cast<int>(data.rows.size());
   std::cerr << "kincal identify: choosing the model: " << identify::candidate_models(nominal, options).size()
-            << " candidates, each fitted " << identify::SelectionOptions{}.folds + 1 << " times on " << data.rows.size()
-            << " rows (" << identify::parallel_solves() << " at a time)" << std::endl;
+            << " candidates, each fitted " << identify::selection_folds(rows) + 1 << " times on " << rows << " rows ("
+            << identify::parallel_solves() << " at a time)"
+            << (rows < identify::kMinRowsForLowestScore ? "; with so few rows the default stands unless beaten" : "")
+            << std::endl;
   selection = identify::select_model(nominal, data, options);
   std::cout << identify::format_selection(*selection);
   options = selection->chosen.options;

@@ -16,6 +16,7 @@
 #include "host/identify/cpa.hpp"
 #include "host/identify/measured_point.hpp"
 #include "host/identify/model_selection.hpp"
+#include "host/identify/sag.hpp"
 #include "host/identify/statistics.hpp"
 #include "host/model/axes.hpp"
 
@@ -817,24 +818,19 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
 // How many standard errors rejection must lower the K-fold errors by (see identify.hpp).
 constexpr double kGateT = 2.0;
 
-// The paired t statistic of the position errors' differences sqrt(a2_i) - sqrt(b2_i) (from
-// squared errors): their mean over its standard error (0 when they are all equal). Errors, not
-// squared errors: a blunder in a held-out fold moves its own squared error by 2 b delta, its
-// size times the models' difference, and would drown what rejecting does to the other rows.
-double paired_t(const std::vector<double>& a2, const std::vector<double>& b2) {
-  const auto n = static_cast<double>(a2.size());
-  std::vector<double> d;
-  for (std::size_t i = 0; i < a2.size(); ++i) d.push_back(std::sqrt(a2[i]) - std::sqrt(b2[i]));
-  double mean = 0.0, variance = 0.0;
-  for (const double x : d) mean += x / n;
-  for (const double x : d) variance += (x - mean) * (x - mean) / (n - 1.0);
-  return variance > 0.0 ? mean / std::sqrt(variance / n) : 0.0;
-}
-
 // identify() with the rejection gate; `with_rule`: its cross-validation with the rule when the
 // caller has it (model selection's), else computed here.
 IdentifyResult gated(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options,
                      const CrossValidation* with_rule) {
+  if (needs_sag_start(nominal, options)) {
+    // Masses to identify and no compliance yet (sag.hpp): stage 1, then the rest from its compliances.
+    const SagStage second = second_sag_stage(
+        nominal, options, identify_ungated(nominal, data, first_sag_stage(nominal, options)).model, data);
+    IdentifyResult r = gated(second.model, data, second.options, with_rule);
+    finish_sag_model(r.model);
+    r.notes.push_back(second.note);
+    return r;
+  }
   IdentifyResult unrejected;
   IdentifyResult result = identify_ungated(nominal, data, options, options.rejection_gate ? &unrejected : nullptr);
   if (!options.rejection_gate || result.rejections.empty()) return result;

@@ -6,11 +6,15 @@
 #include <cstdio>
 #include <exception>
 #include <functional>
+#include <iomanip>
 #include <mutex>
 #include <random>
 #include <sstream>
 #include <system_error>
 #include <thread>
+
+#include "host/identify/sag.hpp"
+#include "host/identify/statistics.hpp"
 
 namespace kincal::identify {
 
@@ -130,6 +134,13 @@ std::vector<Candidate> candidate_models(const RobotModel& nominal, const Identif
     out.push_back(make("geometry+gravity", "every parameter and each joint's gravity compliance (the model's masses)",
                        with_gravity, base, 1.0, {}));
   }
+  // No masses and no compliance (most public URDFs): the masses identified with the compliances,
+  // in a gauge (sag.hpp).
+  if (!masses && !model::has_compliance(nominal))
+    out.push_back(make("geometry+sag",
+                       "every parameter, each joint's gravity compliance and each link's mass and centre of mass "
+                       "(in a gauge: the model has no masses)",
+                       with_identified_masses(nominal), base, 1.0, {}));
   RobotModel with_scales = nominal;
   bool added = false;
   for (model::Joint& j : with_scales.joints)
@@ -140,6 +151,19 @@ std::vector<Candidate> candidate_models(const RobotModel& nominal, const Identif
   if (added)
     out.push_back(
         make("geometry+scales", "every parameter and a scale for each joint's reading", with_scales, base, 1.0, {}));
+  // A transmission's coupling: each revolute joint's share of its revolute upstream neighbour's
+  // reading (robot_model.hpp), which no URDF carries.
+  RobotModel with_couplings = nominal;
+  bool coupled = false;
+  for (std::size_t i = 0; i < with_couplings.joints.size(); ++i)
+    if (model::can_identify_coupling(with_couplings, i)) {
+      with_couplings.joints[i].identify_coupling = true;
+      coupled = true;
+    }
+  if (coupled)
+    out.push_back(make("geometry+couplings",
+                       "every parameter and each revolute joint's share of its upstream neighbour's reading",
+                       with_couplings, base, 1.0, {}));
   return out;
 }
 
@@ -255,59 +279,123 @@ CrossValidation cross_validate(const RobotModel& model, const model::Dataset& da
   return cross_validate({Candidate{"", "", model, options}}, data, selection).front();
 }
 
+int selection_folds(int rows, const SelectionOptions& options) {
+  return rows >= kMinRowsForLowestScore ? options.folds : std::max(2, std::min(rows, options.few_rows_folds));
+}
+
+namespace {
+
+constexpr const char* kDefaultCandidate = "geometry";
+// How many standard errors of the rows' paired differences a candidate's K-fold errors must lie
+// below the default's, below kMinRowsForLowestScore rows (the rejection gate's kGateT, identify.cpp).
+constexpr double kBeatsDefaultT = 2.0;
+
+// The rule (model_selection.hpp) over scored candidates: the index of the chosen one, -1 when none
+// has a score. `against_default`: the default stands unless beaten (each candidate's paired t
+// against it recorded in t_vs_default); it stands too when cross-validation cannot judge it.
+int choose(std::vector<CandidateScore>& scores, const std::vector<CrossValidation>& validations, bool against_default) {
+  const auto at =
+      std::find_if(scores.begin(), scores.end(), [](const CandidateScore& x) { return x.name == kDefaultCandidate; });
+  const int default_index = at == scores.end() ? -1 : static_cast<int>(at - scores.begin());
+  if (against_default && default_index >= 0 && at->score_m < 0.0) return default_index;
+  const bool judge = against_default && default_index >= 0;
+  int best = -1;
+  for (std::size_t c = 0; c < scores.size(); ++c) {
+    CandidateScore& x = scores[c];
+    if (x.score_m < 0.0) continue;
+    if (judge && static_cast<int>(c) != default_index) {
+      x.t_vs_default =
+          paired_t(validations[c].kfold_error2, validations[static_cast<std::size_t>(default_index)].kfold_error2);
+      if (x.t_vs_default > -kBeatsDefaultT) continue;
+    }
+    if (best < 0 || x.score_m < scores[static_cast<std::size_t>(best)].score_m) best = static_cast<int>(c);
+  }
+  return best;
+}
+
+// The chosen candidate and the figures that decided, in words.
+std::string reason_for(const Selection& s, int chosen, bool any_range) {
+  const CandidateScore& x = s.scores[static_cast<std::size_t>(chosen)];
+  std::ostringstream reason;
+  reason.setf(std::ios::fixed);
+  reason.precision(4);
+  const std::string score = any_range ? "mean of the K-fold and out-of-range RMS"
+                                      : "K-fold RMS (no out-of-range fold: no rows in range, none out of it, or a "
+                                        "candidate that cannot be identified from those in range)";
+  if (!s.against_default) {
+    reason << x.name << ": the lowest " << score << " (" << x.score_m * 1e3 << " mm)";
+    return reason.str();
+  }
+  const std::string few = "fewer than " + std::to_string(kMinRowsForLowestScore) +
+                          " rows: the default stands unless another candidate's held-out position errors are "
+                          "lower row by row, by " +
+                          std::to_string(static_cast<int>(kBeatsDefaultT)) + " standard errors";
+  if (x.score_m < 0.0) {
+    reason << x.name << ": the default, cross-validation cannot judge it (" << x.why << "); " << few;
+  } else if (x.name == kDefaultCandidate) {
+    reason << x.name << ": the default (" << x.score_m * 1e3 << " mm); no candidate beats it (" << few << ")";
+  } else {
+    reason << x.name << ": the lowest " << score << " (" << x.score_m * 1e3
+           << " mm) of the default and the candidates that beat it (" << few << "; paired t " << std::setprecision(1)
+           << x.t_vs_default << ")";
+  }
+  return reason.str();
+}
+
+}  // namespace
+
 Selection select_model(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& base,
                        const SelectionOptions& options) {
+  const int rows = static_cast<int>(data.rows.size());
+  SelectionOptions scoring = options;
+  scoring.folds = selection_folds(rows, options);
   const RowSplit range = out_of_range_fold(data, options);
   Selection s;
+  s.folds = scoring.folds;
+  s.leave_one_out = scoring.folds == rows;
+  s.against_default = rows < kMinRowsForLowestScore;
   s.out_of_range_fraction = range.fraction;
   s.out_of_range_train_rows = static_cast<int>(range.inside.size());
   s.out_of_range_test_rows = static_cast<int>(range.outside.size());
   const std::vector<Candidate> candidates = candidate_models(nominal, base);
-  int best = -1;
-  std::vector<CrossValidation> validations = cross_validate(candidates, data, options);
+  std::vector<CrossValidation> validations = cross_validate(candidates, data, scoring);
   for (std::size_t c = 0; c < candidates.size(); ++c) {
     const CrossValidation& cv = validations[c];
-    s.scores.push_back({candidates[c].name, cv.parameters, cv.kfold_rms_m, cv.out_of_range_rms_m, -1.0, cv.why});
+    s.scores.push_back({candidates[c].name, cv.parameters, cv.kfold_rms_m, cv.out_of_range_rms_m, -1.0, 0.0, cv.why});
   }
   // The out-of-range fold counts when every candidate the K folds could judge was identified on
   // its in-range rows: a fold that only the small models can be fitted to would favour them.
   const bool any_range = std::all_of(s.scores.begin(), s.scores.end(), [](const CandidateScore& x) {
     return x.kfold_rms_m < 0.0 || x.out_of_range_rms_m >= 0.0;
   });
-  for (std::size_t c = 0; c < s.scores.size(); ++c) {
-    CandidateScore& x = s.scores[c];
-    if (x.kfold_rms_m < 0.0) continue;
-    x.score_m = any_range ? 0.5 * (x.kfold_rms_m + x.out_of_range_rms_m) : x.kfold_rms_m;
-    if (best < 0 || x.score_m < s.scores[static_cast<std::size_t>(best)].score_m) best = static_cast<int>(c);
-  }
+  for (CandidateScore& x : s.scores)
+    if (x.kfold_rms_m >= 0.0) x.score_m = any_range ? 0.5 * (x.kfold_rms_m + x.out_of_range_rms_m) : x.kfold_rms_m;
+  const int best = choose(s.scores, validations, s.against_default);
   if (best < 0) {
     std::string why;
     for (const CandidateScore& x : s.scores) why += "\n  " + x.name + ": " + x.why;
     throw model::InputError(data.source + ": model selection: no candidate model can be identified from " +
-                            std::to_string(options.folds) + "-fold training rows:" + why);
+                            std::to_string(scoring.folds) + "-fold training rows:" + why);
   }
   s.chosen = candidates[static_cast<std::size_t>(best)];
-  s.chosen_cross_validation = std::move(validations[static_cast<std::size_t>(best)]);
-  std::ostringstream reason;
-  reason.setf(std::ios::fixed);
-  reason.precision(4);
-  reason << s.chosen.name << ": the lowest "
-         << (any_range ? "mean of the K-fold and out-of-range RMS"
-                       : "K-fold RMS (no out-of-range fold: no rows in range, none out of it, or a candidate that "
-                         "cannot be identified from those in range)")
-         << " (" << s.scores[static_cast<std::size_t>(best)].score_m * 1e3 << " mm)";
-  s.reason = reason.str();
+  // The rejection gate pairs the rows of the default K folds: the chosen model's, computed again
+  // when the selection scored other folds.
+  s.chosen_cross_validation = scoring.folds == options.folds
+                                  ? std::move(validations[static_cast<std::size_t>(best)])
+                                  : cross_validate(s.chosen.model, data, s.chosen.options, options);
+  s.reason = reason_for(s, best, any_range);
   return s;
 }
 
-std::string format_selection(const Selection& s, const SelectionOptions& options) {
+std::string format_selection(const Selection& s) {
   std::ostringstream out;
-  out << "model selection: " << options.folds << "-fold cross-validation and an out-of-range fold (train on the "
-      << s.out_of_range_train_rows << " rows inside the central " << s.out_of_range_fraction * 100.0
+  out << "model selection: " << (s.leave_one_out ? std::string("leave-one-out") : std::to_string(s.folds) + "-fold")
+      << " cross-validation and an out-of-range fold (train on the " << s.out_of_range_train_rows
+      << " rows inside the central " << s.out_of_range_fraction * 100.0
       << " % of every joint's range, predict the other " << s.out_of_range_test_rows << "); position RMS:\n";
   char line[200];
-  std::snprintf(line, sizeof line, "  %-22s %10s %12s %8s %10s\n", "candidate", "K-fold", "out-of-range", "params",
-                "score");
+  std::snprintf(line, sizeof line, "  %-22s %10s %12s %8s %10s%s\n", "candidate", "K-fold", "out-of-range", "params",
+                "score", s.against_default ? "  t vs default" : "");
   out << line;
   const auto mm = [](double v) {
     char b[32];
@@ -316,8 +404,11 @@ std::string format_selection(const Selection& s, const SelectionOptions& options
     return std::string(b);
   };
   for (const CandidateScore& x : s.scores) {
-    std::snprintf(line, sizeof line, "  %-22s %10s %12s %8d %10s%s\n", x.name.c_str(), mm(x.kfold_rms_m).c_str(),
-                  mm(x.out_of_range_rms_m).c_str(), x.parameters, mm(x.score_m).c_str(),
+    char t[32] = "";
+    if (s.against_default && x.score_m >= 0.0 && x.name != kDefaultCandidate)
+      std::snprintf(t, sizeof t, "  %13.1f", x.t_vs_default);
+    std::snprintf(line, sizeof line, "  %-22s %10s %12s %8d %10s%s%s\n", x.name.c_str(), mm(x.kfold_rms_m).c_str(),
+                  mm(x.out_of_range_rms_m).c_str(), x.parameters, mm(x.score_m).c_str(), t,
                   x.name == s.chosen.name ? "  <- chosen" : "");
     out << line;
     if (!x.why.empty()) out << "    (" << x.why << ")\n";

@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <numbers>
 
 #include "host/model/robot_model.hpp"
@@ -19,6 +20,8 @@ double default_sigma(const PriorOptions& o, core::ParameterId id) {
   using K = core::ParameterKind;
   if (id.kind == model::kJointScale) return o.scale;
   if (id.kind == model::kJointCompliance) return o.compliance;
+  if (model::is_mass_parameter(id.kind)) return std::numeric_limits<double>::infinity();
+  if (id.kind == model::kJointCoupling) return o.coupling;
   switch (id.kind) {
     case K::link_d:
     case K::link_a:
@@ -75,8 +78,8 @@ std::pair<std::string, double> parse_prior_entry(const std::string& entry) {
   const std::size_t eq = entry.find('=');
   const auto fail = [&](const std::string& why) -> std::pair<std::string, double> {
     throw model::InputError("--prior '" + entry + "': " + why +
-                            " (expected NAME=SIGMA with a unit: mm, m, deg or rad, none for scale<i> and "
-                            "compliance<i>; inf for no prior)");
+                            " (expected NAME=SIGMA with a unit: mm, m, deg or rad, none for scale<i>, "
+                            "compliance<i> and coupling<i>_<i-1>; inf for no prior)");
   };
   if (eq == std::string::npos || eq == 0) return fail("no NAME=");
   const std::string name = entry.substr(0, eq), value = entry.substr(eq + 1);

@@ -17,8 +17,13 @@
 //                                     registration when the model's base is a placeholder)
 //   tool x, y, z / rotations 10 mm / 5 deg   a probe or tool mounted by hand
 //   scale<i>                 0.01     a gear ratio's error (1 %)
+//   coupling<i>_<i-1>        0.01     a transmission's share of the upstream joint's motion
+//                                     (model_selection.hpp's geometry+couplings), 1 % like a
+//                                     ratio: the zoo's elbow couplings are 0.2-0.5 %
 //   compliance<i>            none     no scale a tolerance could name (the model file's value
 //                                     is a user's estimate, not a tolerance)
+//   mass<i>, com_*<i>        none     identified only in a gauge (model_selection.hpp's
+//                                     geometry+sag): no width means anything there
 // `sigma` overrides a parameter by name (--prior on the command line, `priors:` in the model
 // file); `strength` multiplies every 1 / sigma (0: no prior at all, the plain least squares of
 // before).
@@ -52,6 +57,7 @@ struct PriorOptions {
   double tool_length_m = 0.01;
   double tool_angle_rad = 5.0 * std::numbers::pi / 180.0;
   double scale = 0.01;
+  double coupling = 0.01;
   double compliance = std::numeric_limits<double>::infinity();
   // The data choose each class's width (prior_scale.hpp), within [min_scale, max_scale] times
   // the sigmas above; off: the widths above as they are.

@@ -15,7 +15,7 @@ namespace {
 
 int class_of_kind(core::ParameterKind kind) {
   using K = core::ParameterKind;
-  if (kind == model::kJointScale || kind == model::kJointCompliance) return static_cast<int>(PriorClass::non_geometric);
+  if (model::is_joint_map_parameter(kind)) return static_cast<int>(PriorClass::non_geometric);
   if (kind == K::link_d || kind == K::link_a) return static_cast<int>(PriorClass::link_length);
   if (kind <= K::link_beta) return static_cast<int>(PriorClass::link_angle);
   if (kind <= K::base_rz) return static_cast<int>(PriorClass::registration);

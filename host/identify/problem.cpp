@@ -54,7 +54,7 @@ Eigen::Vector3d so3_log(const Eigen::Matrix3d& r) {
 
 Parameterization::Parameterization(const RobotModel& start, ParameterIds ids)
     : start_(start), start_chain_(model::to_chain(start)), ids_(std::move(ids)), current_(start) {
-  if (ids_.size() > static_cast<std::size_t>(core::kMaxErrorParameters) + 2 * core::kMaxJoints)
+  if (ids_.size() > static_cast<std::size_t>(core::kMaxErrorParameters) + 7 * core::kMaxJoints)
     throw std::invalid_argument("too many parameters");
   for (const core::ParameterId& id : ids_) {
     if (model::is_joint_map_parameter(id.kind)) {
@@ -89,14 +89,8 @@ void Parameterization::set(std::span<const double> delta) {
   Eigen::Vector3d base_r = Eigen::Vector3d::Zero(), tool_r = Eigen::Vector3d::Zero();
   current_ = start_;
   for (std::size_t k = 0; k < ids_.size(); ++k) {
-    if (ids_[k].kind == model::kJointScale) {
-      model::Joint& j = current_.joints.at(ids_[k].link);
-      j.scale = j.scale.value_or(1.0) + delta_[k];
-      continue;
-    }
-    if (ids_[k].kind == model::kJointCompliance) {
-      model::Joint& j = current_.joints.at(ids_[k].link);
-      j.compliance = j.compliance.value_or(0.0) + delta_[k];
+    if (model::is_joint_map_parameter(ids_[k].kind)) {
+      model::add_joint_map_error(current_, ids_[k], delta_[k]);
       continue;
     }
     chosen.ids[static_cast<std::size_t>(chosen.count)] = ids_[k];
@@ -174,6 +168,8 @@ Eigen::VectorXd physical_lower_bounds(const Parameterization& p) {
   for (std::size_t k = 0; k < p.ids().size(); ++k)
     if (p.ids()[k].kind == model::kJointCompliance)
       lower(static_cast<Eigen::Index>(k)) = -p.start().joints.at(p.ids()[k].link).compliance.value_or(0.0);
+    else if (p.ids()[k].kind == model::kLinkMass)
+      lower(static_cast<Eigen::Index>(k)) = -p.start().joints.at(p.ids()[k].link).mass_kg;
   return lower;
 }
 

@@ -10,7 +10,7 @@
 // Jacobian is exact at any delta, not only at zero (tests/host/identify check it against
 // central differences).
 //
-// Joint-map parameters (scale<i>, compliance<i>; model/robot_model.hpp) add to the model's
+// Joint-map parameters (scale<i>, compliance<i>, coupling<i>_<i-1>; model/robot_model.hpp) add to the model's
 // fields; a model with a joint map is evaluated through model::evaluate_chain and its columns
 // come from model::parameter_jacobian (exact but for the gravity deflection's dependence on
 // the geometry, taken by central differences, about 1e-12 of a column). A model without one takes
@@ -87,7 +87,8 @@ Eigen::Matrix<double, 6, 1> small_motion(const Transform& a, const Transform& b)
 // command accepts): the lowest change of each of p's parameters, -infinity for none. A joint's
 // compliance must not be negative (model files refuse it: a joint yields with its load), so a
 // compliance<i> change is at least minus the start's value; the solve keeps to it (Ceres bounds;
-// the first-order step is projected onto it). Masses are the model's, never identified.
+// the first-order step is projected onto it). Likewise an identified mass<i> (model/robot_model.hpp's
+// identify_mass) never goes negative.
 Eigen::VectorXd physical_lower_bounds(const Parameterization& p);
 
 using Matrix6 = model::Matrix6;

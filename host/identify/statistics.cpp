@@ -110,4 +110,14 @@ double median(std::vector<double> values) {
   return 0.5 * (*mid + *std::max_element(values.begin(), mid));
 }
 
+double paired_t(const std::vector<double>& a2, const std::vector<double>& b2) {
+  const auto n = static_cast<double>(a2.size());
+  std::vector<double> d;
+  for (std::size_t i = 0; i < a2.size(); ++i) d.push_back(std::sqrt(a2[i]) - std::sqrt(b2[i]));
+  double mean = 0.0, variance = 0.0;
+  for (const double x : d) mean += x / n;
+  for (const double x : d) variance += (x - mean) * (x - mean) / (n - 1.0);
+  return variance > 0.0 ? mean / std::sqrt(variance / n) : 0.0;
+}
+
 }  // namespace kincal::identify

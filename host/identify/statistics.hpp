@@ -18,4 +18,12 @@ double fisher_cdf(double x, double d1, double d2);
 // Median of the values (copied; empty -> 0).
 double median(std::vector<double> values);
 
+// The paired t statistic of the position errors' differences sqrt(a2_i) - sqrt(b2_i), from
+// squared errors of the same rows (a2.size() == b2.size() >= 2): their mean over its standard
+// error, 0 when they are all equal. Negative: `a` predicts better. Errors, not squared errors: a
+// blunder in a held-out row moves its own squared error by 2 b delta, its size times the models'
+// difference, and would drown what the models do to the other rows. What the rejection gate
+// (identify.hpp) and model selection below 100 rows (model_selection.hpp) compare models by.
+double paired_t(const std::vector<double>& a2, const std::vector<double>& b2);
+
 }  // namespace kincal::identify

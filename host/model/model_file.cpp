@@ -256,6 +256,7 @@ std::vector<std::pair<std::string, double>> read_priors(const Reader& r, const Y
     const double largest = angle                         ? 2.0 * std::numbers::pi
                            : id.kind == kJointScale      ? kMaxScale
                            : id.kind == kJointCompliance ? kMaxCompliance
+                           : id.kind == kJointCoupling   ? kMaxCoupling
                                                          : kMaxLength_m;
     if (sigma > largest)
       r.fail(entry.second, "priors: " + name + ": " + shortest_number_text(sigma) + " is more than " +

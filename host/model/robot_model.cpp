@@ -37,7 +37,11 @@ constexpr KindName kIndexedNames[] = {{core::ParameterKind::link_theta, "theta"}
                                       {core::ParameterKind::link_d, "d"},
                                       {core::ParameterKind::link_a, "a"},
                                       {kJointScale, "scale"},
-                                      {kJointCompliance, "compliance"}};
+                                      {kJointCompliance, "compliance"},
+                                      {kLinkMass, "mass"},
+                                      {kLinkCentreX, "com_x"},
+                                      {kLinkCentreY, "com_y"},
+                                      {kLinkCentreZ, "com_z"}};
 constexpr const char* kMotionNames[] = {"base_x", "base_y", "base_z", "base_rx", "base_ry", "base_rz",
                                         "tool_x", "tool_y", "tool_z", "tool_rx", "tool_ry", "tool_rz"};
 
@@ -47,6 +51,31 @@ core::ParameterSet geometric_set(std::span<const core::ParameterId> ids) {
   for (const core::ParameterId& id : ids)
     if (!is_joint_map_parameter(id.kind)) geometric.push_back(id);
   return to_set(geometric);
+}
+
+// "coupling<i>_<k>": joint i's share of reading k; only k = i - 1 is a parameter (the top of
+// robot_model.hpp). nullopt when the name is not of that form.
+std::optional<core::ParameterId> parse_coupling_name(const std::string& name, int joint_count) {
+  const std::string prefix = "coupling";
+  if (name.compare(0, prefix.size(), prefix) != 0) return std::nullopt;
+  const char* last = name.data() + name.size();
+  int joint = 0, reading = 0;
+  const auto [sep, ec] = std::from_chars(name.data() + prefix.size(), last, joint);
+  if (ec != std::errc() || sep == last || *sep != '_') return std::nullopt;
+  const auto [end, ec2] = std::from_chars(sep + 1, last, reading);
+  if (ec2 != std::errc() || end != last) return std::nullopt;
+  if (joint < 2 || joint > joint_count)
+    throw InputError("parameter '" + name + "': joint " + std::to_string(joint) +
+                     " has no upstream neighbour to share a reading of (the model has " + std::to_string(joint_count) +
+                     " joints; couplings are coupling2_1 .. coupling" + std::to_string(joint_count) + "_" +
+                     std::to_string(joint_count - 1) + ")");
+  if (reading != joint - 1)
+    throw InputError("parameter '" + name +
+                     "': only a joint's share of its upstream neighbour's reading is a "
+                     "parameter (coupling" +
+                     std::to_string(joint) + "_" + std::to_string(joint - 1) +
+                     "); other coupling coefficients are the model file's inputs");
+  return core::ParameterId{kJointCoupling, static_cast<std::uint8_t>(joint - 1)};
 }
 
 bool is_plain(const RobotModel& model) { return !has_joint_map(model) && !has_compliance(model); }
@@ -149,7 +178,13 @@ bool has_compliance(const RobotModel& model) {
   return std::any_of(model.joints.begin(), model.joints.end(), [](const Joint& j) { return j.compliance.has_value(); });
 }
 
-bool is_joint_map_parameter(core::ParameterKind kind) { return kind == kJointScale || kind == kJointCompliance; }
+bool is_joint_map_parameter(core::ParameterKind kind) {
+  return kind == kJointScale || kind == kJointCompliance || kind == kJointCoupling || is_mass_parameter(kind);
+}
+
+bool is_mass_parameter(core::ParameterKind kind) {
+  return kind == kLinkMass || kind == kLinkCentreX || kind == kLinkCentreY || kind == kLinkCentreZ;
+}
 
 bool is_motion_parameter(core::ParameterKind kind) {
   return !is_joint_map_parameter(kind) && kind >= core::ParameterKind::base_x;
@@ -157,7 +192,9 @@ bool is_motion_parameter(core::ParameterKind kind) {
 
 DisplayUnit display_unit(const RobotModel& model, core::ParameterId id) {
   using K = core::ParameterKind;
-  if (id.kind == kJointScale) return {1e6, "ppm"};
+  if (id.kind == kJointScale || id.kind == kJointCoupling) return {1e6, "ppm"};
+  if (id.kind == kLinkMass) return {1.0, "kg"};
+  if (is_mass_parameter(id.kind)) return {1e3, "mm"};
   if (id.kind == kJointCompliance) {
     const bool prismatic = id.link < model.joints.size() && model.joints[id.link].type == core::JointType::prismatic;
     return {1e6, prismatic ? "um/N" : "urad/Nm"};
@@ -267,6 +304,7 @@ Eigen::MatrixXd joint_jacobian(const RobotModel& model, std::span<const double> 
 std::string parameter_name(core::ParameterId id) {
   const int kind = static_cast<int>(id.kind);
   if (is_motion_parameter(id.kind)) return kMotionNames[kind - static_cast<int>(core::ParameterKind::base_x)];
+  if (id.kind == kJointCoupling) return "coupling" + std::to_string(id.link + 1) + "_" + std::to_string(id.link);
   for (const KindName& k : kIndexedNames)
     if (k.kind == id.kind) return std::string(k.name) + std::to_string(id.link + 1);
   return "?";
@@ -276,6 +314,7 @@ core::ParameterId parse_parameter_name(const std::string& name, int joint_count)
   for (int k = 0; k < 12; ++k)
     if (name == kMotionNames[k])
       return {static_cast<core::ParameterKind>(static_cast<int>(core::ParameterKind::base_x) + k), 0};
+  if (const std::optional<core::ParameterId> coupling = parse_coupling_name(name, joint_count)) return *coupling;
   for (const KindName& k : kIndexedNames) {
     const std::string prefix = k.name;
     if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
@@ -290,8 +329,8 @@ core::ParameterId parse_parameter_name(const std::string& name, int joint_count)
     return {k.kind, static_cast<std::uint8_t>(joint - 1)};
   }
   throw InputError("unknown parameter name '" + name +
-                   "' (expected d<i>, theta<i>, a<i>, alpha<i>, beta<i>, scale<i>, compliance<i>, base_x..base_rz or "
-                   "tool_x..tool_rz)");
+                   "' (expected d<i>, theta<i>, a<i>, alpha<i>, beta<i>, scale<i>, compliance<i>, coupling<i>_<i-1>, "
+                   "base_x..base_rz or tool_x..tool_rz)");
 }
 
 std::vector<core::ParameterId> all_parameters(const RobotModel& model) {
@@ -314,7 +353,18 @@ std::vector<core::ParameterId> all_parameters(const RobotModel& model) {
     if (model.joints[i].scale) ids.push_back({kJointScale, static_cast<std::uint8_t>(i)});
   for (std::size_t i = 0; i < model.joints.size(); ++i)
     if (model.joints[i].compliance) ids.push_back({kJointCompliance, static_cast<std::uint8_t>(i)});
+  for (std::size_t i = 0; i < model.joints.size(); ++i)
+    if (model.joints[i].identify_coupling) ids.push_back({kJointCoupling, static_cast<std::uint8_t>(i)});
+  for (std::size_t i = 0; i < model.joints.size(); ++i)
+    if (model.joints[i].identify_mass)
+      for (const core::ParameterKind kind : {kLinkMass, kLinkCentreX, kLinkCentreY, kLinkCentreZ})
+        ids.push_back({kind, static_cast<std::uint8_t>(i)});
   return ids;
+}
+
+bool can_identify_coupling(const RobotModel& model, std::size_t i) {
+  return i >= 1 && i < model.joints.size() && model.joints[i].type == core::JointType::revolute &&
+         model.joints[i - 1].type == core::JointType::revolute;
 }
 
 Eigen::MatrixXd parameter_jacobian(const RobotModel& model, std::span<const double> q,
@@ -344,18 +394,35 @@ Eigen::MatrixXd parameter_jacobian(const RobotModel& model, const ChainAtJoints&
   for (std::size_t c = 0; c < ids.size(); ++c) {
     const core::ParameterId id = ids[c];
     const auto col = static_cast<Eigen::Index>(c);
-    if (id.link >= model.joints.size() &&
-        (is_joint_map_parameter(id.kind) || id.kind <= core::ParameterKind::link_beta))
+    if ((id.link >= model.joints.size() &&
+         (is_joint_map_parameter(id.kind) || id.kind <= core::ParameterKind::link_beta)) ||
+        (id.kind == kJointCoupling && id.link < 1))
       throw std::invalid_argument("parameter_jacobian: a parameter names a joint the model does not have");
     const auto link = static_cast<Eigen::Index>(id.link);
     if (id.kind == kJointCompliance) {
       out.col(col) = joints.col(link) * forces(link);
       continue;
     }
-    if (id.kind == kJointScale) {
+    if (is_mass_parameter(id.kind)) {
+      // G is linear in a link's mass (its centre fixed) and in its centre (its mass fixed): a
+      // unit step's difference is the derivative exactly.
+      RobotModel stepped = model;
+      add_joint_map_error(stepped, id, 1.0);
+      const core::JointVector<double> dforces = gravity_forces(stepped, at.chain, at.coupled) - forces;
+      out.col(col) = joints.leftCols(n) * dforces.head(n).cwiseProduct(k);
+      continue;
+    }
+    if (id.kind == kJointScale || id.kind == kJointCoupling) {
       if (!by_values_ready) by_values += deflection_by_values(model, at.chain, at.coupled);
       by_values_ready = true;
-      const Eigen::VectorXd dv = coupling_matrix(model).col(link) * q[static_cast<std::size_t>(id.link)];
+      // A scale moves every variable reading k reaches; a coupling moves joint i by u_{i-1}.
+      Eigen::VectorXd dv = Eigen::VectorXd::Zero(n);
+      if (id.kind == kJointScale) {
+        dv = coupling_matrix(model).col(link) * q[static_cast<std::size_t>(id.link)];
+      } else {
+        const std::size_t from = id.link - 1U;
+        dv(link) = model.joints[from].scale.value_or(1.0) * q[from];
+      }
       out.col(col) = joints.leftCols(n) * (by_values * dv);
       continue;
     }
@@ -392,14 +459,7 @@ RobotModel apply_parameter_errors(const RobotModel& model, std::span<const core:
       geometric_errors.push_back(e);
       continue;
     }
-    if (ids[k].link >= out.joints.size())
-      throw std::invalid_argument("apply_parameter_errors: a parameter names a joint the model does not have");
-    Joint& j = out.joints[ids[k].link];
-    if (ids[k].kind == kJointScale) {
-      j.scale = j.scale.value_or(1.0) + e;
-    } else {
-      j.compliance = j.compliance.value_or(0.0) + e;
-    }
+    add_joint_map_error(out, ids[k], e);
   }
   const core::ParameterSet set = to_set(geometric);
   core::ErrorVector<double> e = core::ErrorVector<double>::Zero();
@@ -408,6 +468,29 @@ RobotModel apply_parameter_errors(const RobotModel& model, std::span<const core:
   if (core::apply_parameter_errors(to_chain(model), set, e, actual) != core::ErrorModelStatus::ok)
     throw std::invalid_argument("apply_parameter_errors: a parameter names a joint the model does not have");
   return from_chain(out, actual);
+}
+
+void add_joint_map_error(RobotModel& model, core::ParameterId id, double error) {
+  if (id.link >= model.joints.size() || (id.kind == kJointCoupling && id.link < 1))
+    throw std::invalid_argument("add_joint_map_error: a parameter names a joint the model does not have");
+  Joint& j = model.joints[id.link];
+  if (id.kind == kJointScale) {
+    j.scale = j.scale.value_or(1.0) + error;
+  } else if (id.kind == kJointCompliance) {
+    j.compliance = j.compliance.value_or(0.0) + error;
+  } else if (id.kind == kJointCoupling) {
+    if (j.coupling.empty()) {
+      j.coupling.assign(model.joints.size(), 0.0);
+      j.coupling[id.link] = 1.0;
+    }
+    j.coupling.at(id.link - 1U) += error;
+  } else if (id.kind == kLinkMass) {
+    j.mass_kg += error;
+  } else if (is_mass_parameter(id.kind)) {
+    j.centre_of_mass_m(static_cast<int>(id.kind) - static_cast<int>(kLinkCentreX)) += error;
+  } else {
+    throw std::invalid_argument("add_joint_map_error: " + parameter_name(id) + " is not a joint-map parameter");
+  }
 }
 
 Matrix3 rotation_from_rpy(const Vector3& rpy) {

@@ -39,6 +39,17 @@
 // of a joint that gives way in proportion to the static torque it holds (heavy arms' shoulder
 // and elbow sag). A joint with a scale or a compliance in its model has that parameter
 // identified (names scale<i>, compliance<i>); the masses, centres of mass and gravity are inputs.
+// A joint with identify_coupling has its share of its upstream neighbour's reading identified
+// (coupling<i>_<i-1>, added to coupling_i,i-1; an absent row counts as the identity row): the
+// one coupling a transmission makes -- a joint's drive passes through the joint before it
+// (Fanuc's elbow J2 + J3 with a ratio off, a wrist whose shafts run through J4 and J5). Only
+// between two revolute joints (a share of a reading of the same kind, dimensionless); the other
+// coefficients stay inputs.
+// A joint with identify_mass (the geometry+sag candidate, for a model without masses) has its
+// link's mass and centre of mass identified too (mass<i> kg, com_x<i> com_y<i> com_z<i> m in
+// frame i). Only compliance x first moment reaches the measurements, so they come with a gauge:
+// the caller holds one of them fixed (identify/sag.hpp fixes the compliance of the joint that
+// sags most). A mass is never negative (identify/problem.hpp's bounds).
 //
 // Everything is double, SI (m, rad). Functions here do not throw unless they say so.
 #pragma once
@@ -85,9 +96,11 @@ struct Joint {
   // The joint map (see the top): empty coupling = the joint's own reading; otherwise one
   // coefficient per reading.
   std::vector<double> coupling;
+  bool identify_coupling = false;              // coupling<i>_<i-1> identified (see the top)
   std::optional<double> scale;                 // dimensionless; present: identified
   std::optional<double> compliance;            // rad/(N m) or m/N; present: identified
   double mass_kg = 0.0;                        // of the link this joint moves
+  bool identify_mass = false;                  // mass<i>, com_*<i> identified (see the top); not in files
   Vector3 centre_of_mass_m = Vector3::Zero();  // in frame i, the frame at the end of link i
 };
 
@@ -187,18 +200,28 @@ Eigen::MatrixXd joint_jacobian(const RobotModel& model, std::span<const double> 
 // Names: d1 theta1 a1 alpha1 beta1 (1-based joint), base_x base_y base_z base_rx base_ry base_rz
 // (small motions of frame 0 along/about its own axes), tool_x ... tool_rz (along/about the
 // tool's own axes). Their errors act as core::apply_parameter_errors says.
-// scale1, compliance1 ...: the joint map's parameters (errors add to them). Their kinds are the
-// host's own, beyond the core's enumerators: the core never sees them (apply_parameter_errors
-// and parameter_jacobian below handle them), and code that orders kinds asks
+// scale1, compliance1, coupling3_2 ...: the joint map's parameters (errors add to them; a
+// coupling's id names joint i, its reading is always i-1). Their kinds are the host's own,
+// beyond the core's enumerators: the core never sees them (apply_parameter_errors and
+// parameter_jacobian below handle them), and code that orders kinds asks
 // is_joint_map_parameter first.
 inline constexpr core::ParameterKind kJointScale{200};
 inline constexpr core::ParameterKind kJointCompliance{201};
+inline constexpr core::ParameterKind kJointCoupling{202};
+// mass<i> (kg) and com_x<i>, com_y<i>, com_z<i> (m, frame i): joint i's link's mass and centre of
+// mass, parameters of the joint map's gravity deflection (errors add to them).
+inline constexpr core::ParameterKind kLinkMass{203};
+inline constexpr core::ParameterKind kLinkCentreX{204};
+inline constexpr core::ParameterKind kLinkCentreY{205};
+inline constexpr core::ParameterKind kLinkCentreZ{206};
+bool is_mass_parameter(core::ParameterKind kind);
 bool is_joint_map_parameter(core::ParameterKind kind);
 // base_* or tool_*: a small motion of frame 0 or of the tool, not a link's or the joint map's.
 bool is_motion_parameter(core::ParameterKind kind);
 
 // How reports print a parameter: value_in_unit = SI value * per_si. Angles in deg, lengths in
-// mm, scales in ppm, compliances in urad/(N m) (um/N for a prismatic joint).
+// mm, scales and couplings in ppm, compliances in urad/(N m) (um/N for a prismatic joint), masses
+// in kg, centres of mass in mm.
 struct DisplayUnit {
   double per_si = 1.0;
   const char* name = "";
@@ -210,8 +233,13 @@ core::ParameterId parse_parameter_name(const std::string& name, int joint_count)
 
 // Every parameter the model's conventions have: links (theta, d, a, alpha, and beta for Doty
 // links), then the base's six motions, then the tool's six (three if the tool is a point), then
-// the scales and compliances the model's joints declare.
+// the scales and compliances the model's joints declare, then the couplings they identify, then
+// the masses and centres of mass they identify (identify_mass).
 std::vector<core::ParameterId> all_parameters(const RobotModel& model);
+
+// Whether joint i (0-based) can have its share of reading i - 1 identified: it and joint i - 1
+// are revolute.
+bool can_identify_coupling(const RobotModel& model, std::size_t i);
 
 // The twist columns of the tool pose w.r.t. parameter errors at zero error: 6 x ids.size().
 Eigen::MatrixXd parameter_jacobian(const RobotModel& model, std::span<const double> q,
@@ -235,9 +263,13 @@ core::JointVector<double> gravity_forces(const RobotModel& model, const core::Pr
                                          const core::JointVector<double>& v);
 
 // The model with the given parameter errors applied exactly (link sums, base/tool composed,
-// scale and compliance added; an absent scale counts as 1, an absent compliance as 0).
+// scale, compliance and coupling added; an absent scale counts as 1, an absent compliance as 0,
+// an absent coupling row as the identity row).
 RobotModel apply_parameter_errors(const RobotModel& model, std::span<const core::ParameterId> ids,
                                   const Eigen::VectorXd& errors);
+// One joint-map parameter's error added to `model`'s fields, as apply_parameter_errors adds it.
+// Throws std::invalid_argument for a joint the model does not have or a kind not of the map.
+void add_joint_map_error(RobotModel& model, core::ParameterId id, double error);
 
 // Rotation helpers for files: URDF's roll-pitch-yaw (R = Rz(yaw) Ry(pitch) Rx(roll)).
 Matrix3 rotation_from_rpy(const Vector3& rpy);

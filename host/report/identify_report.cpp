@@ -19,21 +19,20 @@ std::string mm_text(double m) {
 }
 
 TextTable selection_table(const identify::Selection& s) {
-  const identify::SelectionOptions options{};  // identify runs select_model with the defaults
+  const std::string folds = s.leave_one_out ? std::string("leave-one-out") : std::to_string(s.folds) + "-fold";
   TextTable t;
   t.title = "Model selection";
-  t.columns = {"candidate",        "parameters", std::to_string(options.folds) + "-fold RMS",
-               "out-of-range RMS", "score",      "chosen / why not scored"};
+  t.columns = {"candidate", "parameters", folds + " RMS", "out-of-range RMS", "score", "chosen / why not scored"};
   for (const identify::CandidateScore& x : s.scores) {
     const auto rms = [](double v) { return v < 0.0 ? std::string("-") : mm_text(v); };
     t.rows.push_back({x.name, std::to_string(x.parameters), rms(x.kfold_rms_m), rms(x.out_of_range_rms_m),
                       rms(x.score_m), x.name == s.chosen.name ? "chosen" : x.why});
   }
-  t.note = "Position RMS of rows each candidate was not identified from: " + std::to_string(options.folds) +
-           "-fold cross-validation, and an out-of-range fold (train on the " +
-           std::to_string(s.out_of_range_train_rows) + " rows inside the central " +
-           fixed_text(s.out_of_range_fraction * 100.0, 0) + " % of every joint's range, predict the other " +
-           std::to_string(s.out_of_range_test_rows) + "). Chosen: " + s.reason;
+  t.note = "Position RMS of rows each candidate was not identified from: " + folds +
+           " cross-validation, and an out-of-range fold (train on the " + std::to_string(s.out_of_range_train_rows) +
+           " rows inside the central " + fixed_text(s.out_of_range_fraction * 100.0, 0) +
+           " % of every joint's range, predict the other " + std::to_string(s.out_of_range_test_rows) +
+           "). Chosen: " + s.reason;
   return t;
 }
 
@@ -175,6 +174,13 @@ double parameter_value(const model::RobotModel& model, const model::RobotModel& 
   using K = core::ParameterKind;
   if (id.kind == model::kJointScale) return model.joints.at(id.link).scale.value_or(1.0);
   if (id.kind == model::kJointCompliance) return model.joints.at(id.link).compliance.value_or(0.0);
+  if (id.kind == model::kLinkMass) return model.joints.at(id.link).mass_kg;
+  if (model::is_mass_parameter(id.kind))
+    return model.joints.at(id.link).centre_of_mass_m(static_cast<int>(id.kind) - static_cast<int>(model::kLinkCentreX));
+  if (id.kind == model::kJointCoupling) {
+    const std::vector<double>& row = model.joints.at(id.link).coupling;
+    return row.empty() ? 0.0 : row.at(id.link - 1U);
+  }
   if (id.kind >= K::base_x && id.kind <= K::base_rz)
     return identify::small_motion(start.base_T_frame0,
                                   model.base_T_frame0)(static_cast<int>(id.kind) - static_cast<int>(K::base_x));
@@ -198,10 +204,12 @@ double parameter_value(const model::RobotModel& model, const model::RobotModel& 
 
 Quantity parameter_quantity(const model::RobotModel& model, core::ParameterId id) {
   using K = core::ParameterKind;
-  if (id.kind == model::kJointScale) return Quantity::ratio;
+  if (id.kind == model::kJointScale || id.kind == model::kJointCoupling) return Quantity::ratio;
   if (id.kind == model::kJointCompliance)
     return model.joints.at(id.link).type == core::JointType::prismatic ? Quantity::compliance_m_per_n
                                                                        : Quantity::compliance_rad_per_nm;
+  if (id.kind == model::kLinkMass) return Quantity::mass_kg;
+  if (model::is_mass_parameter(id.kind)) return Quantity::length_m;
   const bool angle = id.kind == K::link_theta || id.kind == K::link_alpha || id.kind == K::link_beta ||
                      (id.kind >= K::base_rx && id.kind <= K::base_rz) || id.kind >= K::tool_rx;
   return angle ? Quantity::angle_rad : Quantity::length_m;
@@ -210,7 +218,8 @@ Quantity parameter_quantity(const model::RobotModel& model, core::ParameterId id
 std::string parameter_group(core::ParameterId id) {
   using K = core::ParameterKind;
   if (id.kind >= K::base_x && id.kind <= K::base_rz) return "base";
-  if (model::is_joint_map_parameter(id.kind)) return "joint readings: scales and compliances";
+  if (model::is_mass_parameter(id.kind)) return "link masses (in the sag's gauge)";
+  if (model::is_joint_map_parameter(id.kind)) return "joint readings: scales, compliances and couplings";
   if (id.kind >= K::tool_x) return "tool";
   return "joint " + std::to_string(id.link + 1);
 }

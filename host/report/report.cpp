@@ -63,6 +63,7 @@ struct RowUnit {
 RowUnit row_unit(Quantity q, const std::vector<double>& values) {
   if (q == Quantity::length_m) return {" mm", kMm, 3};
   if (q == Quantity::ratio) return {"", 1.0, 6};
+  if (q == Quantity::mass_kg) return {" kg", 1.0, 3};
   if (q == Quantity::compliance_rad_per_nm) return {" &micro;rad/(N&middot;m)", kUm, 3};
   if (q == Quantity::compliance_m_per_n) return {" &micro;m/N", kUm, 3};
   const bool small = std::all_of(values.begin(), values.end(), [](double v) { return std::abs(v) < 0.1; });

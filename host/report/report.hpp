@@ -69,7 +69,7 @@ class ReportError : public std::runtime_error {
 
 // What a parameter's value measures (SI): a joint's scale is a ratio; a compliance is rad/(N m)
 // on a revolute joint, m/N on a prismatic one.
-enum class Quantity { length_m, angle_rad, ratio, compliance_rad_per_nm, compliance_m_per_n };
+enum class Quantity { length_m, angle_rad, ratio, compliance_rad_per_nm, compliance_m_per_n, mass_kg };
 
 struct ParameterRow {
   std::string group;  // "joint 1", "base", "tool": rows of a group are shown together, in order

@@ -68,7 +68,7 @@ model::RobotModel perturbed(const model::RobotModel& nominal, std::mt19937_64& r
     const bool base = ids[i].kind >= core::ParameterKind::base_x && ids[i].kind <= core::ParameterKind::base_rz;
     double sigma =
         is_angle(ids[i].kind) ? (base ? s.base_angle_rad : s.angle_rad) : (base ? s.base_length_m : s.length_m);
-    if (ids[i].kind == model::kJointScale) sigma = s.scale_sigma;
+    if (ids[i].kind == model::kJointScale || ids[i].kind == model::kJointCoupling) sigma = s.scale_sigma;
     if (ids[i].kind == model::kJointCompliance) sigma = 0.0;
     e(static_cast<Eigen::Index>(i)) = sigma * unit(rng);
   }

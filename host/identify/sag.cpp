@@ -1,0 +1,90 @@
+#include "host/identify/sag.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+namespace kincal::identify {
+
+RobotModel with_identified_masses(const RobotModel& nominal) {
+  RobotModel out = nominal;
+  for (model::Joint& j : out.joints) {
+    j.compliance = 0.0;
+    j.identify_mass = true;
+    j.mass_kg = kStartMass_kg;
+    j.centre_of_mass_m = model::Vector3::Zero();
+  }
+  return out;
+}
+
+bool needs_sag_start(const RobotModel& model, const IdentifyOptions& options) {
+  const bool masses =
+      std::any_of(model.joints.begin(), model.joints.end(), [](const model::Joint& j) { return j.identify_mass; });
+  const bool compliant = std::any_of(model.joints.begin(), model.joints.end(),
+                                     [](const model::Joint& j) { return j.compliance.value_or(0.0) > 0.0; });
+  return masses && !compliant && options.requested.empty();
+}
+
+IdentifyOptions first_sag_stage(const RobotModel& model, const IdentifyOptions& options) {
+  IdentifyOptions first = options;
+  for (const core::ParameterId& id : model::all_parameters(model))
+    if (model::is_mass_parameter(id.kind)) first.fixed.push_back(model::parameter_name(id));
+  return first;
+}
+
+SagStage second_sag_stage(const RobotModel& model, const IdentifyOptions& options, const RobotModel& first,
+                          const model::Dataset& data) {
+  SagStage s{model, options, ""};
+  for (std::size_t i = 0; i < s.model.joints.size(); ++i) s.model.joints[i].compliance = first.joints[i].compliance;
+  // The reference: the joint whose deflection compliance_i |G_i| is largest over the data's poses.
+  std::vector<double> sag(s.model.joints.size(), 0.0);
+  for (const model::Measurement& m : data.rows) {
+    const model::ChainAtJoints at = model::chain_at_joints(s.model, m.q);
+    const core::JointVector<double> g = model::gravity_forces(s.model, at.chain, at.coupled);
+    for (std::size_t i = 0; i < sag.size(); ++i)
+      sag[i] = std::max(sag[i], s.model.joints[i].compliance.value_or(0.0) * std::abs(g(static_cast<Eigen::Index>(i))));
+  }
+  const auto largest = std::max_element(sag.begin(), sag.end());
+  if (largest == sag.end() || !(*largest > 0.0)) {
+    for (model::Joint& j : s.model.joints) j.identify_mass = false;
+    s.note =
+        "sag: no joint deflects under the start's masses (every compliance 0 after the first stage); the masses "
+        "are not identified";
+    return s;
+  }
+  const auto reference = static_cast<std::uint8_t>(largest - sag.begin());
+  const std::string name = model::parameter_name({model::kJointCompliance, reference});
+  s.options.fixed.push_back(name);
+  std::ostringstream note;
+  note << "sag: only compliance x first moment is observable; gauge: " << name << " held at "
+       << *s.model.joints[reference].compliance * 1e6 << " urad/Nm (its first-stage value with " << kStartMass_kg
+       << " kg per link; it deflects most, " << *largest * 180.0 / std::numbers::pi
+       << " deg at the data's poses), so the masses are in that gauge's units";
+  s.note = note.str();
+  return s;
+}
+
+void finish_sag_model(RobotModel& model) {
+  double carried_kg = model.payload.mass_kg;
+  for (std::size_t i = model.joints.size(); i-- > 0;) {
+    carried_kg += model.joints[i].mass_kg;
+    if (carried_kg == 0.0) model.joints[i].compliance.reset();
+  }
+  if (!model.calibration) return;
+  std::vector<model::ParameterReport>& record = model.calibration->parameters;
+  for (std::size_t i = 0; i < model.joints.size(); ++i) {
+    const std::string name = model::parameter_name({model::kJointCompliance, static_cast<std::uint8_t>(i)});
+    const auto entry =
+        std::find_if(record.begin(), record.end(), [&](const model::ParameterReport& p) { return p.name == name; });
+    if (!model.joints[i].compliance) {
+      if (entry != record.end()) record.erase(entry);
+    } else if (entry != record.end()) {
+      entry->value = *model.joints[i].compliance;
+    } else {
+      record.push_back({name, *model.joints[i].compliance, 0.0});
+    }
+  }
+}
+
+}  // namespace kincal::identify

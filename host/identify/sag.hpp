@@ -1,0 +1,62 @@
+// Gravity sag for a model without masses (issue #41): model selection's geometry+sag candidate.
+//
+// A URDF without <inertial> gives the gravity deflection (model/robot_model.hpp: v_i +=
+// compliance_i G_i(v)) nothing to act with. Here every link's mass and centre of mass become
+// parameters beside every joint's compliance (mass<i>, com_x<i> .. com_z<i>, compliance<i>). G is
+// linear in each link's mass and first moment, so only compliance x (mass, first moment) reaches
+// the measurements: scaling every mass by s and every compliance by 1 / s changes nothing. The
+// gauge is fixed explicitly: the compliance of the joint that sags most is held at its value
+// from a first stage. Two stages, because at zero compliance the masses have no effect (their
+// Jacobian columns are zero and identifiability would hold them all fixed):
+//   1. every compliance identified with the masses held at a start that assumes nothing about the
+//      robot: 1 kg per link at its frame's origin (kStartMass_kg);
+//   2. from the nominal geometry again, with the compliances of stage 1: everything, masses and
+//      centres of mass too, but the reference compliance (the largest sag at the data's poses)
+//      held at its stage-1 value. Identifiability (identifiability.hpp) holds fixed what the data
+//      cannot see (a vertical first axis's load, a wrist's centre along its own axis, ...).
+// Bounds: compliances and masses never negative (problem.hpp). The result is an ordinary model
+// with masses and compliances, which every command reads; the masses are in the gauge's units
+// (kilograms only up to the common factor), as the report's group name says.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "host/identify/identify.hpp"
+
+namespace kincal::identify {
+
+inline constexpr double kStartMass_kg = 1.0;
+
+// The candidate's model: `nominal` (no masses, no compliance) with a compliance 0 on every joint
+// and every link's mass (kStartMass_kg, centre at its frame's origin) marked identified.
+RobotModel with_identified_masses(const RobotModel& nominal);
+
+// Stage 1 is due: some link's mass is to be identified, no compliance is above 0 yet and the
+// caller names no parameter list of its own.
+bool needs_sag_start(const RobotModel& model, const IdentifyOptions& options);
+
+// Stage 1's options: `options` with every identified mass and centre of mass held fixed.
+IdentifyOptions first_sag_stage(const RobotModel& model, const IdentifyOptions& options);
+
+// Stage 2's start and options from stage 1's result: `model` with stage 1's compliances and the
+// gauge's reference compliance added to the fixed parameters; a note says which. With no
+// compliance above 0 after stage 1 (no sag seen), the masses are no longer identified.
+struct SagStage {
+  RobotModel model;
+  IdentifyOptions options;
+  std::string note;
+};
+SagStage second_sag_stage(const RobotModel& model, const IdentifyOptions& options, const RobotModel& first,
+                          const model::Dataset& data);
+
+// The candidate's result made a model every command reads as a calibration of `nominal`'s arm:
+//  - a compliance whose joint carries no mass (every mass after it identified as 0) cannot act and
+//    model files refuse it: removed (the predictions do not change);
+//  - the calibration record counts every compliance left from zero, the nominal's (stage 1's
+//    values and the gauge's held one included), so that undoing the record (what `correct` and
+//    `export` take the controller's model from) gives back an arm that does not sag rather than
+//    one sagging by stage 1's compliances under the start's masses.
+void finish_sag_model(RobotModel& model);
+
+}  // namespace kincal::identify
