@@ -223,7 +223,7 @@ TEST_CASE("model selection: the out-of-range split, the candidates, and the choi
   for (const identify::Candidate& c : identify::candidate_models(ur10, {})) names += c.name + " ";
   CHECK(names ==
         "registration joint-offsets geometry-x2 geometry geometry-x0.5 geometry-noprior geometry+gravity "
-        "geometry+scales ");
+        "geometry+scales geometry+couplings ");
   {  // the gravity candidate needs masses and no declared compliance
     RobotModel massless = ur10;
     for (model::Joint& j : massless.joints) j.mass_kg = 0.0;
@@ -261,13 +261,14 @@ TEST_CASE("model selection: the out-of-range split, the candidates, and the choi
   const model::Dataset train =
       realdata::subset(all, std::vector<int>(split.train_order.begin(), split.train_order.begin() + 100));
   const identify::Selection selection = identify::select_model(ur10, train, {});
-  REQUIRE(selection.scores.size() == 8);
+  REQUIRE(selection.scores.size() == 9);
   CHECK(selection.scores[0].parameters == 12);  // base and tool
   CHECK(selection.scores[1].parameters == 16);  // and four joint offsets (theta1, theta6 go to base, tool)
   // and four compliances: gravity does not turn the vertical first axis nor the last (its link's
   // centre of mass is on its axis), so identifiability holds compliance1 and compliance6 fixed
   CHECK(selection.scores[6].parameters == selection.scores[3].parameters + 4);
   CHECK(selection.scores[7].parameters == selection.scores[3].parameters + 6);  // and six scales
+  CHECK(selection.scores[8].parameters > selection.scores[3].parameters);       // and couplings
   // The nominal geometry leaves about 1.1 mm; every geometric candidate about half that.
   CHECK(selection.scores[0].kfold_rms_m > 1.5 * selection.scores[3].kfold_rms_m);
   // UR's published masses explain part of what geometry leaves: the gravity candidate wins.
