@@ -55,20 +55,17 @@
 // that can).
 // Below 100 rows (issue #41): K = min(rows, few_rows_folds = 10) folds -- every row predicted from
 // 90 % of the others or more, so that the large candidates can be identified on a fold's training
-// rows (leave-one-out, K = rows, costs twice as much at 20 rows and more above) -- and the default (`geometry`) stands unless beaten: a
-// candidate must have a lower score and K-fold position errors lower than the default's row by
-// row, by 2 standard errors of the paired differences (statistics.hpp: paired_t <= -2, the
-// rejection gate's test); the lowest score of the default and those that do wins. When
-// cross-validation cannot judge the default (it cannot be identified on some fold's rows), it
-// stands. Why: with tens of rows the scores of near-equal candidates differ by chance (five folds
-// of a few rows judge mostly noise), and the lowest alone would trade the default for noise on a
-// precise arm; a structure the geometry lacks shows in every row (a 0.4 % joint scale is
-// millimetres at the tool: in the zoo the default left 200 times the oracle's held-out error at
-// 20 rows, tests/bench/zoo).
-// Below kMinRowsForSelection (20) rows `kincal identify` does not select: the large candidates
-// cannot be identified on a fold's rows (a 7-joint arm measured at a point has 31 geometric
-// parameters, 38 with a scale per joint, and the noise, from 3 equations a row) and the paired
-// test over so few rows has little power.
+// rows (leave-one-out, K = rows, costs twice as much at 20 rows and more above) -- and the default (`geometry`) stands
+// unless beaten: a candidate must have a lower score and K-fold position errors lower than the default's row by row, by
+// 2 standard errors of the paired differences (statistics.hpp: paired_t <= -2, the rejection gate's test); the lowest
+// score of the default and those that do wins. When cross-validation cannot judge the default (it cannot be identified
+// on some fold's rows), it stands. Why: with tens of rows the scores of near-equal candidates differ by chance (five
+// folds of a few rows judge mostly noise), and the lowest alone would trade the default for noise on a precise arm; a
+// structure the geometry lacks shows in every row (a 0.4 % joint scale is millimetres at the tool: in the zoo the
+// default left 200 times the oracle's held-out error at 20 rows, tests/bench/zoo). Below kMinRowsForSelection (20) rows
+// `kincal identify` does not select: the large candidates cannot be identified on a fold's rows (a 7-joint arm measured
+// at a point has 31 geometric parameters, 38 with a scale per joint, and the noise, from 3 equations a row) and the
+// paired test over so few rows has little power.
 //
 // Cost: (K + 1) solves per candidate, 6 to 10 candidates: on the shared UR10 set (1495 rows) that
 // is 48 solves; see realdata_ur10_bench for the measured time. Below 100 rows, (K + 1) per

@@ -163,10 +163,10 @@ TEST_CASE("joint targets: where first order is not enough, the Newton solve reac
 TEST_CASE("joint targets: models the block cannot carry get the Newton solve alone") {
   const model::RobotModel start = robot("puma560.yaml");
   model::RobotModel calibrated = perturbed(start, 1e-3, 1e-3, 4);
-  calibrated.joints[3].mass_kg = 2.0;  // the block carries one set of masses
+  calibrated.joints[2].coupling = {0.0, 0.003, 1.0, 0.0, 0.0, 0.0};  // the block carries the controller's row
   correct::JointCorrector pc(start, calibrated);
   CHECK_FALSE(pc.platform_step());
-  CHECK(pc.platform_note().find("mass") != std::string::npos);
+  CHECK(pc.platform_note().find("coupling") != std::string::npos);
   const correct::JointCorrection c = pc.correct(std::vector<double>{0.1, -0.4, 0.3, 0.2, -0.5, 0.7});
   CHECK(c.refined);
   CHECK(c.solution.outcome == correct::Outcome::reached);

@@ -210,11 +210,20 @@ TEST_CASE("correction block with the joint map: the platform's correction puts t
   CHECK(worst_after_m < 30e-6);  // quantization (2^-16 rad) and the correction's third-order rest
   CHECK(worst_without_map_m > 10 * worst_after_m);
 
-  // Coupling and masses are inputs: models that disagree on them are refused.
+  // The block carries one coupling row (the controller's): an identified coupling is refused.
+  // Masses: one set, the controller's, unless its model has no compliance (then the identified
+  // ones act alone); this controller declares compliances, so differing masses are refused.
   model::RobotModel other = identified;
   other.joints[2].coupling.clear();
-  CHECK_THROWS_WITH_AS(correct::correction_block(start, other), doctest::Contains("coupling or mass"),
+  CHECK_THROWS_WITH_AS(correct::correction_block(start, other), doctest::Contains("coupling row differs"),
                        model::InputError);
+  other = identified;
+  other.joints[3].mass_kg += 1.0;
+  model::RobotModel sagging = start;
+  sagging.joints[1].compliance = 1e-5;
+  CHECK_THROWS_WITH_AS(correct::correction_block(sagging, other), doctest::Contains("mass differs"), model::InputError);
+  const shared::CorrectionParameters identified_masses = correct::correction_block(start, other);
+  CHECK(identified_masses.joint_maps[3].mass_kg == doctest::Approx(other.joints[3].mass_kg));
   other = identified;
   other.payload.mass_kg = 1.0;
   CHECK_THROWS_WITH_AS(correct::correction_block(start, other), doctest::Contains("payload or gravity"),
