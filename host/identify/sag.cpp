@@ -70,6 +70,9 @@ void finish_sag_model(RobotModel& model) {
   for (std::size_t i = model.joints.size(); i-- > 0;) {
     carried_kg += model.joints[i].mass_kg;
     if (carried_kg == 0.0) model.joints[i].compliance.reset();
+    // A link whose mass went to 0 has no centre: whatever the solve left there (hundreds of
+    // metres on the zoo) would only make the file unreadable.
+    if (model.joints[i].mass_kg == 0.0) model.joints[i].centre_of_mass_m.setZero();
   }
   if (!model.calibration) return;
   std::vector<model::ParameterReport>& record = model.calibration->parameters;
