@@ -97,14 +97,21 @@ shared::CorrectionParameters correction_block(const model::RobotModel& controlle
       m.centre_of_mass_m[static_cast<std::size_t>(k)] = to_float(gravity.centre_of_mass_m(k), name + " centre of mass");
   }
   if (controller.payload.mass_kg != identified.payload.mass_kg ||
-      controller.payload.centre_of_mass_m != identified.payload.centre_of_mass_m ||
-      controller.gravity_mps2 != identified.gravity_mps2)
-    throw model::InputError("correction block: the models differ in payload or gravity (inputs, never identified)");
+      controller.payload.centre_of_mass_m != identified.payload.centre_of_mass_m)
+    throw model::InputError("correction block: the models differ in payload (an input, never identified)");
+  // An identified direction of gravity (gravity_rx, gravity_ry) is exact in the block on the same
+  // terms as identified masses.
+  const bool gravity_differs = controller.gravity_mps2 != identified.gravity_mps2;
+  if (gravity_differs && controller_sags)
+    throw model::InputError(
+        "correction block: gravity's direction differs between the models while the controller's model has a "
+        "compliance: the block carries one gravity vector");
+  const model::Vector3& gravity = gravity_differs ? identified.gravity_mps2 : controller.gravity_mps2;
   block.payload_mass_kg = to_float(controller.payload.mass_kg, "payload mass");
   for (int k = 0; k < 3; ++k) {
     const auto i = static_cast<std::size_t>(k);
     block.payload_centre_of_mass_m[i] = to_float(controller.payload.centre_of_mass_m(k), "payload centre of mass");
-    block.gravity_mps2[i] = to_float(controller.gravity_mps2(k), "gravity");
+    block.gravity_mps2[i] = to_float(gravity(k), "gravity");
   }
   const model::Vector3 tool_r = identify::so3_log(a.flange_T_tool.rotation);
   const Eigen::Matrix<double, 6, 1> tool_error = identify::small_motion(a.flange_T_tool, b.flange_T_tool);

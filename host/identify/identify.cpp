@@ -242,9 +242,13 @@ SolveSummary solve_ceres(Parameterization& p, const model::Dataset& data, const 
   }
   if ((prior_weight.array() > 0.0).any())
     problem.AddResidualBlock(new PriorCost(prior_weight, prior_centre), nullptr, delta.data());
-  const Eigen::VectorXd lower = physical_lower_bounds(p);
-  for (Eigen::Index k = 0; k < lower.size(); ++k)
-    if (std::isfinite(lower(k))) problem.SetParameterLowerBound(delta.data(), static_cast<int>(k), lower(k));
+  const PhysicalBounds bounds = physical_bounds(p);
+  for (Eigen::Index k = 0; k < bounds.lower.size(); ++k) {
+    if (std::isfinite(bounds.lower(k)))
+      problem.SetParameterLowerBound(delta.data(), static_cast<int>(k), bounds.lower(k));
+    if (std::isfinite(bounds.upper(k)))
+      problem.SetParameterUpperBound(delta.data(), static_cast<int>(k), bounds.upper(k));
+  }
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::DENSE_QR;
   options.max_num_iterations = max_iterations;
@@ -650,8 +654,9 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
         stacked(param, data, weights, rows, r, &j);
         append_prior(prior_weight, result.prior_centre, delta, r, j);
         const Eigen::VectorXd step = j.colPivHouseholderQr().solve(-r);
-        const Eigen::VectorXd lower = physical_lower_bounds(param);  // the step projected onto them
-        for (int k = 0; k < p; ++k) delta[static_cast<std::size_t>(k)] = std::max(step(k), lower(k));
+        const PhysicalBounds bounds = physical_bounds(param);  // the step clamped to them
+        for (int k = 0; k < p; ++k)
+          delta[static_cast<std::size_t>(k)] = std::clamp(step(k), bounds.lower(k), bounds.upper(k));
         param.set(delta);
         result.iterations = 1;
         result.termination = "one linear step (first-order model)";

@@ -131,18 +131,18 @@ std::vector<Candidate> candidate_models(const RobotModel& nominal, const Identif
   if (masses && !model::has_compliance(nominal)) {
     RobotModel with_gravity = nominal;
     for (model::Joint& j : with_gravity.joints) j.compliance = 0.0;
-    out.push_back(make("geometry+gravity", "every parameter and each joint's gravity compliance (the model's masses)",
+    with_gravity.identify_gravity_direction = true;
+    out.push_back(make("geometry+gravity",
+                       "every parameter, each joint's gravity compliance (the model's masses) and gravity's direction",
                        with_gravity, base, 1.0, {}));
   }
   // No masses and no compliance (most public URDFs): the masses identified with the compliances,
   // in a gauge (sag.hpp).
-  if (!masses && !model::has_compliance(nominal)) {
+  if (!masses && !model::has_compliance(nominal))
     out.push_back(make("geometry+sag",
-                       "every parameter, each joint's gravity compliance and each link's mass and centre of mass "
-                       "(in a gauge: the model has no masses)",
+                       "every parameter, each joint's gravity compliance, each link's mass and centre of mass "
+                       "(in a gauge: the model has no masses) and gravity's direction",
                        with_identified_masses(nominal), base, 1.0, {}));
-    out.back().automatic = false;
-  }
   RobotModel with_scales = nominal;
   bool added = false;
   for (model::Joint& j : with_scales.joints)
@@ -359,8 +359,7 @@ Selection select_model(const RobotModel& nominal, const model::Dataset& data, co
   s.out_of_range_fraction = range.fraction;
   s.out_of_range_train_rows = static_cast<int>(range.inside.size());
   s.out_of_range_test_rows = static_cast<int>(range.outside.size());
-  std::vector<Candidate> candidates = candidate_models(nominal, base);
-  std::erase_if(candidates, [](const Candidate& c) { return !c.automatic; });
+  const std::vector<Candidate> candidates = candidate_models(nominal, base);
   std::vector<CrossValidation> validations = cross_validate(candidates, data, scoring);
   for (std::size_t c = 0; c < candidates.size(); ++c) {
     const CrossValidation& cv = validations[c];

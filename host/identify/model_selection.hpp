@@ -92,10 +92,6 @@ struct Candidate {
   std::string description;
   RobotModel model;  // what it identifies from: the nominal, or the nominal with scales added
   IdentifyOptions options;
-  // false: taken only by name (--model-select NAME), never by select_model (geometry+sag: on the
-  // zoo its fits predict the measured point well, but `correct` on them misses the TCP by
-  // millimetres to decimetres, a cause not yet found; issue #41's note).
-  bool automatic = true;
 };
 
 // The candidates above for this model and the caller's options.

@@ -22,6 +22,7 @@ double default_sigma(const PriorOptions& o, core::ParameterId id) {
   if (id.kind == model::kJointCompliance) return o.compliance;
   if (model::is_mass_parameter(id.kind)) return std::numeric_limits<double>::infinity();
   if (id.kind == model::kJointCoupling) return o.coupling;
+  if (model::is_gravity_direction_parameter(id.kind)) return o.gravity_direction_rad;
   switch (id.kind) {
     case K::link_d:
     case K::link_a:

@@ -24,6 +24,7 @@
 //                                     is a user's estimate, not a tolerance)
 //   mass<i>, com_*<i>        none     identified only in a gauge (model_selection.hpp's
 //                                     geometry+sag): no width means anything there
+//   gravity_rx, gravity_ry   1 deg    an arm's base against level (floors, a first joint's tilt)
 // `sigma` overrides a parameter by name (--prior on the command line, `priors:` in the model
 // file); `strength` multiplies every 1 / sigma (0: no prior at all, the plain least squares of
 // before).
@@ -59,6 +60,7 @@ struct PriorOptions {
   double scale = 0.01;
   double coupling = 0.01;
   double compliance = std::numeric_limits<double>::infinity();
+  double gravity_direction_rad = 1.0 * std::numbers::pi / 180.0;
   // The data choose each class's width (prior_scale.hpp), within [min_scale, max_scale] times
   // the sigmas above; off: the widths above as they are.
   bool estimate_scales = true;

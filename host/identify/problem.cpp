@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include <Eigen/Geometry>
@@ -163,14 +164,47 @@ Transform Parameterization::pose(std::span<const double> q, Eigen::MatrixXd* jac
   return frames.base_T_tool;
 }
 
-Eigen::VectorXd physical_lower_bounds(const Parameterization& p) {
-  Eigen::VectorXd lower = Eigen::VectorXd::Constant(p.size(), -std::numeric_limits<double>::infinity());
-  for (std::size_t k = 0; k < p.ids().size(); ++k)
-    if (p.ids()[k].kind == model::kJointCompliance)
-      lower(static_cast<Eigen::Index>(k)) = -p.start().joints.at(p.ids()[k].link).compliance.value_or(0.0);
-    else if (p.ids()[k].kind == model::kLinkMass)
-      lower(static_cast<Eigen::Index>(k)) = -p.start().joints.at(p.ids()[k].link).mass_kg;
-  return lower;
+namespace {
+
+// The sum of the distances between consecutive frames at zero readings, and the tool's from the
+// last: no part of the arm is farther than this from any of its frames.
+double arm_size_m(const model::RobotModel& m) {
+  const model::ChainAtJoints at = model::chain_at_joints(m, std::vector<double>(m.joints.size(), 0.0));
+  double size = 0.0;
+  for (int i = 0; i < at.frames.joint_count; ++i)
+    size += (at.frames.base_T_frame[static_cast<std::size_t>(i) + 1].translation -
+             at.frames.base_T_frame[static_cast<std::size_t>(i)].translation)
+                .norm();
+  return size + (at.frames.base_T_tool.translation -
+                 at.frames.base_T_frame[static_cast<std::size_t>(at.frames.joint_count)].translation)
+                    .norm();
+}
+
+}  // namespace
+
+PhysicalBounds physical_bounds(const Parameterization& p) {
+  const auto n = static_cast<Eigen::Index>(p.size());
+  PhysicalBounds b{Eigen::VectorXd::Constant(n, -std::numeric_limits<double>::infinity()),
+                   Eigen::VectorXd::Constant(n, std::numeric_limits<double>::infinity())};
+  std::optional<double> size;
+  for (std::size_t k = 0; k < p.ids().size(); ++k) {
+    const auto i = static_cast<Eigen::Index>(k);
+    const core::ParameterKind kind = p.ids()[k].kind;
+    if (!model::is_joint_map_parameter(kind)) continue;
+    const model::Joint& joint = p.start().joints.at(p.ids()[k].link);
+    if (kind == model::kJointCompliance) {
+      b.lower(i) = -joint.compliance.value_or(0.0);
+    } else if (kind == model::kLinkMass) {
+      b.lower(i) = -joint.mass_kg;
+    } else if (model::is_mass_parameter(kind)) {  // a centre of mass coordinate
+      if (!size) size = arm_size_m(p.start());
+      const double at =
+          joint.centre_of_mass_m(static_cast<Eigen::Index>(kind) - static_cast<Eigen::Index>(model::kLinkCentreX));
+      b.lower(i) = std::min(0.0, -*size - at);  // a start beyond it (a user's file) is kept
+      b.upper(i) = std::max(0.0, *size - at);
+    }
+  }
+  return b;
 }
 
 std::vector<Matrix6> instrument_covariances(const model::Dataset& data, double sigma_m, double orientation_sigma_rad) {

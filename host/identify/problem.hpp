@@ -84,12 +84,18 @@ Eigen::Vector3d so3_log(const Eigen::Matrix3d& r);
 Eigen::Matrix<double, 6, 1> small_motion(const Transform& a, const Transform& b);
 
 // The physical bounds of the parameters (issue #41: every file identify writes is one every
-// command accepts): the lowest change of each of p's parameters, -infinity for none. A joint's
-// compliance must not be negative (model files refuse it: a joint yields with its load), so a
-// compliance<i> change is at least minus the start's value; the solve keeps to it (Ceres bounds;
-// the first-order step is projected onto it). Likewise an identified mass<i> (model/robot_model.hpp's
-// identify_mass) never goes negative.
-Eigen::VectorXd physical_lower_bounds(const Parameterization& p);
+// command accepts): the lowest and highest change of each of p's parameters, -/+infinity for none.
+// A joint's compliance must not be negative (model files refuse it: a joint yields with its
+// load), so a compliance<i> change is at least minus the start's value; likewise an identified
+// mass<i> (model/robot_model.hpp's identify_mass) never goes negative, and an identified centre of
+// mass stays within the arm's size (the sum of its links' lengths at zero and the tool's offset
+// from the last frame): a link whose mass goes to 0 with its first moment kept would otherwise
+// carry its centre off to kilometres. The solve keeps to them (Ceres bounds; the first-order step
+// is clamped to them).
+struct PhysicalBounds {
+  Eigen::VectorXd lower, upper;
+};
+PhysicalBounds physical_bounds(const Parameterization& p);
 
 using Matrix6 = model::Matrix6;
 

@@ -15,6 +15,7 @@ RobotModel with_identified_masses(const RobotModel& nominal) {
     j.mass_kg = kStartMass_kg;
     j.centre_of_mass_m = model::Vector3::Zero();
   }
+  out.identify_gravity_direction = true;
   return out;
 }
 
@@ -29,7 +30,8 @@ bool needs_sag_start(const RobotModel& model, const IdentifyOptions& options) {
 IdentifyOptions first_sag_stage(const RobotModel& model, const IdentifyOptions& options) {
   IdentifyOptions first = options;
   for (const core::ParameterId& id : model::all_parameters(model))
-    if (model::is_mass_parameter(id.kind)) first.fixed.push_back(model::parameter_name(id));
+    if (model::is_mass_parameter(id.kind) || model::is_gravity_direction_parameter(id.kind))
+      first.fixed.push_back(model::parameter_name(id));
   return first;
 }
 
@@ -37,6 +39,17 @@ SagStage second_sag_stage(const RobotModel& model, const IdentifyOptions& option
                           const model::Dataset& data) {
   SagStage s{model, options, ""};
   for (std::size_t i = 0; i < s.model.joints.size(); ++i) s.model.joints[i].compliance = first.joints[i].compliance;
+  // What the data could not tell from the registration or the measured point without masses stays
+  // held: the masses' lever arms would otherwise make it "separable" (d6 beside the tool's offset
+  // along the last axis moved 180 mm on the zoo's 6-DoF tracker, the TCP with it).
+  std::string held;
+  if (first.calibration)
+    for (const std::string& name : first.calibration->held_fixed) {
+      const core::ParameterId id = model::parse_parameter_name(name, static_cast<int>(s.model.joints.size()));
+      if (model::is_joint_map_parameter(id.kind)) continue;
+      s.options.fixed.push_back(name);
+      held += (held.empty() ? "" : ", ") + name;
+    }
   // The reference: the joint whose deflection compliance_i |G_i| is largest over the data's poses.
   std::vector<double> sag(s.model.joints.size(), 0.0);
   for (const model::Measurement& m : data.rows) {
@@ -61,6 +74,7 @@ SagStage second_sag_stage(const RobotModel& model, const IdentifyOptions& option
        << *s.model.joints[reference].compliance * 1e6 << " urad/Nm (its first-stage value with " << kStartMass_kg
        << " kg per link; it deflects most, " << *largest * 180.0 / std::numbers::pi
        << " deg at the data's poses), so the masses are in that gauge's units";
+  if (!held.empty()) note << "; held as the first stage held them (not separable without the masses): " << held;
   s.note = note.str();
   return s;
 }

@@ -12,8 +12,11 @@
 //      robot: 1 kg per link at its frame's origin (kStartMass_kg);
 //   2. from the nominal geometry again, with the compliances of stage 1: everything, masses and
 //      centres of mass too, but the reference compliance (the largest sag at the data's poses)
-//      held at its stage-1 value. Identifiability (identifiability.hpp) holds fixed what the data
-//      cannot see (a vertical first axis's load, a wrist's centre along its own axis, ...).
+//      held at its stage-1 value, and every geometric parameter stage 1 held fixed held again (the
+//      masses' lever arms must not make d6 "separable" from the measured point's offset along the
+//      last axis: it moved 180 mm on the zoo, the TCP with it). Identifiability
+//      (identifiability.hpp) holds fixed what else the data cannot see (a vertical first axis's
+//      load, a wrist's centre along its own axis, ...).
 // Bounds: compliances and masses never negative (problem.hpp). The result is an ordinary model
 // with masses and compliances, which every command reads; the masses are in the gauge's units
 // (kilograms only up to the common factor), as the report's group name says.
@@ -28,15 +31,17 @@ namespace kincal::identify {
 
 inline constexpr double kStartMass_kg = 1.0;
 
-// The candidate's model: `nominal` (no masses, no compliance) with a compliance 0 on every joint
-// and every link's mass (kStartMass_kg, centre at its frame's origin) marked identified.
+// The candidate's model: `nominal` (no masses, no compliance) with a compliance 0 on every joint,
+// every link's mass (kStartMass_kg, centre at its frame's origin) and gravity's direction
+// (robot_model.hpp's gravity_rx, gravity_ry) marked identified.
 RobotModel with_identified_masses(const RobotModel& nominal);
 
 // Stage 1 is due: some link's mass is to be identified, no compliance is above 0 yet and the
 // caller names no parameter list of its own.
 bool needs_sag_start(const RobotModel& model, const IdentifyOptions& options);
 
-// Stage 1's options: `options` with every identified mass and centre of mass held fixed.
+// Stage 1's options: `options` with every identified mass and centre of mass, and gravity's
+// direction, held fixed.
 IdentifyOptions first_sag_stage(const RobotModel& model, const IdentifyOptions& options);
 
 // Stage 2's start and options from stage 1's result: `model` with stage 1's compliances and the

@@ -179,8 +179,11 @@ bool has_compliance(const RobotModel& model) {
 }
 
 bool is_joint_map_parameter(core::ParameterKind kind) {
-  return kind == kJointScale || kind == kJointCompliance || kind == kJointCoupling || is_mass_parameter(kind);
+  return kind == kJointScale || kind == kJointCompliance || kind == kJointCoupling || is_mass_parameter(kind) ||
+         is_gravity_direction_parameter(kind);
 }
+
+bool is_gravity_direction_parameter(core::ParameterKind kind) { return kind == kGravityRx || kind == kGravityRy; }
 
 bool is_mass_parameter(core::ParameterKind kind) {
   return kind == kLinkMass || kind == kLinkCentreX || kind == kLinkCentreY || kind == kLinkCentreZ;
@@ -194,6 +197,7 @@ DisplayUnit display_unit(const RobotModel& model, core::ParameterId id) {
   using K = core::ParameterKind;
   if (id.kind == kJointScale || id.kind == kJointCoupling) return {1e6, "ppm"};
   if (id.kind == kLinkMass) return {1.0, "kg"};
+  if (is_gravity_direction_parameter(id.kind)) return {180.0 / std::numbers::pi, "deg"};
   if (is_mass_parameter(id.kind)) return {1e3, "mm"};
   if (id.kind == kJointCompliance) {
     const bool prismatic = id.link < model.joints.size() && model.joints[id.link].type == core::JointType::prismatic;
@@ -305,6 +309,7 @@ std::string parameter_name(core::ParameterId id) {
   const int kind = static_cast<int>(id.kind);
   if (is_motion_parameter(id.kind)) return kMotionNames[kind - static_cast<int>(core::ParameterKind::base_x)];
   if (id.kind == kJointCoupling) return "coupling" + std::to_string(id.link + 1) + "_" + std::to_string(id.link);
+  if (is_gravity_direction_parameter(id.kind)) return id.kind == kGravityRx ? "gravity_rx" : "gravity_ry";
   for (const KindName& k : kIndexedNames)
     if (k.kind == id.kind) return std::string(k.name) + std::to_string(id.link + 1);
   return "?";
@@ -315,6 +320,7 @@ core::ParameterId parse_parameter_name(const std::string& name, int joint_count)
     if (name == kMotionNames[k])
       return {static_cast<core::ParameterKind>(static_cast<int>(core::ParameterKind::base_x) + k), 0};
   if (const std::optional<core::ParameterId> coupling = parse_coupling_name(name, joint_count)) return *coupling;
+  if (name == "gravity_rx" || name == "gravity_ry") return {name == "gravity_rx" ? kGravityRx : kGravityRy, 0};
   for (const KindName& k : kIndexedNames) {
     const std::string prefix = k.name;
     if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
@@ -330,7 +336,7 @@ core::ParameterId parse_parameter_name(const std::string& name, int joint_count)
   }
   throw InputError("unknown parameter name '" + name +
                    "' (expected d<i>, theta<i>, a<i>, alpha<i>, beta<i>, scale<i>, compliance<i>, coupling<i>_<i-1>, "
-                   "base_x..base_rz or tool_x..tool_rz)");
+                   "base_x..base_rz, tool_x..tool_rz or gravity_rx, gravity_ry)");
 }
 
 std::vector<core::ParameterId> all_parameters(const RobotModel& model) {
@@ -359,6 +365,8 @@ std::vector<core::ParameterId> all_parameters(const RobotModel& model) {
     if (model.joints[i].identify_mass)
       for (const core::ParameterKind kind : {kLinkMass, kLinkCentreX, kLinkCentreY, kLinkCentreZ})
         ids.push_back({kind, static_cast<std::uint8_t>(i)});
+  if (model.identify_gravity_direction && has_compliance(model) && !model.joints.empty())
+    for (const core::ParameterKind kind : {kGravityRx, kGravityRy}) ids.push_back({kind, 0});
   return ids;
 }
 
@@ -403,12 +411,19 @@ Eigen::MatrixXd parameter_jacobian(const RobotModel& model, const ChainAtJoints&
       out.col(col) = joints.col(link) * forces(link);
       continue;
     }
-    if (is_mass_parameter(id.kind)) {
-      // G is linear in a link's mass (its centre fixed) and in its centre (its mass fixed): a
-      // unit step's difference is the derivative exactly.
+    if (is_mass_parameter(id.kind) || is_gravity_direction_parameter(id.kind)) {
+      // G is linear in a link's mass (its centre fixed), in its centre (its mass fixed) and in the
+      // gravity vector: a unit step's difference is the derivative exactly; a turn's derivative is
+      // G of the vector axis x g.
       RobotModel stepped = model;
-      add_joint_map_error(stepped, id, 1.0);
-      const core::JointVector<double> dforces = gravity_forces(stepped, at.chain, at.coupled) - forces;
+      core::JointVector<double> dforces;
+      if (is_gravity_direction_parameter(id.kind)) {
+        stepped.gravity_mps2 = (id.kind == kGravityRx ? Vector3::UnitX() : Vector3::UnitY()).cross(model.gravity_mps2);
+        dforces = gravity_forces(stepped, at.chain, at.coupled);
+      } else {
+        add_joint_map_error(stepped, id, 1.0);
+        dforces = gravity_forces(stepped, at.chain, at.coupled) - forces;
+      }
       out.col(col) = joints.leftCols(n) * dforces.head(n).cwiseProduct(k);
       continue;
     }
@@ -488,6 +503,9 @@ void add_joint_map_error(RobotModel& model, core::ParameterId id, double error) 
     j.mass_kg += error;
   } else if (is_mass_parameter(id.kind)) {
     j.centre_of_mass_m(static_cast<int>(id.kind) - static_cast<int>(kLinkCentreX)) += error;
+  } else if (is_gravity_direction_parameter(id.kind)) {
+    model.gravity_mps2 =
+        Eigen::AngleAxisd(error, id.kind == kGravityRx ? Vector3::UnitX() : Vector3::UnitY()) * model.gravity_mps2;
   } else {
     throw std::invalid_argument("add_joint_map_error: " + parameter_name(id) + " is not a joint-map parameter");
   }

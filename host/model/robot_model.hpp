@@ -50,6 +50,11 @@
 // frame i). Only compliance x first moment reaches the measurements, so they come with a gauge:
 // the caller holds one of them fixed (identify/sag.hpp fixes the compliance of the joint that
 // sags most). A mass is never negative (identify/problem.hpp's bounds).
+// A model with identify_gravity_direction (the candidates with a compliance) has the direction of
+// gravity in frame 0 identified too (gravity_rx, gravity_ry: turns of the gravity vector about
+// frame 0's x and y axes): frame 0 is where the registration puts the arm, and an arm standing
+// off level, or a first joint tilted against its base, loads its joints as gravity really
+// points, not as frame 0's -z (the zoo's service arms: 6.8x the oracle without it).
 //
 // Everything is double, SI (m, rad). Functions here do not throw unless they say so.
 #pragma once
@@ -146,6 +151,7 @@ struct RobotModel {
   AngleUnit file_angles = AngleUnit::rad;  // how the file wrote angles; writing keeps it
   std::optional<CalibrationRecord> calibration;
   Vector3 gravity_mps2{0.0, 0.0, -kStandardGravity_mps2};  // in frame 0
+  bool identify_gravity_direction = false;                 // gravity_rx, gravity_ry (see the top); not in files
   Payload payload;
 
   int joint_count() const { return static_cast<int>(joints.size()); }
@@ -214,6 +220,11 @@ inline constexpr core::ParameterKind kLinkMass{203};
 inline constexpr core::ParameterKind kLinkCentreX{204};
 inline constexpr core::ParameterKind kLinkCentreY{205};
 inline constexpr core::ParameterKind kLinkCentreZ{206};
+// gravity_rx, gravity_ry (rad): turns of the gravity vector about frame 0's x and y axes, one
+// each per model (link 0).
+inline constexpr core::ParameterKind kGravityRx{207};
+inline constexpr core::ParameterKind kGravityRy{208};
+bool is_gravity_direction_parameter(core::ParameterKind kind);
 bool is_mass_parameter(core::ParameterKind kind);
 bool is_joint_map_parameter(core::ParameterKind kind);
 // base_* or tool_*: a small motion of frame 0 or of the tool, not a link's or the joint map's.

@@ -177,6 +177,10 @@ double parameter_value(const model::RobotModel& model, const model::RobotModel& 
   if (id.kind == model::kLinkMass) return model.joints.at(id.link).mass_kg;
   if (model::is_mass_parameter(id.kind))
     return model.joints.at(id.link).centre_of_mass_m(static_cast<int>(id.kind) - static_cast<int>(model::kLinkCentreX));
+  if (model::is_gravity_direction_parameter(id.kind)) {  // the turn from the start's direction
+    const Eigen::Vector3d turn = start.gravity_mps2.normalized().cross(model.gravity_mps2.normalized());
+    return std::asin(std::clamp(turn(id.kind == model::kGravityRx ? 0 : 1), -1.0, 1.0));
+  }
   if (id.kind == model::kJointCoupling) {
     const std::vector<double>& row = model.joints.at(id.link).coupling;
     return row.empty() ? 0.0 : row.at(id.link - 1U);
@@ -210,6 +214,7 @@ Quantity parameter_quantity(const model::RobotModel& model, core::ParameterId id
                                                                        : Quantity::compliance_rad_per_nm;
   if (id.kind == model::kLinkMass) return Quantity::mass_kg;
   if (model::is_mass_parameter(id.kind)) return Quantity::length_m;
+  if (model::is_gravity_direction_parameter(id.kind)) return Quantity::angle_rad;
   const bool angle = id.kind == K::link_theta || id.kind == K::link_alpha || id.kind == K::link_beta ||
                      (id.kind >= K::base_rx && id.kind <= K::base_rz) || id.kind >= K::tool_rx;
   return angle ? Quantity::angle_rad : Quantity::length_m;
@@ -219,6 +224,7 @@ std::string parameter_group(core::ParameterId id) {
   using K = core::ParameterKind;
   if (id.kind >= K::base_x && id.kind <= K::base_rz) return "base";
   if (model::is_mass_parameter(id.kind)) return "link masses (in the sag's gauge)";
+  if (model::is_gravity_direction_parameter(id.kind)) return "gravity's direction in frame 0";
   if (model::is_joint_map_parameter(id.kind)) return "joint readings: scales, compliances and couplings";
   if (id.kind >= K::tool_x) return "tool";
   return "joint " + std::to_string(id.link + 1);

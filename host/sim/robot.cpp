@@ -69,7 +69,7 @@ model::RobotModel perturbed(const model::RobotModel& nominal, std::mt19937_64& r
     double sigma =
         is_angle(ids[i].kind) ? (base ? s.base_angle_rad : s.angle_rad) : (base ? s.base_length_m : s.length_m);
     if (ids[i].kind == model::kJointScale || ids[i].kind == model::kJointCoupling) sigma = s.scale_sigma;
-    if (ids[i].kind == model::kJointCompliance) sigma = 0.0;
+    if (ids[i].kind == model::kJointCompliance || model::is_gravity_direction_parameter(ids[i].kind)) sigma = 0.0;
     e(static_cast<Eigen::Index>(i)) = sigma * unit(rng);
   }
   return model::apply_parameter_errors(start, ids, e);

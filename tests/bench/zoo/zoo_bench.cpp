@@ -17,7 +17,8 @@
 //
 // Usage: zoo_bench [--cases N] [--filter TEXT] [--work DIR] [--kincal PATH]
 //   --cases N: the first N cases of the design; --filter: only cases whose label (robot/instrument/
-//   class/size/mistake) contains TEXT; --work: the folder the cases' files are kept in.
+//   class/size/mistake) contains TEXT; --work: the folder the cases' files are kept in;
+//   --identify-arg ARG: an argument added to identify's defaults (repeat it), to judge a non-default.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -157,6 +158,7 @@ void print_failure(const CommandRun& run) {
 
 struct Context {
   std::string kincal, work;
+  std::vector<std::string> identify_args;  // added to identify's defaults (--identify-arg)
 };
 
 struct CaseData {
@@ -177,10 +179,15 @@ CaseData simulate(const CaseSpec& c) {
 
 CommandRun identify(const Context& ctx, const CaseSpec& c, const std::string& dir, const std::string& data,
                     const std::string& validate) {
-  return run_command(
-      {ctx.kincal, "identify", "--model", c.robot->chain.urdf_path, "--tip-link", c.robot->chain.flange_link, "--data",
-       data, "--validate", validate, "--out", "m.yaml", "--urdf", "m.urdf"},
-      dir, "identify");
+  std::vector<std::string> args{ctx.kincal,   "identify",
+                                "--model",    c.robot->chain.urdf_path,
+                                "--tip-link", c.robot->chain.flange_link,
+                                "--data",     data,
+                                "--validate", validate,
+                                "--out",      "m.yaml",
+                                "--urdf",     "m.urdf"};
+  args.insert(args.end(), ctx.identify_args.begin(), ctx.identify_args.end());
+  return run_command(args, dir, "identify");
 }
 
 double heldout_rms_kincal(const std::string& dir, const CaseData& d) {
@@ -451,10 +458,13 @@ int main(int argc, char** argv) {
   CLI::App app{"zoo benchmark (issues #41, #42)"};
   int max_cases = 1000;
   std::string filter, work = (fs::temp_directory_path() / "kincal_zoo").string(), kincal = KINCAL_CLI;
+  std::vector<std::string> identify_args;
   app.add_option("--cases", max_cases, "run the first N cases of the design");
   app.add_option("--filter", filter, "run the cases whose label (robot/instrument/class/size/mistake) holds TEXT");
   app.add_option("--work", work, "folder for the cases' files (kept)");
   app.add_option("--kincal", kincal, "the kincal command");
+  app.add_option("--identify-arg", identify_args, "an argument added to identify's (repeat it; judges a non-default)")
+      ->allow_extra_args(false);
   CLI11_PARSE(app, argc, argv);
   work = fs::absolute(work).string();
 
@@ -477,16 +487,16 @@ int main(int argc, char** argv) {
     CaseResult r;
     if (c.mistake == Mistake::none) {
       write_text(dir + "/train.csv", dataset_csv(c.robot->chain, d.truth, d.train, "t", Mistake::none));
-      r = run_clean(Context{kincal, work}, c, d, dir);
+      r = run_clean(Context{kincal, work, identify_args}, c, d, dir);
     } else {
       // The clean twin's warnings, to tell a warning about the mistake from the ones it always gives.
       const std::string twin = work + "/case" + std::to_string(c.index) + "-clean";
       fs::create_directories(twin);
       write_text(twin + "/held_out.csv", dataset_csv(c.robot->chain, d.truth, d.held_out, "h", Mistake::none));
       write_text(twin + "/train.csv", dataset_csv(c.robot->chain, d.truth, d.train, "t", Mistake::none));
-      const CommandRun clean = identify(Context{kincal, work}, c, twin, "train.csv", "held_out.csv");
+      const CommandRun clean = identify(Context{kincal, work, identify_args}, c, twin, "train.csv", "held_out.csv");
       write_text(dir + "/train.csv", dataset_csv(c.robot->chain, d.truth, d.train, "t", c.mistake));
-      r = run_mistake(Context{kincal, work}, c, dir, warnings(clean.err));
+      r = run_mistake(Context{kincal, work, identify_args}, c, dir, warnings(clean.err));
     }
     results.emplace_back(c, r);
   }

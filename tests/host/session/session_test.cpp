@@ -224,9 +224,17 @@ TEST_CASE("correction block with the joint map: the platform's correction puts t
   CHECK_THROWS_WITH_AS(correct::correction_block(sagging, other), doctest::Contains("mass differs"), model::InputError);
   const shared::CorrectionParameters identified_masses = correct::correction_block(start, other);
   CHECK(identified_masses.joint_maps[3].mass_kg == doctest::Approx(other.joints[3].mass_kg));
+  // An identified direction of gravity likewise: carried when the controller's model does not sag.
+  other = identified;
+  other.gravity_mps2 = Eigen::AngleAxisd(0.01, model::Vector3::UnitX()) * other.gravity_mps2;
+  CHECK_THROWS_WITH_AS(correct::correction_block(sagging, other), doctest::Contains("gravity's direction differs"),
+                       model::InputError);
+  const shared::CorrectionParameters identified_gravity = correct::correction_block(start, other);
+  CHECK(identified_gravity.gravity_mps2[1] == doctest::Approx(other.gravity_mps2.y()));
+  CHECK(identified_gravity.gravity_mps2[1] != 0.0f);
   other = identified;
   other.payload.mass_kg = 1.0;
-  CHECK_THROWS_WITH_AS(correct::correction_block(start, other), doctest::Contains("payload or gravity"),
+  CHECK_THROWS_WITH_AS(correct::correction_block(start, other), doctest::Contains("differ in payload"),
                        model::InputError);
 }
 
