@@ -8,11 +8,10 @@
 #include <sstream>
 #include <utility>
 
-#include <ceres/ceres.h>
-#include <ceres/rotation.h>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
+#include "host/camera/hand_eye_refinement.hpp"
 #include "host/camera/number_text.hpp"
 
 namespace kincal::camera {
@@ -166,57 +165,6 @@ Isometry3d solve_robot_world(const std::vector<Isometry3d>& base_T_gripper,
   return isometry(r_g2c, t_g2c).inverse();
 }
 
-// One board corner seen in one view: residual in pixels of the projection of
-// camera_T_target = gripper_T_camera^-1 * base_T_gripper^-1 * base_T_target.
-struct CornerCost {
-  Matrix3d gripper_R_base;
-  Vector3d base_t_gripper;
-  Vector3d corner_m;
-  double u_px, v_px;
-  const CameraModel* camera;
-
-  template <typename T>
-  bool operator()(const T* gripper_T_camera, const T* base_T_target, T* residual) const {
-    const T corner[3] = {T(corner_m.x()), T(corner_m.y()), T(corner_m.z())};
-    T in_base[3];
-    ceres::AngleAxisRotatePoint(base_T_target, corner, in_base);
-    T offset[3];
-    for (int k = 0; k < 3; ++k) offset[k] = in_base[k] + base_T_target[3 + k] - T(base_t_gripper[k]);
-    T in_gripper[3];
-    for (int r = 0; r < 3; ++r) {
-      in_gripper[r] = T(gripper_R_base(r, 0)) * offset[0] + T(gripper_R_base(r, 1)) * offset[1] +
-                      T(gripper_R_base(r, 2)) * offset[2] - gripper_T_camera[3 + r];
-    }
-    const T inverse_rotation[3] = {-gripper_T_camera[0], -gripper_T_camera[1], -gripper_T_camera[2]};
-    T p[3];
-    ceres::AngleAxisRotatePoint(inverse_rotation, in_gripper, p);
-    const T x = p[0] / p[2], y = p[1] / p[2];
-    const std::array<double, 5>& d = camera->distortion;
-    const T r2 = x * x + y * y;
-    const T radial = T(1) + T(d[0]) * r2 + T(d[1]) * r2 * r2 + T(d[4]) * r2 * r2 * r2;
-    const T xd = x * radial + T(2 * d[2]) * x * y + T(d[3]) * (r2 + T(2) * x * x);
-    const T yd = y * radial + T(d[2]) * (r2 + T(2) * y * y) + T(2 * d[3]) * x * y;
-    const cv::Matx33d& k = camera->camera_matrix;
-    residual[0] = T(k(0, 0)) * xd + T(k(0, 2)) - T(u_px);
-    residual[1] = T(k(1, 1)) * yd + T(k(1, 2)) - T(v_px);
-    return true;
-  }
-};
-
-std::array<double, 6> to_parameters(const Isometry3d& m) {
-  const Eigen::AngleAxisd aa(m.rotation());
-  const Vector3d r = aa.angle() * aa.axis();
-  return {r.x(), r.y(), r.z(), m.translation().x(), m.translation().y(), m.translation().z()};
-}
-
-Isometry3d from_parameters(const std::array<double, 6>& p) {
-  const Vector3d r(p[0], p[1], p[2]);
-  Isometry3d m = Isometry3d::Identity();
-  if (r.norm() > 0) m.linear() = Eigen::AngleAxisd(r.norm(), r.normalized()).toRotationMatrix();
-  m.translation() = Vector3d(p[3], p[4], p[5]);
-  return m;
-}
-
 // The squared reprojection error (px^2) summed over one view's corners at camera_T_target.
 double reprojection_ssr(const BoardDetection& detection, const CameraModel& camera, const Isometry3d& camera_T_target) {
   cv::Mat r, rvec, tvec;
@@ -301,20 +249,24 @@ std::vector<std::string> assess_consistency(const HandEyeCalibration& result,
   const std::string residuals = "AX = XB residual " + fixed(result.rotation_rms_rad * kDeg, 2) + " degrees / " +
                                 fixed(result.translation_rms_m * 1e3, 1) + " mm RMS, reprojection " +
                                 fixed(result.rms_after_px, 2) + " px RMS";
+  const std::string exact_residuals = "AX = XB residual " + fixed(result.exact_rotation_rms_rad * kDeg, 2) +
+                                      " degrees / " + fixed(result.exact_translation_rms_m * 1e3, 1) +
+                                      " mm RMS with the poses held exact";
   const std::string mistake = "hand-eye calibration: the robot poses and the images do not belong together: ";
   for (int shift = -kMaxShiftTested; shift <= kMaxShiftTested; ++shift) {
-    if (shift == 0 || result.rotation_rms_rad <= 0.5 / kDeg) continue;
+    if (shift == 0 || result.exact_rotation_rms_rad <= 0.5 / kDeg) continue;
     const std::optional<double> shifted =
         shifted_rotation_rms(base_T_gripper, camera_T_target, shift, options.min_poses);
-    if (shifted && *shifted * options.convention_ratio < result.rotation_rms_rad) {
-      throw CalibrationError(mistake + residuals + "; each image fits the pose " + std::to_string(std::abs(shift)) +
-                             (std::abs(shift) == 1 ? " row " : " rows ") + (shift > 0 ? "after" : "before") +
-                             " its own (AX = XB rotation residual " + fixed(*shifted * kDeg, 2) +
+    if (shifted && *shifted * options.convention_ratio < result.exact_rotation_rms_rad) {
+      throw CalibrationError(mistake + exact_residuals + "; each image fits the pose " +
+                             std::to_string(std::abs(shift)) + (std::abs(shift) == 1 ? " row " : " rows ") +
+                             (shift > 0 ? "after" : "before") + " its own (AX = XB rotation residual " +
+                             fixed(*shifted * kDeg, 2) +
                              " degrees): a poses file of another run, rows out of order, or images missing");
     }
   }
-  if (result.rotation_rms_rad > options.refuse_rotation_rms_rad) {
-    throw CalibrationError(mistake + residuals + " (rotations beyond " +
+  if (result.exact_rotation_rms_rad > options.refuse_rotation_rms_rad) {
+    throw CalibrationError(mistake + exact_residuals + " (rotations beyond " +
                            fixed(options.refuse_rotation_rms_rad * kDeg, 1) +
                            " degrees, which no intrinsics or board size explain): a poses file of another run, rows "
                            "out of order, or another camera");
@@ -348,23 +300,29 @@ std::vector<std::string> assess_consistency(const HandEyeCalibration& result,
   return warnings;
 }
 
-// The refined gripper_T_camera's standard deviations from the refinement's Jacobian, the corner
-// noise estimated from its residuals (sigma^2 = SSR / (2N - 12)): per axis, rotation (rad) and
-// translation (m, gripper frame). Zero when Ceres cannot invert the information.
-void refined_sigma(ceres::Problem& problem, double* x, double final_cost, std::size_t corners,
-                   HandEyeCalibration& result) {
-  ceres::Covariance::Options covariance_options;
-  ceres::Covariance covariance(covariance_options);
-  const std::vector<std::pair<const double*, const double*>> blocks = {{x, x}};
-  if (!covariance.Compute(blocks, &problem)) return;
-  std::array<double, 36> c{};
-  covariance.GetCovarianceBlock(x, x, c.data());
-  const double dof = std::max(1.0, 2.0 * static_cast<double>(corners) - 12.0);
-  const double sigma2 = 2.0 * final_cost / dof;
-  for (std::size_t i = 0; i < 3; ++i) {
-    result.rotation_sigma_rad[i] = std::sqrt(sigma2 * c[i * 6 + i]);
-    result.translation_sigma_m[i] = std::sqrt(sigma2 * c[(i + 3) * 6 + i + 3]);
+// Step 6's start values of the noise scales (hand_eye_refinement.hpp): the corners' sigma from the
+// views' own board poses, SSR / (2 m - 6 n); the poses' per axis from the AX = ZB loop closures
+// W^-1 H_i X C_i at the start (RMS angle and shift over sqrt 3); zero when the poses are held exact.
+ChainNoise start_noise(const std::vector<const BoardDetection*>& detections,
+                       const std::vector<Isometry3d>& base_T_gripper, const std::vector<Isometry3d>& camera_T_target,
+                       const CameraModel& camera, const Isometry3d& gripper_T_camera, const Isometry3d& base_T_target,
+                       bool correct_poses) {
+  double ssr = 0, rows = 0, angle2 = 0, shift2 = 0;
+  for (std::size_t i = 0; i < detections.size(); ++i) {
+    ssr += reprojection_ssr(*detections[i], camera, camera_T_target[i]);
+    rows += 2.0 * static_cast<double>(detections[i]->board_m.size()) - 6.0;
+    const Isometry3d loop = base_T_target.inverse() * base_T_gripper[i] * gripper_T_camera * camera_T_target[i];
+    angle2 += std::pow(Eigen::AngleAxisd(loop.rotation()).angle(), 2);
+    shift2 += loop.translation().squaredNorm();
   }
+  ChainNoise noise;
+  noise.corner_px = rows > 0 ? std::sqrt(ssr / rows) : 1.0;
+  if (correct_poses) {
+    const double per_axis = 3.0 * static_cast<double>(detections.size());
+    noise.pose_rotation_rad = std::sqrt(angle2 / per_axis);
+    noise.pose_translation_m = std::sqrt(shift2 / per_axis);
+  }
+  return noise;
 }
 
 }  // namespace
@@ -492,37 +450,30 @@ HandEyeCalibration calibrate_hand_eye(const std::vector<HandEyeView>& views, con
   result.start_method = start.method;
   const Isometry3d target0 = mean_target(base_T_gripper, camera_T_target, start.gripper_T_camera);
   result.rms_before_px = reprojection_rms(detections, base_T_gripper, camera, start.gripper_T_camera, target0);
-  std::array<double, 6> x = to_parameters(start.gripper_T_camera), w = to_parameters(target0);
-  ceres::Problem problem;
-  for (std::size_t i = 0; i < detections.size(); ++i) {
-    const Isometry3d gripper_T_base = base_T_gripper[i].inverse();
-    for (std::size_t c = 0; c < detections[i]->board_m.size(); ++c) {
-      const cv::Point3f& corner = detections[i]->board_m[c];
-      const cv::Point2f& px = detections[i]->image_px[c];
-      auto* cost = new ceres::AutoDiffCostFunction<CornerCost, 2, 6, 6>(
-          new CornerCost{gripper_T_base.rotation(), base_T_gripper[i].translation(),
-                         Vector3d(corner.x, corner.y, corner.z), px.x, px.y, &camera});
-      problem.AddResidualBlock(cost, nullptr, x.data(), w.data());
-    }
-  }
-  ceres::Solver::Options solver;
-  solver.linear_solver_type = ceres::DENSE_QR;
-  solver.max_num_iterations = 200;
-  solver.function_tolerance = 1e-12;
-  solver.parameter_tolerance = 1e-12;
-  solver.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(solver, &problem, &summary);
-  if (!summary.IsSolutionUsable()) {
-    throw CalibrationError("hand-eye calibration: the refinement failed: " + summary.message);
-  }
-  result.gripper_T_camera = from_parameters(x);
-  result.base_T_target = from_parameters(w);
+  const ChainRefinement refined_chain =
+      refine_chain(detections, base_T_gripper, camera, start.gripper_T_camera, target0,
+                   start_noise(detections, base_T_gripper, camera_T_target, camera, start.gripper_T_camera, target0,
+                               options.correct_poses),
+                   options.correct_poses);
+  result.gripper_T_camera = refined_chain.gripper_T_camera;
+  result.base_T_target = refined_chain.base_T_target;
+  result.noise = refined_chain.sigma;
+  result.noise_rounds = refined_chain.rounds;
+  result.rotation_sigma_rad = refined_chain.rotation_sigma_rad;
+  result.translation_sigma_m = refined_chain.translation_sigma_m;
   result.rms_after_px =
       reprojection_rms(detections, base_T_gripper, camera, result.gripper_T_camera, result.base_T_target);
   const Residual refined = ax_xb(base_T_gripper, camera_T_target, result.gripper_T_camera);
   result.rotation_rms_rad = refined.rotation_rms_rad;
   result.translation_rms_m = refined.translation_rms_m;
+  const Residual exact = options.correct_poses
+                             ? ax_xb(base_T_gripper, camera_T_target,
+                                     refine_chain(detections, base_T_gripper, camera, start.gripper_T_camera, target0,
+                                                  refined_chain.sigma, false)
+                                         .gripper_T_camera)
+                             : refined;
+  result.exact_rotation_rms_rad = exact.rotation_rms_rad;
+  result.exact_translation_rms_m = exact.translation_rms_m;
   for (std::size_t i = 0; i < used.size(); ++i) {
     HandEyeViewReport& v = result.views[used[i]];
     const double corners = static_cast<double>(detections[i]->board_m.size());
@@ -537,9 +488,6 @@ HandEyeCalibration calibrate_hand_eye(const std::vector<HandEyeView>& views, con
     v.loop_rotation_rad = Eigen::AngleAxisd(loop.rotation()).angle();
     v.loop_translation_m = loop.translation().norm();
   }
-  std::size_t corners = 0;
-  for (const BoardDetection* d : detections) corners += d->board_m.size();
-  refined_sigma(problem, x.data(), summary.final_cost, corners, result);
   for (const HandEyeEstimate& e : result.methods)
     result.methods_spread_m = std::max(
         result.methods_spread_m, (e.gripper_T_camera.translation() - result.gripper_T_camera.translation()).norm());
@@ -565,6 +513,13 @@ std::string describe(const HandEyeCalibration& c) {
   line({"refined", c.gripper_T_camera, c.rotation_rms_rad, c.translation_rms_m});
   out << "refinement from " << c.start_method << ": reprojection RMS " << fixed(c.rms_before_px, 4) << " px before, "
       << fixed(c.rms_after_px, 4) << " px after\n";
+  out << "noise scales from the data (" << c.noise_rounds << " rounds): corners " << fixed(c.noise.corner_px, 3)
+      << " px; poses ";
+  if (c.noise.pose_rotation_rad > 0)
+    out << fixed(c.noise.pose_rotation_rad * kDeg, 4) << " degrees, " << fixed(c.noise.pose_translation_m * 1e3, 3)
+        << " mm per axis\n";
+  else
+    out << "held exact\n";
   out << "gripper_t_camera sigma (from the residuals) x y z: " << fixed(c.translation_sigma_m[0] * 1e3, 2) << " "
       << fixed(c.translation_sigma_m[1] * 1e3, 2) << " " << fixed(c.translation_sigma_m[2] * 1e3, 2)
       << " mm; rotation about x y z: " << fixed(c.rotation_sigma_rad[0] * kDeg, 3) << " "

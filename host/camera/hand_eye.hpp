@@ -23,11 +23,18 @@
 //     all pairs of poses of the rotation angle and translation of (A X)^-1 (X B)). An OpenCV solver
 //     that throws (motions it cannot use) is CalibrationError "hand-eye calibration: OpenCV's
 //     FUNCTION failed on the robot poses (its reason)", here and in step 4.
-//  6. Refinement (Ceres, Levenberg-Marquardt): gripper_T_camera and base_T_target minimizing
-//     the reprojection error of every board corner in every used view, starting from the
-//     AX = XB method with the smallest rotation residual; RMS before and after are reported.
+//  6. Refinement (Ceres, Levenberg-Marquardt; hand_eye_refinement.hpp): gripper_T_camera and
+//     base_T_target minimizing the reprojection error of every board corner in every used view
+//     through the chain, starting from the AX = XB method with the smallest rotation residual;
+//     each robot pose gets a small correction with a prior whose width, like the corners' noise,
+//     is estimated from the data (variance components): a motion capture's or a worn arm's pose
+//     noise is not pushed into the hand-eye, and exact poses (a simulated robot) leave the
+//     corrections at zero. options.correct_poses false holds the poses exact (the corners alone).
+//     RMS before and after are reported (through the given, uncorrected poses), and the noise
+//     scales found.
 //  7. Consistency (issue #43: poor data give an answer with a warning, not a refusal). Refused
-//     (CalibrationError with the numbers), as plainly a mistake: poses shifted against the images
+//     (CalibrationError with the numbers; the residuals judged are those of the refinement with the
+//     poses held exact, exact_rotation_rms_rad), as plainly a mistake: poses shifted against the images
 //     -- pairing each image with the pose up to kMaxShiftTested (3) rows before or after its own
 //     fits options.convention_ratio times better (AX = XB rotation residual, Park; the given one
 //     worse than 0.5 degrees) -- and an AX = XB rotation residual beyond
@@ -38,15 +45,15 @@
 //     lengths by a factor k (|k - 1| > 3 %) lowers the AX = XB translation residual by 30 % or
 //     more, the likely cause with the scale the data suggest: the camera's focal length (k fx,
 //     k fy: the board's distance scales with it) or the square size (k times the given). (Factory
-//     intrinsics 13 % off left residuals within a good set's, 1.0 degrees / 18 mm / 1.5 px on the
-//     simulated 8 views: only the scale shows them.) The refined result is then biased (its
-//     rotation by about 4 degrees for a square 1.2 times off): the warning says what to fix.
+//     intrinsics 13 % off left residuals within a good set's, 1.0 degrees / 16 mm / 4.7 px on the
+//     simulated 8 views, the pose noise found 0.41 degrees / 7.2 mm: only the scale shows them.)
+//     The refined result is then biased: the warning says what to fix.
 //     The uncertainty comes with every result: gripper_T_camera's standard
-//     deviations from the refinement (Ceres' covariance, the corner noise from the residuals)
-//     and how far the AX = XB methods lie from the refined translation.
-// Robot poses are taken as exact (their errors are what the kinematic calibration finds).
+//     deviations from the refinement (its normal matrix at the estimated noise scales) and how far
+//     the AX = XB methods lie from the refined translation.
 // Cost: O(n^2) motions for the checks and residuals (n poses), O(m^2) in the m large motions for
-// the axis check; the refinement is milliseconds for tens of views.
+// the axis check; the refinement runs up to 20 rounds of a Ceres solve (hand_eye_refinement.hpp),
+// and once more with the poses held exact for step 7.
 #pragma once
 
 #include <array>
@@ -56,6 +63,7 @@
 #include <Eigen/Geometry>
 
 #include "host/camera/board.hpp"
+#include "host/camera/hand_eye_refinement.hpp"
 #include "host/camera/intrinsics.hpp"
 
 namespace kincal::camera {
@@ -84,6 +92,8 @@ struct HandEyeOptions {
   double max_reprojection_rms_px = 5;
   // Beyond this AX = XB rotation residual, a refusal (step 7).
   double refuse_rotation_rms_rad = 10 * 3.14159265358979323846 / 180;
+  // Step 6: the poses get corrections with an estimated noise (true), or are held exact (false).
+  bool correct_poses = true;
 };
 
 struct HandEyeEstimate {
@@ -125,7 +135,13 @@ struct HandEyeCalibration {
   Eigen::Isometry3d gripper_T_camera = Eigen::Isometry3d::Identity();  // refined
   Eigen::Isometry3d base_T_target = Eigen::Isometry3d::Identity();     // refined
   double rms_before_px = 0, rms_after_px = 0;
+  ChainNoise noise;      // step 6's estimated sigmas: corners (px), poses per axis (rad, m; 0 when exact)
+  int noise_rounds = 0;  // its variance component rounds
   double rotation_rms_rad = 0, translation_rms_m = 0;  // AX = XB residuals of the refined result
+  // The AX = XB residuals of the refinement with the poses held exact: what step 7's refusals judge
+  // (pose corrections would absorb poses of another run); the refined result's own when
+  // options.correct_poses is false.
+  double exact_rotation_rms_rad = 0, exact_translation_rms_m = 0;
   // The refined gripper_T_camera's standard deviations per axis (step 7): rotation (rad) and
   // translation (m, in the gripper frame); the largest distance (m) of an AX = XB method's
   // translation from the refined one.

@@ -3,11 +3,11 @@
 // the same options); the spread of the n solutions, scaled by (n - 1) / n, is the covariance of
 // gripper_T_camera (Efron & Stein's jackknife variance).
 //
-// Why not the Jacobian of the reprojection error: that holds the gripper poses exact, as a robot's
-// are to a tenth of a millimetre. A motion capture's poses of a hand-held camera body (a few
-// millimetres and tenths of a degree, interpolated between samples 50 ms apart) carry most of the
-// error, and only a spread over the views sees it. On the shared AprilGrid/Vicon set
-// (tests/bench/aprilgrid_real_bench.cpp) the jackknife gives the numbers in the README's table.
+// Beside the refinement's own sigma (hand_eye_refinement.hpp: its normal matrix at the noise
+// scales it estimates, the poses' included), a check that assumes no noise model. A motion
+// capture's poses of a hand-held camera body (a few millimetres and tenths of a degree,
+// interpolated between samples 50 ms apart) carry most of the error; on the shared AprilGrid/Vicon
+// set (tests/bench/aprilgrid_real_bench.cpp) the refinement's is about 3/4 of the jackknife's per axis.
 //
 // Rotation: each solution's rotation as the rotation vector of full^-1 * solution (rad, in the
 // full solution's camera frame); position: gripper_t_camera (m, gripper frame).

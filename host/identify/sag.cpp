@@ -24,7 +24,7 @@ bool needs_sag_start(const RobotModel& model, const IdentifyOptions& options) {
       std::any_of(model.joints.begin(), model.joints.end(), [](const model::Joint& j) { return j.identify_mass; });
   const bool compliant = std::any_of(model.joints.begin(), model.joints.end(),
                                      [](const model::Joint& j) { return j.compliance.value_or(0.0) > 0.0; });
-  return masses && !compliant && options.requested.empty();
+  return (masses || model.identify_gravity_direction) && !compliant && options.requested.empty();
 }
 
 IdentifyOptions first_sag_stage(const RobotModel& model, const IdentifyOptions& options) {
@@ -61,9 +61,17 @@ SagStage second_sag_stage(const RobotModel& model, const IdentifyOptions& option
   const auto largest = std::max_element(sag.begin(), sag.end());
   if (largest == sag.end() || !(*largest > 0.0)) {
     for (model::Joint& j : s.model.joints) j.identify_mass = false;
+    s.model.identify_gravity_direction = false;
     s.note =
-        "sag: no joint deflects under the start's masses (every compliance 0 after the first stage); the masses "
-        "are not identified";
+        "sag: no joint deflects (every compliance 0 after the first stage); the masses and gravity's direction are "
+        "not identified";
+    return s;
+  }
+  const bool masses =
+      std::any_of(s.model.joints.begin(), s.model.joints.end(), [](const model::Joint& j) { return j.identify_mass; });
+  if (!masses) {  // the model's own masses: no gauge to fix, only gravity's direction is added
+    s.note = "sag: gravity's direction identified from the first stage's compliances";
+    if (!held.empty()) s.note += "; held as the first stage held them: " + held;
     return s;
   }
   const auto reference = static_cast<std::uint8_t>(largest - sag.begin());

@@ -17,6 +17,9 @@
 //      last axis: it moved 180 mm on the zoo, the TCP with it). Identifiability
 //      (identifiability.hpp) holds fixed what else the data cannot see (a vertical first axis's
 //      load, a wrist's centre along its own axis, ...).
+// Gravity's direction (robot_model.hpp's gravity_rx, gravity_ry) is held in stage 1 and
+// identified in stage 2, for the same reason; the two stages serve geometry+gravity too (the
+// model's own masses: no gauge, only the direction waits for stage 1's compliances).
 // Bounds: compliances and masses never negative (problem.hpp). The result is an ordinary model
 // with masses and compliances, which every command reads; the masses are in the gauge's units
 // (kilograms only up to the common factor), as the report's group name says.
@@ -36,17 +39,18 @@ inline constexpr double kStartMass_kg = 1.0;
 // (robot_model.hpp's gravity_rx, gravity_ry) marked identified.
 RobotModel with_identified_masses(const RobotModel& nominal);
 
-// Stage 1 is due: some link's mass is to be identified, no compliance is above 0 yet and the
-// caller names no parameter list of its own.
+// Stage 1 is due: some link's mass or gravity's direction is to be identified, no compliance is
+// above 0 yet and the caller names no parameter list of its own.
 bool needs_sag_start(const RobotModel& model, const IdentifyOptions& options);
 
 // Stage 1's options: `options` with every identified mass and centre of mass, and gravity's
 // direction, held fixed.
 IdentifyOptions first_sag_stage(const RobotModel& model, const IdentifyOptions& options);
 
-// Stage 2's start and options from stage 1's result: `model` with stage 1's compliances and the
-// gauge's reference compliance added to the fixed parameters; a note says which. With no
-// compliance above 0 after stage 1 (no sag seen), the masses are no longer identified.
+// Stage 2's start and options from stage 1's result: `model` with stage 1's compliances, the
+// geometric parameters stage 1 held and (when masses are identified) the gauge's reference
+// compliance added to the fixed parameters; a note says which. With no compliance above 0 after
+// stage 1 (no sag seen), neither the masses nor gravity's direction are identified.
 struct SagStage {
   RobotModel model;
   IdentifyOptions options;

@@ -56,6 +56,11 @@
 //       and the board's place fitted on the even views predict the odd views' corners through the
 //       chain (and the other way round), RMS over the held-out corners (chain_heldout_rms_px);
 //       OpenCV's board place fitted to the corners with its X held (fitted_target), as kincal's is
+//   aprilgrid_real_mocap_hand_eye_pose_sigma_deg, ..._pose_sigma_mm, ..._corner_sigma_px   the noise
+//       scales kincal's refinement estimated from the data (per axis; host/camera/hand_eye_refinement.hpp)
+//   aprilgrid_real_mocap_hand_eye_residual_mm_exact_poses, ..._heldout_rms_px_exact_poses   the
+//       same two measures with the poses held exact (HandEyeOptions::correct_poses false: the
+//       refinement on the corners alone, as before issue #43's pose corrections)
 //   aprilgrid_real_mocap_time_offset_best_ms, ..._residual_at_best_offset_mm_opencv   the shift of
 //       the images' times (5 ms steps over +-200 ms) at which OpenCV's best method fits best: the
 //       two clocks' offset, if any
@@ -502,6 +507,7 @@ void hand_eye(const std::vector<std::string>& stamps, const std::vector<BoardDet
   std::printf("kincal: %d poses, body_t_camera %.4f %.4f %.4f m, reprojection RMS %.3f px\n", k.poses_used,
               k.gripper_T_camera.translation().x(), k.gripper_T_camera.translation().y(),
               k.gripper_T_camera.translation().z(), k.rms_after_px);
+  std::printf("%s", describe(k).c_str());
   const OpenCvHandEye cv_best = opencv_hand_eye(m.h, m.c, true);
   figure("aprilgrid_real_mocap_hand_eye_residual_mm", ours[1] * 1e3, "mm");
   figure("aprilgrid_real_mocap_hand_eye_residual_mm_opencv", cv_best.residual[1] * 1e3, "mm");
@@ -528,6 +534,16 @@ void hand_eye(const std::vector<std::string>& stamps, const std::vector<BoardDet
   const std::array<double, 2> held_out = chain_heldout_rms_px(m, camera, options);
   figure("aprilgrid_real_mocap_hand_eye_heldout_rms_px", held_out[0], "px");
   figure("aprilgrid_real_mocap_hand_eye_heldout_rms_px_opencv", held_out[1], "px");
+  figure("aprilgrid_real_mocap_hand_eye_pose_sigma_deg", k.noise.pose_rotation_rad * 180 / std::numbers::pi, "deg");
+  figure("aprilgrid_real_mocap_hand_eye_pose_sigma_mm", k.noise.pose_translation_m * 1e3, "mm");
+  figure("aprilgrid_real_mocap_hand_eye_corner_sigma_px", k.noise.corner_px, "px");
+  // The same solve with the poses held exact (the refinement without pose corrections).
+  HandEyeOptions exact = options;
+  exact.correct_poses = false;
+  const HandEyeCalibration k_exact = calibrate_hand_eye(m.views, camera, exact);
+  figure("aprilgrid_real_mocap_hand_eye_residual_mm_exact_poses",
+         ax_xb_rms(m.h, m.c, k_exact.gripper_T_camera)[1] * 1e3, "mm");
+  figure("aprilgrid_real_mocap_hand_eye_heldout_rms_px_exact_poses", chain_heldout_rms_px(m, camera, exact)[0], "px");
   const HandEyeSpread spread = hand_eye_jackknife(m.views, camera, options, k);
   std::printf("%s", describe(spread).c_str());
   figure("aprilgrid_real_mocap_hand_eye_position_std_mm", std::sqrt(spread.position_covariance_m2.trace()) * 1e3, "mm");

@@ -759,6 +759,79 @@ TEST_CASE("hand-eye checks refuse weak pose sets and detect a swapped convention
   }
 }
 
+// Issue #43: a motion capture's (or a worn arm's) poses carry noise of their own. Held exact, that
+// noise is pushed into gripper_T_camera; with corrections whose width is estimated from the data,
+// the hand-eye lies closer to the truth, and exact poses leave the result as it was.
+TEST_CASE("hand-eye with noisy robot poses: the poses' noise is estimated and kept out of gripper_T_camera") {
+  const Board board = parse_board(scenes::chessboard_text());
+  const CameraModel camera = model_of(scenes::test_camera());
+  const Eigen::Isometry3d base_T_target = scenes::base_T_target(), truth = scenes::gripper_T_camera();
+  constexpr int kPoses = 16, kTrials = 8;
+  constexpr double kRotationSigma_rad = 0.2 * kDeg, kTranslationSigma_m = 0.002;
+  std::vector<Eigen::Isometry3d> board_T_camera;
+  for (const Eigen::Isometry3d& v : scenes::board_views(board, kPoses)) board_T_camera.push_back(v.inverse());
+  cv::RNG rng(43);
+  // The views with each pose moved by a turn and a shift in the gripper frame, sigma per axis.
+  const auto views_with_noise = [&](double rotation_sigma_rad, double translation_sigma_m) {
+    std::vector<HandEyeView> views;
+    for (int i = 0; i < kPoses; ++i) {
+      const std::string name = "pose" + std::to_string(i);
+      const Eigen::Vector3d turn(rng.gaussian(rotation_sigma_rad), rng.gaussian(rotation_sigma_rad),
+                                 rng.gaussian(rotation_sigma_rad));
+      const Eigen::Vector3d shift(rng.gaussian(translation_sigma_m), rng.gaussian(translation_sigma_m),
+                                  rng.gaussian(translation_sigma_m));
+      Eigen::Isometry3d noise = Eigen::Isometry3d::Identity();
+      if (turn.norm() > 0) noise.linear() = Eigen::AngleAxisd(turn.norm(), turn.normalized()).toRotationMatrix();
+      noise.translation() = shift;
+      const Eigen::Isometry3d pose = base_T_target * board_T_camera[static_cast<std::size_t>(i)] * truth.inverse();
+      views.push_back({name, pose * noise,
+                       projected(board, camera, board_T_camera[static_cast<std::size_t>(i)].inverse(), name, rng)});
+    }
+    return views;
+  };
+  HandEyeOptions exact;
+  exact.correct_poses = false;
+  exact.max_rotation_rms_rad = exact.max_translation_rms_m = 1;  // the warnings are not judged here
+
+  SUBCASE("noisy poses: closer to the truth than with the poses held exact, the noise recovered") {
+    HandEyeOptions corrected = exact;
+    corrected.correct_poses = true;
+    double held2 = 0, corrected2 = 0, held_turn2 = 0, corrected_turn2 = 0, rotation_sigma = 0, translation_sigma = 0;
+    for (int trial = 0; trial < kTrials; ++trial) {
+      const std::vector<HandEyeView> views = views_with_noise(kRotationSigma_rad, kTranslationSigma_m);
+      const HandEyeCalibration h = calibrate_hand_eye(views, camera, exact);
+      const HandEyeCalibration c = calibrate_hand_eye(views, camera, corrected);
+      held2 += (h.gripper_T_camera.translation() - truth.translation()).squaredNorm() / kTrials;
+      corrected2 += (c.gripper_T_camera.translation() - truth.translation()).squaredNorm() / kTrials;
+      held_turn2 += std::pow(rotation_error_rad(h.gripper_T_camera, truth), 2) / kTrials;
+      corrected_turn2 += std::pow(rotation_error_rad(c.gripper_T_camera, truth), 2) / kTrials;
+      rotation_sigma += c.noise.pose_rotation_rad / kTrials;
+      translation_sigma += c.noise.pose_translation_m / kTrials;
+      CHECK(h.noise.pose_rotation_rad == 0);
+    }
+    MESSAGE("gripper_T_camera error RMS over "
+            << kTrials << " trials: poses held exact " << std::sqrt(held2) * 1e3 << " mm / "
+            << std::sqrt(held_turn2) / kDeg << " degrees; corrected " << std::sqrt(corrected2) * 1e3 << " mm / "
+            << std::sqrt(corrected_turn2) / kDeg << " degrees; pose sigma found " << rotation_sigma / kDeg
+            << " degrees, " << translation_sigma * 1e3 << " mm");
+    CHECK(std::sqrt(corrected2) < 0.7 * std::sqrt(held2));
+    CHECK(std::sqrt(corrected_turn2) < 0.7 * std::sqrt(held_turn2));
+    CHECK(rotation_sigma == doctest::Approx(kRotationSigma_rad).epsilon(0.25));
+    CHECK(translation_sigma == doctest::Approx(kTranslationSigma_m).epsilon(0.25));
+  }
+  SUBCASE("exact poses: the corrections stay at zero and the result is the exact-pose one") {
+    const std::vector<HandEyeView> views = views_with_noise(0, 0);
+    const HandEyeCalibration h = calibrate_hand_eye(views, camera, exact);
+    const HandEyeCalibration c = calibrate_hand_eye(views, camera);
+    MESSAGE(describe(c));
+    CHECK(c.noise.pose_rotation_rad < 1e-5);
+    CHECK(c.noise.pose_translation_m < 1e-5);
+    CHECK(c.noise.corner_px == doctest::Approx(0.1).epsilon(0.1));
+    CHECK((c.gripper_T_camera.translation() - h.gripper_T_camera.translation()).norm() < 1e-5);
+    CHECK(rotation_error_rad(c.gripper_T_camera, h.gripper_T_camera) < 1e-5);
+  }
+}
+
 TEST_CASE("calibration files round-trip in OpenCV YAML and name bad keys") {
   TempDir dir;
   const Board board = parse_board(scenes::chessboard_text());
