@@ -265,8 +265,9 @@ TEST_CASE("model selection: the out-of-range split, the candidates, and the choi
   CHECK(selection.scores[0].parameters == 12);  // base and tool
   CHECK(selection.scores[1].parameters == 16);  // and four joint offsets (theta1, theta6 go to base, tool)
   // and four compliances: gravity does not turn the vertical first axis nor the last (its link's
-  // centre of mass is on its axis), so identifiability holds compliance1 and compliance6 fixed
-  CHECK(selection.scores[6].parameters == selection.scores[3].parameters + 4);
+  // centre of mass is on its axis), so identifiability holds compliance1 and compliance6 fixed;
+  // and gravity's direction (gravity_rx, gravity_ry)
+  CHECK(selection.scores[6].parameters == selection.scores[3].parameters + 4 + 2);
   CHECK(selection.scores[7].parameters == selection.scores[3].parameters + 6);  // and six scales
   CHECK(selection.scores[8].parameters > selection.scores[3].parameters);       // and couplings
   // The nominal geometry leaves about 1.1 mm; every geometric candidate about half that.
