@@ -30,8 +30,10 @@
 //                    moves and its centre of mass in the frame at the link's end (m) (4 float32);
 //                    then the payload's mass and centre of mass in the flange frame, and the
 //                    gravity vector in frame 0 (m/s^2) (7 float32). Coupling, masses, payload
-//                    and gravity are inputs, the same for the nominal and the identified model;
-//                    a block without compliance carries them all the same (zeros are fine).
+//                    and gravity are one set for the nominal and the identified model (the
+//                    identified masses and gravity direction when the nominal has no compliance,
+//                    host/correct/correction_block.cpp); a block without compliance carries them
+//                    all the same (zeros are fine).
 //   Format version 2 (all blocks): v1's correction block had no joint type or convention (every
 //   joint revolute, modified DH), which cannot describe a prismatic axis or Doty's links.
 //   Format version 3 (all blocks): the correction block's joint map; a platform refuses a
