@@ -38,7 +38,8 @@
 // c_b each body's centre of mass, g the gravity vector given in frame 0: the first-order model
 // of a joint that gives way in proportion to the static torque it holds (heavy arms' shoulder
 // and elbow sag). A joint with a scale or a compliance in its model has that parameter
-// identified (names scale<i>, compliance<i>); the masses, centres of mass and gravity are inputs.
+// identified (names scale<i>, compliance<i>); the masses, centres of mass and gravity are inputs
+// unless identify_mass or identify_gravity_direction (below) say otherwise.
 // A joint with identify_coupling has its share of its upstream neighbour's reading identified
 // (coupling<i>_<i-1>, added to coupling_i,i-1; an absent row counts as the identity row): the
 // one coupling a transmission makes -- a joint's drive passes through the joint before it
