@@ -243,9 +243,7 @@ model::RobotModel choose_model(const IdentifyArgs& a, const model::RobotModel& n
   const int rows = static_cast<int>(data.rows.size());
   std::cerr << "kincal identify: choosing the model: " << identify::candidate_models(nominal, options).size()
             << " candidates, each fitted " << identify::selection_folds(rows) + 1 << " times on " << rows << " rows ("
-            << identify::parallel_solves() << " at a time)"
-            << (rows < identify::kMinRowsForLowestScore ? "; with so few rows the default stands unless beaten" : "")
-            << std::endl;
+            << identify::parallel_solves() << " at a time)" << std::endl;
   selection = identify::select_model(nominal, data, options);
   std::cout << identify::format_selection(*selection);
   options = selection->chosen.options;

@@ -23,10 +23,17 @@ std::string number_text(double v) {
   return ec == std::errc() ? std::string(buffer, end) : std::string("nan");
 }
 
-int run_predict(const ModelOption& model_option, const std::string& joints_path, const std::string& out_path) {
+int run_predict(const ModelOption& model_option, const std::string& joints_path, const std::string& out_path,
+                const std::string& at) {
   try {
     files::refuse_overwriting({{"-o", out_path, true}}, {{"--model", model_option.path}, {"--joints", joints_path}});
-    const model::RobotModel m = model_option.load();
+    const model::RobotModel loaded = model_option.load();
+    if (at == "tcp" && !loaded.flange_T_tcp)
+      throw model::InputError(
+          model_option.path +
+          ": --at tcp: the model has no TCP (a model file's 'tcp:', set from a URDF's tip link); its "
+          "measured point is what it predicts");
+    const model::RobotModel m = at == "tcp" ? model::tool_at_tcp(loaded) : loaded;
     const std::vector<std::vector<double>> rows = model::read_joints(joints_path);
     if (!rows.empty()) model::check_joint_count(m, static_cast<int>(rows.front().size()), joints_path);
     std::ostringstream out;
@@ -60,12 +67,19 @@ void add_predict_command(CLI::App& app, int& status) {
   auto model_option = std::make_shared<ModelOption>();
   auto joints_path = std::make_shared<std::string>();
   auto out_path = std::make_shared<std::string>();
-  auto* cmd = app.add_subcommand("predict", "Predict the tool point (pose) of a model for rows of joint readings");
+  auto at = std::make_shared<std::string>("measured");
+  auto* cmd = app.add_subcommand("predict",
+                                 "Predict the measured point (pose) or the TCP of a model for rows of joint readings");
   add_model_option(*cmd, *model_option, "model");
   cmd->add_option("--joints", *joints_path, "joint readings (CSV with header q1..qN; other columns ignored)")
       ->required();
   cmd->add_option("-o,--out", *out_path, "output CSV (default or '-': standard output)");
-  cmd->callback([=, &status] { status = run_predict(*model_option, *joints_path, *out_path); });
+  cmd->add_option("--at", *at,
+                  "measured: the point or frame the data measured (reflector, marker, board), what a held-out "
+                  "measurement is compared with; tcp: the controller's TCP (a pose), what correct aims")
+      ->check(CLI::IsMember({"measured", "tcp"}))
+      ->capture_default_str();
+  cmd->callback([=, &status] { status = run_predict(*model_option, *joints_path, *out_path, *at); });
 }
 
 }  // namespace kincal::cli

@@ -30,6 +30,7 @@ TargetCorrector::TargetCorrector(const model::RobotModel& nominal, const model::
       joints_(nominal, calibrated, in_limit_units(options, limit)),
       cartesian_(nominal, calibrated, frame, in_limit_units(options, limit).solve),
       limit_(limit),
+      solve_(in_limit_units(options, limit).solve),
       orientation_(options.orientation) {
   nominal_arm_.base_T_frame0 = model::Transform{};  // commands are in the robot's base frame
 }
@@ -89,7 +90,29 @@ TargetCorrector::JointChange TargetCorrector::largest_change(const std::vector<d
 
 void TargetCorrector::limit_change(TargetResult& r, const std::vector<double>& reference, const model::RobotModel& arm,
                                    const model::Transform& goal, bool orientation) const {
-  const JointChange c = largest_change(r.solution.q, reference);
+  JointChange c = largest_change(r.solution.q, reference);
+  if (c.over_limit > 1.0 && r.solution.outcome == Outcome::reached) {
+    // The nearest readings are the smallest change in the solves' 2-norm; a redundant arm can
+    // share a change that puts one joint just past the limit among the others: the goal again,
+    // every joint held within its limit of the reference (the solver's joint limits), from there.
+    model::RobotModel within = arm;
+    bool box = true;
+    for (std::size_t i = 0; i < within.joints.size() && i < reference.size(); ++i) {
+      model::Joint& j = within.joints[i];
+      const double l = j.type == core::JointType::prismatic ? limit_.prismatic_m : limit_.revolute_rad;
+      j.lower = std::max(j.lower, reference[i] - l);
+      j.upper = std::min(j.upper, reference[i] + l);
+      box = box && j.lower <= j.upper;
+    }
+    if (box) {
+      const Solution again = solve_pose(within, goal, orientation, r.solution.q, solve_, reference);
+      const JointChange a = largest_change(again.q, reference);
+      if (again.outcome == Outcome::reached && a.over_limit <= 1.0) {
+        r.solution = again;
+        c = a;
+      }
+    }
+  }
   r.change_over_limit = c.over_limit;
   r.change_joint = c.joint;
   r.change = c.change;

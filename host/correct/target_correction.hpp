@@ -13,8 +13,10 @@
 // degree, so its correction moves joints by about as much. The solves return the readings nearest
 // the reference that reach the target (pose_solver.hpp: the smallest change, a prismatic joint's
 // metres weighed against radians as the limits are), so a redundant arm's turns that cancel at
-// the tool never arise. A target whose smallest correction still changes a joint by more than the
-// limit from its reference -- a model that does not fit the arm, another branch, a target near a
+// the tool never arise; where that smallest change (a 2-norm) still turns one joint past the limit,
+// the goal is solved again with every joint held within the limit of the reference (a redundant
+// arm shares the change among its joints). A target whose correction still changes a joint by
+// more than the limit from its reference -- a model that does not fit the arm, another branch, a target near a
 // singularity where millimetres take tens of degrees -- is refused, never "reached": outcome
 // joint_change_limit, the readings left as the reference, the residual theirs, and the joint and
 // its change named in the result. The reference: a joint target's own readings; a Cartesian
@@ -87,6 +89,7 @@ class TargetCorrector {
   JointCorrector joints_;
   CartesianSolver cartesian_;
   JointChangeLimit limit_;
+  SolveOptions solve_;       // in the limits' units (pose_solver.hpp)
   bool orientation_ = true;  // joint targets: the tool's orientation corrected too
 
   struct JointChange {

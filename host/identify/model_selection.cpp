@@ -120,9 +120,11 @@ std::vector<Candidate> candidate_models(const RobotModel& nominal, const Identif
       make("geometry-x0.5", "every geometric parameter, the default priors half as strong", nominal, base, 0.5,
            joint_map),
       make("geometry-noprior", "every geometric parameter, no priors", nominal, base, 0.0, joint_map)};
-  if (!joint_map.empty())
+  if (!joint_map.empty()) {
     out.push_back(make("geometry+nongeometric", "every parameter with the model file's scales and compliances", nominal,
                        base, 1.0, {}));
+    out.back().holds = true;
+  }
   // Links with masses but no compliance declared: a candidate with a gravity compliance on every
   // joint (identifiability holds fixed those gravity does not load, e.g. a vertical first axis).
   const bool masses =
@@ -135,6 +137,7 @@ std::vector<Candidate> candidate_models(const RobotModel& nominal, const Identif
     out.push_back(make("geometry+gravity",
                        "every parameter, each joint's gravity compliance (the model's masses) and gravity's direction",
                        with_gravity, base, 1.0, {}));
+    out.back().holds = true;
   }
   // No masses and no compliance (most public URDFs): the masses identified with the compliances,
   // in a gauge (sag.hpp).
@@ -282,37 +285,22 @@ CrossValidation cross_validate(const RobotModel& model, const model::Dataset& da
 }
 
 int selection_folds(int rows, const SelectionOptions& options) {
-  return rows >= kMinRowsForLowestScore ? options.folds : std::max(2, std::min(rows, options.few_rows_folds));
+  return rows >= kMinRowsForFiveFolds ? options.folds : std::max(2, std::min(rows, options.few_rows_folds));
 }
 
 namespace {
 
 constexpr const char* kDefaultCandidate = "geometry";
-// How many standard errors of the rows' paired differences a candidate's K-fold errors must lie
-// below the default's, below kMinRowsForLowestScore rows (the rejection gate's kGateT, identify.cpp).
-constexpr double kBeatsDefaultT = 2.0;
+// How many standard errors of the rows' paired differences a candidate's held-out errors must lie
+// below the one it replaces (the rejection gate's kGateT, identify.cpp).
+constexpr double kBeatsT = 2.0;
 
-// The rule (model_selection.hpp) over scored candidates: the index of the chosen one, -1 when none
-// has a score. `against_default`: the default stands unless beaten (each candidate's paired t
-// against it recorded in t_vs_default); it stands too when cross-validation cannot judge it.
-int choose(std::vector<CandidateScore>& scores, const std::vector<CrossValidation>& validations, bool against_default) {
-  const auto at =
-      std::find_if(scores.begin(), scores.end(), [](const CandidateScore& x) { return x.name == kDefaultCandidate; });
-  const int default_index = at == scores.end() ? -1 : static_cast<int>(at - scores.begin());
-  if (against_default && default_index >= 0 && at->score_m < 0.0) return default_index;
-  const bool judge = against_default && default_index >= 0;
-  int best = -1;
-  for (std::size_t c = 0; c < scores.size(); ++c) {
-    CandidateScore& x = scores[c];
-    if (x.score_m < 0.0) continue;
-    if (judge && static_cast<int>(c) != default_index) {
-      x.t_vs_default =
-          paired_t(validations[c].kfold_error2, validations[static_cast<std::size_t>(default_index)].kfold_error2);
-      if (x.t_vs_default > -kBeatsDefaultT) continue;
-    }
-    if (best < 0 || x.score_m < scores[static_cast<std::size_t>(best)].score_m) best = static_cast<int>(c);
-  }
-  return best;
+// One candidate's held-out squared errors as the rule pairs them: the K folds' rows, then the
+// out-of-range fold's when the score counts it.
+std::vector<double> paired_errors(const CrossValidation& v, bool any_range) {
+  std::vector<double> e = v.kfold_error2;
+  if (any_range) e.insert(e.end(), v.out_of_range_error2.begin(), v.out_of_range_error2.end());
+  return e;
 }
 
 // The chosen candidate and the figures that decided, in words.
@@ -324,27 +312,47 @@ std::string reason_for(const Selection& s, int chosen, bool any_range) {
   const std::string score = any_range ? "mean of the K-fold and out-of-range RMS"
                                       : "K-fold RMS (no out-of-range fold: no rows in range, none out of it, or a "
                                         "candidate that cannot be identified from those in range)";
-  if (!s.against_default) {
-    reason << x.name << ": the lowest " << score << " (" << x.score_m * 1e3 << " mm)";
-    return reason.str();
-  }
-  const std::string few = "fewer than " + std::to_string(kMinRowsForLowestScore) +
-                          " rows: the default stands unless another candidate's held-out position errors are "
-                          "lower row by row, by " +
-                          std::to_string(static_cast<int>(kBeatsDefaultT)) + " standard errors";
-  if (x.score_m < 0.0) {
-    reason << x.name << ": the default, cross-validation cannot judge it (" << x.why << "); " << few;
-  } else if (x.name == kDefaultCandidate) {
-    reason << x.name << ": the default (" << x.score_m * 1e3 << " mm); no candidate beats it (" << few << ")";
-  } else {
-    reason << x.name << ": the lowest " << score << " (" << x.score_m * 1e3
-           << " mm) of the default and the candidates that beat it (" << few << "; paired t " << std::setprecision(1)
-           << x.t_vs_default << ")";
-  }
+  const std::string rule = "a candidate must have a lower " + score +
+                           " than the default and held-out position errors lower row by row, by " +
+                           std::to_string(static_cast<int>(kBeatsT)) +
+                           " standard errors; of those the lowest score wins, but one built on the arm's own physics "
+                           "(its masses, its file's scales and compliances) stands unless beaten row by row too";
+  if (x.score_m < 0.0)
+    reason << x.name << ": the default, cross-validation cannot judge it (" << x.why << ")";
+  else if (x.name == kDefaultCandidate)
+    reason << x.name << ": the default (" << x.score_m * 1e3 << " mm); no candidate beats it (" << rule << ")";
+  else
+    reason << x.name << ": " << x.score_m * 1e3 << " mm, beats " << x.against << " (paired t " << std::setprecision(1)
+           << x.t << ") (" << rule << ")";
   return reason.str();
 }
 
 }  // namespace
+
+int choose_candidate(std::vector<CandidateScore>& scores, const std::vector<CrossValidation>& validations,
+                     bool any_range) {
+  const auto at =
+      std::find_if(scores.begin(), scores.end(), [](const CandidateScore& x) { return x.name == kDefaultCandidate; });
+  const int fallback = at == scores.end() ? -1 : static_cast<int>(at - scores.begin());  // the default
+  if (fallback >= 0 && at->score_m < 0.0) return fallback;
+  const auto judge = [&](std::size_t c, std::size_t against) {
+    scores[c].against = scores[against].name;
+    scores[c].t = paired_t(paired_errors(validations[c], any_range), paired_errors(validations[against], any_range));
+    return scores[c].score_m < scores[against].score_m && scores[c].t <= -kBeatsT;
+  };
+  int chosen = fallback;
+  for (std::size_t c = 0; c < scores.size(); ++c) {
+    if (scores[c].score_m < 0.0 || static_cast<int>(c) == fallback) continue;
+    if (fallback >= 0 && !judge(c, static_cast<std::size_t>(fallback))) continue;  // not better than the default
+    if (chosen < 0 || chosen == fallback) {
+      chosen = static_cast<int>(c);
+      continue;
+    }
+    const auto held = static_cast<std::size_t>(chosen);
+    if (scores[held].holds ? judge(c, held) : scores[c].score_m < scores[held].score_m) chosen = static_cast<int>(c);
+  }
+  return chosen;
+}
 
 Selection select_model(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& base,
                        const SelectionOptions& options) {
@@ -355,7 +363,6 @@ Selection select_model(const RobotModel& nominal, const model::Dataset& data, co
   Selection s;
   s.folds = scoring.folds;
   s.leave_one_out = scoring.folds == rows;
-  s.against_default = rows < kMinRowsForLowestScore;
   s.out_of_range_fraction = range.fraction;
   s.out_of_range_train_rows = static_cast<int>(range.inside.size());
   s.out_of_range_test_rows = static_cast<int>(range.outside.size());
@@ -363,7 +370,8 @@ Selection select_model(const RobotModel& nominal, const model::Dataset& data, co
   std::vector<CrossValidation> validations = cross_validate(candidates, data, scoring);
   for (std::size_t c = 0; c < candidates.size(); ++c) {
     const CrossValidation& cv = validations[c];
-    s.scores.push_back({candidates[c].name, cv.parameters, cv.kfold_rms_m, cv.out_of_range_rms_m, -1.0, 0.0, cv.why});
+    s.scores.push_back({candidates[c].name, cv.parameters, cv.kfold_rms_m, cv.out_of_range_rms_m, -1.0,
+                        candidates[c].holds, 0.0, "", cv.why});
   }
   // The out-of-range fold counts when every candidate the K folds could judge was identified on
   // its in-range rows: a fold that only the small models can be fitted to would favour them.
@@ -372,7 +380,7 @@ Selection select_model(const RobotModel& nominal, const model::Dataset& data, co
   });
   for (CandidateScore& x : s.scores)
     if (x.kfold_rms_m >= 0.0) x.score_m = any_range ? 0.5 * (x.kfold_rms_m + x.out_of_range_rms_m) : x.kfold_rms_m;
-  const int best = choose(s.scores, validations, s.against_default);
+  const int best = choose_candidate(s.scores, validations, any_range);
   if (best < 0) {
     std::string why;
     for (const CandidateScore& x : s.scores) why += "\n  " + x.name + ": " + x.why;
@@ -396,8 +404,8 @@ std::string format_selection(const Selection& s) {
       << " rows inside the central " << s.out_of_range_fraction * 100.0
       << " % of every joint's range, predict the other " << s.out_of_range_test_rows << "); position RMS:\n";
   char line[200];
-  std::snprintf(line, sizeof line, "  %-22s %10s %12s %8s %10s%s\n", "candidate", "K-fold", "out-of-range", "params",
-                "score", s.against_default ? "  t vs default" : "");
+  std::snprintf(line, sizeof line, "  %-22s %10s %12s %8s %10s  %s\n", "candidate", "K-fold", "out-of-range", "params",
+                "score", "paired t vs");
   out << line;
   const auto mm = [](double v) {
     char b[32];
@@ -406,13 +414,17 @@ std::string format_selection(const Selection& s) {
     return std::string(b);
   };
   for (const CandidateScore& x : s.scores) {
-    char t[32] = "";
-    if (s.against_default && x.score_m >= 0.0 && x.name != kDefaultCandidate)
-      std::snprintf(t, sizeof t, "  %13.1f", x.t_vs_default);
+    char t[64];
+    if (x.against.empty())
+      std::snprintf(t, sizeof t, "%24s", "");
+    else
+      std::snprintf(t, sizeof t, "  %5.1f %-16s", x.t, x.against.c_str());
     std::snprintf(line, sizeof line, "  %-22s %10s %12s %8d %10s%s%s\n", x.name.c_str(), mm(x.kfold_rms_m).c_str(),
                   mm(x.out_of_range_rms_m).c_str(), x.parameters, mm(x.score_m).c_str(), t,
                   x.name == s.chosen.name ? "  <- chosen" : "");
-    out << line;
+    std::string row = line;
+    row.erase(row.find_last_not_of(" \n") + 1);
+    out << row << '\n';
     if (!x.why.empty()) out << "    (" << x.why << ")\n";
   }
   out << "chosen: " << s.reason << "\n";

@@ -231,6 +231,13 @@ void error_classes() {
   error_class("precise_arm", model::load_model(KINCAL_ROBOTS_DIR "/puma560.yaml"), precise, 2e-5, 40);
 }
 
+// Every candidate on a split, for orientation (the selection sees the training rows only).
+void every_candidate(const model::RobotModel& nominal, const model::Dataset& train, const model::Dataset& judged,
+                     const std::string& prefix) {
+  for (const identify::Candidate& each : identify::candidate_models(nominal, {}))
+    figure(prefix + each.name, run(each.model, train, judged, each.options).rms_m * 1e3, "mm");
+}
+
 // The extrapolation split as issue #41 counts it: the rows of the 995 training rows inside the
 // central 70 % of every joint's range (over those 995) train; every other row of the file, the
 // 500 held out included, is judged. With the defaults and with the fixed default widths.
@@ -249,6 +256,7 @@ void issue41_extrapolation(const model::RobotModel& nominal, const model::Datase
   const Outcome after = run(now.chosen.model, train, judged, now.chosen.options, selection_scores(now));
   figure("realdata_ur10_extrapolation995_rms_mm", after.rms_m * 1e3, "mm");
   prior_scale_figures(after.result, "_extrapolation995");
+  every_candidate(nominal, train, judged, "realdata_ur10_extrapolation995_rms_mm_");
   const identify::Selection fixed = chosen(nominal, train, "extrapolation995_fixed_priors", fixed_priors());
   figure("realdata_ur10_extrapolation995_fixed_priors_rms_mm",
          run(fixed.chosen.model, train, judged, fixed.chosen.options, selection_scores(fixed)).rms_m * 1e3, "mm");
@@ -374,10 +382,7 @@ int main() {
     figure("realdata_ur10_extrapolation_old_default_rms_mm", old.rms_m * 1e3, "mm");
     figure("realdata_ur10_extrapolation_coverage_95", now.coverage, "fraction");
     figure("realdata_ur10_extrapolation_default_before_coverage_95", before.coverage, "fraction");
-    // Every candidate on this split, for orientation (the choice above sees the training rows only).
-    for (const identify::Candidate& each : identify::candidate_models(nominal, {}))
-      figure("realdata_ur10_extrapolation_rms_mm_" + each.name,
-             run(each.model, inside, outside, each.options).rms_m * 1e3, "mm");
+    every_candidate(nominal, inside, outside, "realdata_ur10_extrapolation_rms_mm_");
     // The worked example's two routes on the same 300 rows.
     const model::RobotModel urdf =
         model::load_model(KINCAL_ROBOTS_DIR "/ur10.urdf", model::UrdfChainEnds{"", "tracker_probe"});

@@ -289,6 +289,35 @@ TEST_CASE("target corrector: a target whose smallest correction exceeds the limi
   }
 }
 
+TEST_CASE("target corrector: a redundant goal just past the limit in the smallest change is shared within it") {
+  // A point target 150 mm off the PUMA's wrist leaves it three spare joints: the smallest change
+  // (2-norm) turns one joint most; with the limit below that turn, the others take their share.
+  model::RobotModel start = robot("puma560.yaml");
+  start.base_T_frame0 = model::Transform{};
+  start.flange_T_tool.translation = model::Vector3(0.05, 0.0, 0.15);
+  const model::RobotModel calibrated = perturbed(start, 2e-3, 2e-3, 6);
+  const std::vector<double> q = {0.1, -0.4, 0.3, 0.2, -0.5, 0.7};
+  const std::vector<correct::Target> targets = {{3, true, q, model::forward_kinematics(start, q), false}};
+  correct::TargetCorrector free(start, calibrated, correct::TargetFrame::base, std::nullopt);
+  const correct::TargetResult smallest = free.correct(targets, {}, "t.csv").front();
+  REQUIRE(smallest.solution.outcome == correct::Outcome::reached);
+  INFO("the smallest change turns joint ", smallest.change_joint + 1, " by ", smallest.change, " rad");
+  correct::JointChangeLimit tighter;
+  tighter.revolute_rad = 0.9 * smallest.change;
+  correct::TargetCorrector shared(start, calibrated, correct::TargetFrame::base, std::nullopt, {}, tighter);
+  const correct::TargetResult r = shared.correct(targets, {}, "t.csv").front();
+  CHECK(r.solution.outcome == correct::Outcome::reached);
+  CHECK(r.change_over_limit <= 1.0);
+  CHECK(r.solution.residual_m <= 1e-7);
+  CHECK((model::forward_kinematics(calibrated, r.solution.q).translation - targets[0].pose.translation).norm() < 1e-6);
+  // A limit no sharing meets: refused, the readings left.
+  tighter.revolute_rad = 0.05 * smallest.change;
+  correct::TargetCorrector none(start, calibrated, correct::TargetFrame::base, std::nullopt, {}, tighter);
+  const correct::TargetResult refused = none.correct(targets, {}, "t.csv").front();
+  CHECK(refused.solution.outcome == correct::Outcome::joint_change_limit);
+  CHECK(refused.solution.q == q);
+}
+
 TEST_CASE("Cartesian targets: base and device frames give the same readings; the seed's wrist is kept") {
   model::RobotModel start = robot("puma560.yaml");
   start.base_T_frame0 = model::Transform{};
