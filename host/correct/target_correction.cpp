@@ -99,7 +99,8 @@ void TargetCorrector::limit_change(TargetResult& r, const std::vector<double>& r
     bool box = true;
     for (std::size_t i = 0; i < within.joints.size() && i < reference.size(); ++i) {
       model::Joint& j = within.joints[i];
-      const double l = j.type == core::JointType::prismatic ? limit_.prismatic_m : limit_.revolute_rad;
+      // A hair inside the limit, so that a joint clamped at the box's edge counts as within it.
+      const double l = (1.0 - 1e-9) * (j.type == core::JointType::prismatic ? limit_.prismatic_m : limit_.revolute_rad);
       j.lower = std::max(j.lower, reference[i] - l);
       j.upper = std::min(j.upper, reference[i] + l);
       box = box && j.lower <= j.upper;

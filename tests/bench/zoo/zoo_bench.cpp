@@ -272,19 +272,19 @@ struct NearestResidual {
   }
 };
 
-double true_change_over_limit(const Chain& chain, const Truth& truth, const std::vector<double>& seed) {
-  const Pose goal_root = forward(chain, ChainErrors(chain.joints.size()), seed);  // the nominal TCP: the target
-  std::vector<double> unit, q = seed;
-  for (const ChainJoint& j : chain.joints) unit.push_back(j.prismatic ? 5e-3 : 5.0 * kDeg);
+// One penalty solve of the above from `q`, every joint within [lower, upper]: the largest change
+// over its limit, infinite when the goal is not met.
+double nearest_over_limit(const NearestResidual& nearest, std::vector<double> q, const std::vector<double>& lower,
+                          const std::vector<double>& upper) {
   ceres::Problem problem;
-  auto* cost = new ceres::DynamicNumericDiffCostFunction<NearestResidual, ceres::CENTRAL>(
-      new NearestResidual{&chain, &truth, goal_root, measures_pose(truth.instrument), seed, unit});
+  auto* cost = new ceres::DynamicNumericDiffCostFunction<NearestResidual, ceres::CENTRAL>(new NearestResidual(nearest));
   cost->AddParameterBlock(static_cast<int>(q.size()));
   cost->SetNumResiduals(6 + static_cast<int>(q.size()));
   problem.AddResidualBlock(cost, nullptr, q.data());
   for (std::size_t j = 0; j < q.size(); ++j) {
-    problem.SetParameterLowerBound(q.data(), static_cast<int>(j), chain.joints[j].lower);
-    problem.SetParameterUpperBound(q.data(), static_cast<int>(j), chain.joints[j].upper);
+    q[j] = std::clamp(q[j], lower[j], upper[j]);
+    problem.SetParameterLowerBound(q.data(), static_cast<int>(j), lower[j]);
+    problem.SetParameterUpperBound(q.data(), static_cast<int>(j), upper[j]);
   }
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::DENSE_QR;
@@ -294,12 +294,33 @@ double true_change_over_limit(const Chain& chain, const Truth& truth, const std:
   ceres::Solve(options, &problem, &summary);
   std::vector<double> residual(6 + q.size());
   const double* parameters[] = {q.data()};
-  NearestResidual{&chain, &truth, goal_root, measures_pose(truth.instrument), seed, unit}(parameters, residual.data());
+  nearest(parameters, residual.data());
   if (Eigen::Map<const Eigen::VectorXd>(residual.data(), 6).cwiseAbs().maxCoeff() > 1.0)
     return std::numeric_limits<double>::infinity();
   double over = 0.0;
   for (std::size_t j = 0; j < q.size(); ++j) over = std::max(over, std::abs(residual[6 + j]));
   return over;
+}
+
+// The nearest readings within the chain's limits; past the limit, the goal again with every joint
+// held within the limit of the seed (a redundant arm shares the change, as correct does).
+double true_change_over_limit(const Chain& chain, const Truth& truth, const std::vector<double>& seed) {
+  const Pose goal_root = forward(chain, ChainErrors(chain.joints.size()), seed);  // the nominal TCP: the target
+  std::vector<double> unit, lower, upper;
+  for (const ChainJoint& j : chain.joints) {
+    unit.push_back(j.prismatic ? 5e-3 : 5.0 * kDeg);
+    lower.push_back(j.lower);
+    upper.push_back(j.upper);
+  }
+  const NearestResidual nearest{&chain, &truth, goal_root, measures_pose(truth.instrument), seed, unit};
+  const double over = nearest_over_limit(nearest, seed, lower, upper);
+  if (over <= 1.0) return over;
+  std::vector<double> box_lower = lower, box_upper = upper;
+  for (std::size_t j = 0; j < seed.size(); ++j) {
+    box_lower[j] = std::max(lower[j], seed[j] - (1.0 - 1e-9) * unit[j]);  // a hair inside, as correct's
+    box_upper[j] = std::min(upper[j], seed[j] + (1.0 - 1e-9) * unit[j]);
+  }
+  return std::min(over, nearest_over_limit(nearest, seed, box_lower, box_upper));
 }
 
 // The true arm at correct's joint targets of the targets it reached: its TCP against the nominal
