@@ -26,6 +26,7 @@
 #include <cctype>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <optional>
 #include <sstream>
@@ -41,8 +42,11 @@ using namespace kincal;
 
 namespace {
 
-void require(bool condition) {
-  if (!condition) std::abort();
+// A property that must hold; the line that failed on stderr, then abort (libFuzzer keeps the input).
+void require(bool condition, int line = __builtin_LINE()) {
+  if (condition) return;
+  std::fprintf(stderr, "semantic_fuzz.cpp:%d: property failed\n", line);
+  std::abort();
 }
 
 enum Mutation {
@@ -164,8 +168,8 @@ std::optional<model::RobotModel> parsed_model(const std::string& text, std::stri
   }
 }
 
-// A joint's "name: X" (in the joints list, up to the next top-level key) set to the name of the
-// joint before it.
+// A joint's "name: X" (in the joints list, up to the next top-level key; not in a comment) set to
+// the name of the joint before it.
 std::optional<std::string> duplicate_name(const std::string& text, std::size_t which, int& line) {
   const std::size_t joints = text.rfind("joints:", 0) == 0 ? 0 : text.find("\njoints:");
   if (joints == std::string::npos) return std::nullopt;
@@ -176,6 +180,8 @@ std::optional<std::string> duplicate_name(const std::string& text, std::size_t w
   std::vector<std::pair<std::size_t, std::size_t>> names;  // value start, size
   for (std::size_t at = text.find("name: ", joints); at < end; at = text.find("name: ", at + 1)) {
     if (text[at - 1] != ' ' && text[at - 1] != '{') continue;
+    const std::size_t line_start = text.rfind('\n', at) + 1;  // npos + 1 = 0 on the first line
+    if (text.find('#', line_start) < at) continue;            // in a comment: no name of the model's
     const std::size_t v = at + 6;
     const std::size_t e = text.find_first_of(",}\n\r", v);
     if (e == std::string::npos || e == v) continue;
