@@ -110,6 +110,7 @@ void TargetCorrector::limit_change(TargetResult& r, const std::vector<double>& r
       const JointChange a = largest_change(again.q, reference);
       if (again.outcome == Outcome::reached && a.over_limit <= 1.0) {
         r.solution = again;
+        r.refined = r.refined || r.platform_step_used;  // a joint target's readings: the Newton solve's now
         c = a;
       }
     }
@@ -132,8 +133,9 @@ std::string summary_line(const std::vector<TargetResult>& results) {
   std::vector<double> spread;
   for (const TargetResult& r : results) {
     ++outcomes[outcome_name(r.solution.outcome)];
-    stepped += r.platform_step_used && !r.refined ? 1 : 0;
-    refined += r.refined ? 1 : 0;
+    const bool reached = r.solution.outcome == Outcome::reached;  // a refused target's readings are its own
+    stepped += reached && r.platform_step_used && !r.refined ? 1 : 0;
+    refined += reached && r.refined ? 1 : 0;
     residual_m = std::max(residual_m, r.solution.residual_m);
     residual_rad = std::max(residual_rad, r.solution.residual_rad);
     if (r.spread) spread.push_back(r.spread->position_m);
@@ -146,10 +148,11 @@ std::string summary_line(const std::vector<TargetResult>& results) {
   }
   char text[256];
   if (stepped > 0)  // the platform's step is named only where it ran
-    std::snprintf(text, sizeof text, " (joint targets: %d by the platform's step alone, %d by the Newton solve)",
-                  stepped, refined);
+    std::snprintf(text, sizeof text,
+                  " (joint targets reached: %d by the platform's step alone, %d by the Newton solve)", stepped,
+                  refined);
   else
-    std::snprintf(text, sizeof text, " (joint targets: %d by the Newton solve)", refined);
+    std::snprintf(text, sizeof text, " (joint targets reached: %d by the Newton solve)", refined);
   out += text;
   std::snprintf(text, sizeof text, "; largest residual %.4f mm, %.4f mrad", residual_m * 1e3, residual_rad * 1e3);
   out += text;

@@ -105,11 +105,11 @@ class TargetCorrector {
                     const model::Transform& goal, bool orientation) const;
 };
 
-// One line for a run: counts by outcome, how joint targets were corrected (the platform's step
-// named only when it ran), the largest residual,
-// the predicted spread's median and maximum. E.g. "12 targets: 12 reached (12 by the platform's
-// step, 0 refined by the Newton solve); largest residual 0.000 mm, 0.000 mrad; predicted position
-// sd median 0.031 mm, max 0.054 mm".
+// One line for a run: counts by outcome, how the reached joint targets were corrected (the
+// platform's step named only when it ran), the largest residual,
+// the predicted spread's median and maximum. E.g. "12 targets: 12 reached (joint targets reached:
+// 12 by the platform's step alone, 0 by the Newton solve); largest residual 0.0000 mm, 0.0000 mrad;
+// predicted position sd median 0.031 mm, max 0.054 mm".
 std::string summary_line(const std::vector<TargetResult>& results);
 
 }  // namespace kincal::correct
