@@ -107,6 +107,9 @@ Transform onto_axis(const Transform& estimate, const Vector3& axis_in_link, cons
 // Below these an origin counts as unchanged and keeps its text. Above what the model's round
 // trip through chain_from_axes leaves (about 2e-12 m on metre-long arms with skew axes, found
 // by fuzz.urdf), and small enough that ten kept origins move a tool 2 m out by under 1e-9 m.
+// The length's is relative beyond a metre (times the arm's size, its links' farthest origin): the
+// round trip's error grows with the lengths upstream (a 405 m link moved the next joint's 0.4 m
+// origin by 6e-11 m: fuzz.urdf, urdf_regressions/origin_405_m.urdf).
 constexpr double kUnchangedM = 1e-11;
 constexpr double kUnchangedRad = 1e-11;
 
@@ -152,10 +155,10 @@ const XmlElementSpan& element_at(const XmlTextMap& map, std::size_t index, std::
 }
 
 // The edits that give joint `j` the origin `o`: only what changed (an attribute value, a missing
-// attribute or a missing <origin>), nothing when nothing did.
+// attribute or a missing <origin>; a length by more than unchanged_m), nothing when nothing did.
 void edit_origin(const std::string& text, const XmlTextMap& map, const UrdfJoint& j, const Transform& o,
-                 std::vector<Edit>& edits) {
-  const bool move = (o.translation - j.parent_T_joint.translation).norm() > kUnchangedM;
+                 double unchanged_m, std::vector<Edit>& edits) {
+  const bool move = (o.translation - j.parent_T_joint.translation).norm() > unchanged_m;
   const bool turn = Eigen::AngleAxisd(j.parent_T_joint.rotation.transpose() * o.rotation).angle() > kUnchangedRad;
   if (!move && !turn) return;
   const XmlElementSpan& joint = element_at(map, j.element, "joint", j.line);
@@ -176,7 +179,7 @@ void edit_origin(const std::string& text, const XmlTextMap& map, const UrdfJoint
                        " " + std::string(name) + "=" + origin.quote + triple(value) + origin.quote});
     }
   };
-  if (move) set("xyz", o.translation, kUnchangedM);
+  if (move) set("xyz", o.translation, unchanged_m);
   if (turn) set("rpy", rpy_from_rotation(o.rotation), kUnchangedRad);
 }
 
@@ -294,11 +297,13 @@ CalibratedUrdf write_calibrated_urdf(const std::string& original_text, const std
   // byte for byte (formatting, comments, quotes, attribute order, line ends, a byte-order mark).
   const XmlTextMap map = map_xml_text(original_text);
   std::vector<Edit> edits;
+  double size_m = 1.0;
+  for (const Transform& pose : poses) size_m = std::max(size_m, pose.translation.norm());
   for (std::size_t k = 0; k < chain.joints.size(); ++k) {
     if (!rewrite[k]) continue;
     const UrdfJoint& j = chain.joints[k];
     const Transform parent = k == 0 ? Transform{} : poses[k - 1];
-    edit_origin(original_text, map, j, parent.inverse() * poses[k], edits);
+    edit_origin(original_text, map, j, parent.inverse() * poses[k], kUnchangedM * size_m, edits);
   }
   if (!measured_point_link.empty())
     edits.push_back(

@@ -14,6 +14,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <string>
 
@@ -25,8 +26,11 @@ using namespace kincal;
 
 namespace {
 
-void require(bool condition) {
-  if (!condition) std::abort();
+// A property that must hold; the line that failed on stderr, then abort (libFuzzer keeps the input).
+void require(bool condition, int line = __builtin_LINE()) {
+  if (condition) return;
+  std::fprintf(stderr, "urdf_fuzz.cpp:%d: property failed\n", line);
+  std::abort();
 }
 
 void check_text_map(const std::string& text) {
