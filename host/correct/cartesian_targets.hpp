@@ -48,6 +48,8 @@ class CartesianSolver {
   const model::RobotModel& calibrated_arm() const { return calibrated_; }
   // The target in frame 0.
   model::Transform in_base(const model::Transform& target) const;
+  // The solves' options (their joint units, tolerances).
+  const SolveOptions& options() const { return options_; }
 
  private:
   model::RobotModel nominal_, calibrated_;

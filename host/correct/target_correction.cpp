@@ -30,7 +30,6 @@ TargetCorrector::TargetCorrector(const model::RobotModel& nominal, const model::
       joints_(nominal, calibrated, in_limit_units(options, limit)),
       cartesian_(nominal, calibrated, frame, in_limit_units(options, limit).solve),
       limit_(limit),
-      solve_(in_limit_units(options, limit).solve),
       orientation_(options.orientation) {
   nominal_arm_.base_T_frame0 = model::Transform{};  // commands are in the robot's base frame
 }
@@ -106,7 +105,7 @@ void TargetCorrector::limit_change(TargetResult& r, const std::vector<double>& r
       box = box && j.lower <= j.upper;
     }
     if (box) {
-      const Solution again = solve_pose(within, goal, orientation, r.solution.q, solve_, reference);
+      const Solution again = solve_pose(within, goal, orientation, r.solution.q, cartesian_.options(), reference);
       const JointChange a = largest_change(again.q, reference);
       if (again.outcome == Outcome::reached && a.over_limit <= 1.0) {
         r.solution = again;

@@ -89,7 +89,6 @@ class TargetCorrector {
   JointCorrector joints_;
   CartesianSolver cartesian_;
   JointChangeLimit limit_;
-  SolveOptions solve_;       // in the limits' units (pose_solver.hpp)
   bool orientation_ = true;  // joint targets: the tool's orientation corrected too
 
   struct JointChange {

@@ -19,12 +19,19 @@ RobotModel with_identified_masses(const RobotModel& nominal) {
   return out;
 }
 
+namespace {
+
+// Whether the model identifies a link's mass (geometry+sag), not only uses the given ones.
+bool identifies_masses(const RobotModel& model) {
+  return std::any_of(model.joints.begin(), model.joints.end(), [](const model::Joint& j) { return j.identify_mass; });
+}
+
+}  // namespace
+
 bool needs_sag_start(const RobotModel& model, const IdentifyOptions& options) {
-  const bool masses =
-      std::any_of(model.joints.begin(), model.joints.end(), [](const model::Joint& j) { return j.identify_mass; });
   const bool compliant = std::any_of(model.joints.begin(), model.joints.end(),
                                      [](const model::Joint& j) { return j.compliance.value_or(0.0) > 0.0; });
-  return (masses || model.identify_gravity_direction) && !compliant && options.requested.empty();
+  return (identifies_masses(model) || model.identify_gravity_direction) && !compliant && options.requested.empty();
 }
 
 IdentifyOptions first_sag_stage(const RobotModel& model, const IdentifyOptions& options) {
@@ -67,9 +74,7 @@ SagStage second_sag_stage(const RobotModel& model, const IdentifyOptions& option
         "not identified";
     return s;
   }
-  const bool masses =
-      std::any_of(s.model.joints.begin(), s.model.joints.end(), [](const model::Joint& j) { return j.identify_mass; });
-  if (!masses) {  // the model's own masses: no gauge to fix, only gravity's direction is added
+  if (!identifies_masses(s.model)) {  // the model's own masses: no gauge to fix, only gravity's direction is added
     s.note = "sag: gravity's direction identified from the first stage's compliances";
     if (!held.empty()) s.note += "; held as the first stage held them: " + held;
     return s;
