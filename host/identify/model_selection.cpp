@@ -265,12 +265,15 @@ std::vector<CrossValidation> cross_validate(const std::vector<Candidate>& models
       cv.why = failed->why;
       continue;
     }
-    for (std::size_t f = 0; f < k; ++f)
+    for (std::size_t f = 0; f < k; ++f) {
       cv.kfold_error2.insert(cv.kfold_error2.end(), fit[f].error2.begin(), fit[f].error2.end());
+      cv.kfold_rows.insert(cv.kfold_rows.end(), folds[f].test.begin(), folds[f].test.end());
+    }
     cv.kfold_rms_m = root_mean(cv.kfold_error2);
     if (!range_fold) continue;
     if (fit[k].ok) {
       cv.out_of_range_error2 = fit[k].error2;
+      cv.out_of_range_rows = range.outside;
       cv.out_of_range_rms_m = root_mean(cv.out_of_range_error2);
     } else {
       cv.why = "out-of-range fold: " + fit[k].why;
@@ -295,12 +298,20 @@ constexpr const char* kDefaultCandidate = "geometry";
 // below the one it replaces (the rejection gate's kGateT, identify.cpp).
 constexpr double kBeatsT = 2.0;
 
-// One candidate's held-out squared errors as the rule pairs them: the K folds' rows, then the
-// out-of-range fold's when the score counts it.
-std::vector<double> paired_errors(const CrossValidation& v, bool any_range) {
-  std::vector<double> e = v.kfold_error2;
-  if (any_range) e.insert(e.end(), v.out_of_range_error2.begin(), v.out_of_range_error2.end());
-  return e;
+// The paired t of `a`'s held-out position errors against `b`'s, one difference per row: its
+// K-fold errors' difference, plus its out-of-range errors' when the score counts that fold.
+double row_paired_t(const CrossValidation& a, const CrossValidation& b, bool any_range) {
+  std::vector<double> d(a.kfold_rows.size(), 0.0);
+  std::vector<std::size_t> at(d.size(), 0);  // row -> its index in d (the K folds hold every row once)
+  for (std::size_t i = 0; i < a.kfold_rows.size(); ++i) {
+    at[static_cast<std::size_t>(a.kfold_rows[i])] = i;
+    d[i] = std::sqrt(a.kfold_error2[i]) - std::sqrt(b.kfold_error2[i]);
+  }
+  if (any_range)
+    for (std::size_t i = 0; i < a.out_of_range_rows.size(); ++i)
+      d[at[static_cast<std::size_t>(a.out_of_range_rows[i])]] +=
+          std::sqrt(a.out_of_range_error2[i]) - std::sqrt(b.out_of_range_error2[i]);
+  return paired_t(d);
 }
 
 // The chosen candidate and the figures that decided, in words.
@@ -337,7 +348,7 @@ int choose_candidate(std::vector<CandidateScore>& scores, const std::vector<Cros
   if (fallback >= 0 && at->score_m < 0.0) return fallback;
   const auto judge = [&](std::size_t c, std::size_t against) {
     scores[c].against = scores[against].name;
-    scores[c].t = paired_t(paired_errors(validations[c], any_range), paired_errors(validations[against], any_range));
+    scores[c].t = row_paired_t(validations[c], validations[against], any_range);
     return scores[c].score_m < scores[against].score_m && scores[c].t <= -kBeatsT;
   };
   int chosen = fallback;

@@ -57,8 +57,10 @@
 // fold's training rows (leave-one-out, K = rows, costs twice as much at 20 rows and more above).
 // Rule, at every size: a candidate must have a lower score than the default (`geometry`) and
 // held-out position errors lower than the default's row by row, by 2 standard errors of the
-// paired differences (statistics.hpp: paired_t <= -2, the rejection gate's test; the K folds' rows
-// and the out-of-range fold's when the score counts it); of those, the lowest score wins -- but a
+// paired differences (statistics.hpp: paired_t <= -2, the rejection gate's test; one difference
+// per row: its K-fold error's, plus its out-of-range error's when the score counts that fold and
+// the row is in it -- counted as two rows, a row predicted in both folds made the test look
+// surer than its data); of those, the lowest score wins -- but a
 // candidate built on what the user gave about the arm's physics (Candidate::holds: the model
 // file's own scales and compliances, geometry+gravity with its masses) stands against a later
 // one unless that one beats it row by row too. When cross-validation cannot judge the default (it
@@ -152,8 +154,10 @@ struct CrossValidation {
   int parameters = 0;                // identified in the first fold's solve
   std::string why;                   // why a score is missing
   // Each held-out row's squared position error (m^2), in the same order for every model on the
-  // same data (rows fold by fold; the out-of-range fold's rows): the pairs the gate compares.
+  // same data (rows fold by fold; the out-of-range fold's rows): the pairs the gate compares; and
+  // the data's row each belongs to.
   std::vector<double> kfold_error2, out_of_range_error2;
+  std::vector<int> kfold_rows, out_of_range_rows;
 };
 CrossValidation cross_validate(const RobotModel& model, const model::Dataset& data, const IdentifyOptions& options,
                                const SelectionOptions& selection = {});

@@ -111,9 +111,13 @@ double median(std::vector<double> values) {
 }
 
 double paired_t(const std::vector<double>& a2, const std::vector<double>& b2) {
-  const auto n = static_cast<double>(a2.size());
   std::vector<double> d;
   for (std::size_t i = 0; i < a2.size(); ++i) d.push_back(std::sqrt(a2[i]) - std::sqrt(b2[i]));
+  return paired_t(d);
+}
+
+double paired_t(const std::vector<double>& d) {
+  const auto n = static_cast<double>(d.size());
   double mean = 0.0, variance = 0.0;
   for (const double x : d) mean += x / n;
   for (const double x : d) variance += (x - mean) * (x - mean) / (n - 1.0);

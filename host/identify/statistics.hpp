@@ -23,7 +23,10 @@ double median(std::vector<double> values);
 // error, 0 when they are all equal. Negative: `a` predicts better. Errors, not squared errors: a
 // blunder in a held-out row moves its own squared error by 2 b delta, its size times the models'
 // difference, and would drown what the models do to the other rows. What the rejection gate
-// (identify.hpp) and model selection below 100 rows (model_selection.hpp) compare models by.
+// (identify.hpp) and model selection (model_selection.hpp) compare models by.
 double paired_t(const std::vector<double>& a2, const std::vector<double>& b2);
+// The t statistic of paired differences (size >= 2): their mean over its standard error, 0 when
+// they are all equal.
+double paired_t(const std::vector<double>& differences);
 
 }  // namespace kincal::identify

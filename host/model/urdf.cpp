@@ -107,9 +107,12 @@ Transform onto_axis(const Transform& estimate, const Vector3& axis_in_link, cons
 // Below these an origin counts as unchanged and keeps its text. Above what the model's round
 // trip through chain_from_axes leaves (about 2e-12 m on metre-long arms with skew axes, found
 // by fuzz.urdf), and small enough that ten kept origins move a tool 2 m out by under 1e-9 m.
-// The length's is relative beyond a metre (times the arm's size, its links' farthest origin): the
-// round trip's error grows with the lengths upstream (a 405 m link moved the next joint's 0.4 m
-// origin by 6e-11 m: fuzz.urdf, urdf_regressions/origin_405_m.urdf).
+// Both are relative beyond a metre (times the arm's size, the farthest origin the round trip
+// goes through: the links' and the models' frames, below): the round trip's error grows with
+// the lengths upstream (a 405 m link moved the next joint's 0.4 m origin by 6e-11 m:
+// fuzz.urdf, urdf_regressions/origin_405_m.urdf), and a frame's turn about an axis that nearly
+// coincides with the next (1e-6 m apart, 3e-8 rad, 400 m out) is known to eps x size / their
+// distance (1.6e-10 rad came back: urdf_regressions/nearly_parallel_axes_1e-6_m_apart.urdf).
 constexpr double kUnchangedM = 1e-11;
 constexpr double kUnchangedRad = 1e-11;
 
@@ -155,11 +158,13 @@ const XmlElementSpan& element_at(const XmlTextMap& map, std::size_t index, std::
 }
 
 // The edits that give joint `j` the origin `o`: only what changed (an attribute value, a missing
-// attribute or a missing <origin>; a length by more than unchanged_m), nothing when nothing did.
-void edit_origin(const std::string& text, const XmlTextMap& map, const UrdfJoint& j, const Transform& o,
-                 double unchanged_m, std::vector<Edit>& edits) {
+// attribute or a missing <origin>; by more than kUnchangedM or kUnchangedRad times the arm's
+// size `size_m`, at least a metre), nothing when nothing did.
+void edit_origin(const std::string& text, const XmlTextMap& map, const UrdfJoint& j, const Transform& o, double size_m,
+                 std::vector<Edit>& edits) {
+  const double unchanged_m = kUnchangedM * size_m, unchanged_rad = kUnchangedRad * size_m;
   const bool move = (o.translation - j.parent_T_joint.translation).norm() > unchanged_m;
-  const bool turn = Eigen::AngleAxisd(j.parent_T_joint.rotation.transpose() * o.rotation).angle() > kUnchangedRad;
+  const bool turn = Eigen::AngleAxisd(j.parent_T_joint.rotation.transpose() * o.rotation).angle() > unchanged_rad;
   if (!move && !turn) return;
   const XmlElementSpan& joint = element_at(map, j.element, "joint", j.line);
   if (j.origin_element == UrdfJoint::kNoElement) {
@@ -180,7 +185,7 @@ void edit_origin(const std::string& text, const XmlTextMap& map, const UrdfJoint
     }
   };
   if (move) set("xyz", o.translation, unchanged_m);
-  if (turn) set("rpy", rpy_from_rotation(o.rotation), kUnchangedRad);
+  if (turn) set("rpy", rpy_from_rotation(o.rotation), unchanged_rad);
 }
 
 // The file's own line end: CRLF when its first line ends so.
@@ -283,11 +288,18 @@ CalibratedUrdf write_calibrated_urdf(const std::string& original_text, const std
       poses[k] = parent * j.parent_T_joint;  // a fixed joint keeps its origin, wherever it is
     }
   }
+  // The arm's size (kUnchangedM): the farthest origin of the URDF's joints and of the models'
+  // frames (axes 405 m out that meet 3.7 km away put frames there, and an unchanged origin came
+  // back 6e-9 m off: fuzz.urdf, urdf_regressions/frames_3700_m_out.urdf).
+  double size_m = 1.0;
+  for (const Transform& pose : poses) size_m = std::max(size_m, pose.translation.norm());
+  for (const core::ChainFrames<double>* frames : {&nominal_frames, &cal_frames})
+    for (const Transform& frame : frames->base_T_frame) size_m = std::max(size_m, frame.translation.norm());
   // The measured point or frame from the tip link: a link of its own when asked, else a note.
   Transform tip_T_measured = poses.back().inverse() * cal_tool;
   if (calibrated.tool == ToolKind::point) tip_T_measured.rotation.setIdentity();
   const double measured_turn = Eigen::AngleAxisd(tip_T_measured.rotation).angle();
-  if (measured_point_link.empty() && (tip_T_measured.translation.norm() > 1e-9 || measured_turn > 1e-9))
+  if (measured_point_link.empty() && (tip_T_measured.translation.norm() > 1e-9 * size_m || measured_turn > 1e-9))
     result.notes.push_back("the measured point (the model's tool) is " +
                            millimetres(tip_T_measured.translation.norm()) + " from the tip link '" + chain.tip_link +
                            "' and is no link of this URDF (ask for it as a link of its own: kincal urdf --marker-link "
@@ -297,13 +309,11 @@ CalibratedUrdf write_calibrated_urdf(const std::string& original_text, const std
   // byte for byte (formatting, comments, quotes, attribute order, line ends, a byte-order mark).
   const XmlTextMap map = map_xml_text(original_text);
   std::vector<Edit> edits;
-  double size_m = 1.0;
-  for (const Transform& pose : poses) size_m = std::max(size_m, pose.translation.norm());
   for (std::size_t k = 0; k < chain.joints.size(); ++k) {
     if (!rewrite[k]) continue;
     const UrdfJoint& j = chain.joints[k];
     const Transform parent = k == 0 ? Transform{} : poses[k - 1];
-    edit_origin(original_text, map, j, parent.inverse() * poses[k], kUnchangedM * size_m, edits);
+    edit_origin(original_text, map, j, parent.inverse() * poses[k], size_m, edits);
   }
   if (!measured_point_link.empty())
     edits.push_back(

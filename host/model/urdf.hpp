@@ -18,7 +18,8 @@
 // and everything else kept (link and joint names, meshes, inertias, limits, axes, other
 // branches, comments). The text is edited in place, found by the parser's own element order
 // (urdf_text.hpp), so any spelling the reader accepts works: of the chain's <origin> elements
-// only the xyz or rpy values that changed by more than 1e-11 m or 1e-11 rad are rewritten (in
+// only the xyz or rpy values that changed by more than 1e-11 m or 1e-11 rad (times the arm's
+// size in metres beyond a metre: the round trip's rounding grows with it) are rewritten (in
 // the element's own quotes; a number of three within that of its old value keeps its old
 // spelling, and the white space around and between the three stays as it was (tabs, several
 // spaces, a line end); a missing attribute is added after the element's name, a missing <origin> after

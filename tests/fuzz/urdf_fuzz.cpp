@@ -7,7 +7,7 @@
 //   - For a model: its forward kinematics equal the URDF's (1e-9 m relative, 1e-9 rad), and
 //     write_calibrated_urdf of that same model writes a URDF the reader reads back
 //     to the same chain (joint names and types), and the text is the input's with kincal's
-//     comment and nothing else changed (no origin moved by more than 1e-11).
+//     comment and nothing else changed (no origin moved by more than urdf.cpp's kUnchangedM).
 // Any other exception, a crash, a leak or undefined behaviour is a finding. Runs standalone too
 // (file arguments), and as the ctest fuzz.urdf for a bounded time.
 #include <tinyxml2.h>
