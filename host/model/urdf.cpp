@@ -288,7 +288,7 @@ CalibratedUrdf write_calibrated_urdf(const std::string& original_text, const std
       poses[k] = parent * j.parent_T_joint;  // a fixed joint keeps its origin, wherever it is
     }
   }
-  // The arm's size (kUnchangedM): the farthest origin of the URDF's joints and of the models'
+  // The arm's size (kUnchangedM, kUnchangedRad): the farthest origin of the URDF's joints and of the models'
   // frames (axes 405 m out that meet 3.7 km away put frames there, and an unchanged origin came
   // back 6e-9 m off: fuzz.urdf, urdf_regressions/frames_3700_m_out.urdf).
   double size_m = 1.0;
