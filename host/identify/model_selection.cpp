@@ -301,15 +301,12 @@ constexpr double kBeatsT = 2.0;
 // The paired t of `a`'s held-out position errors against `b`'s, one difference per row: its
 // K-fold errors' difference, plus its out-of-range errors' when the score counts that fold.
 double row_paired_t(const CrossValidation& a, const CrossValidation& b, bool any_range) {
-  std::vector<double> d(a.kfold_rows.size(), 0.0);
-  std::vector<std::size_t> at(d.size(), 0);  // row -> its index in d (the K folds hold every row once)
-  for (std::size_t i = 0; i < a.kfold_rows.size(); ++i) {
-    at[static_cast<std::size_t>(a.kfold_rows[i])] = i;
-    d[i] = std::sqrt(a.kfold_error2[i]) - std::sqrt(b.kfold_error2[i]);
-  }
+  std::vector<double> d(a.kfold_rows.size(), 0.0);  // by row: the K folds hold every row once
+  for (std::size_t i = 0; i < a.kfold_rows.size(); ++i)
+    d[static_cast<std::size_t>(a.kfold_rows[i])] += std::sqrt(a.kfold_error2[i]) - std::sqrt(b.kfold_error2[i]);
   if (any_range)
     for (std::size_t i = 0; i < a.out_of_range_rows.size(); ++i)
-      d[at[static_cast<std::size_t>(a.out_of_range_rows[i])]] +=
+      d[static_cast<std::size_t>(a.out_of_range_rows[i])] +=
           std::sqrt(a.out_of_range_error2[i]) - std::sqrt(b.out_of_range_error2[i]);
   return paired_t(d);
 }
