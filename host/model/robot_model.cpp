@@ -126,32 +126,128 @@ Eigen::VectorXd compliances(const RobotModel& model) {
   return k;
 }
 
-core::PreparedChain<double> prepared(const core::ChainModel<double>& chain) {
-  core::PreparedChain<double> p;
-  core::prepare_chain(chain, p);
-  return p;
-}
-
-// Central-difference steps for the deflection's derivatives (rad or m): G is smooth and the
-// deflection small, so truncation (h^2) and rounding (1e-16 |G| / h) both stay far below 1e-9
-// of a column.
-constexpr double kDeflectionStep = 1e-6;
-
-// d(deflection)/d(v) at v: n x n, compliance_i dG_i/dv_k.
-Eigen::MatrixXd deflection_by_values(const RobotModel& model, const core::PreparedChain<double>& chain,
-                                     const core::JointVector<double>& v) {
-  const auto n = static_cast<Eigen::Index>(model.joints.size());
-  Eigen::MatrixXd d(n, n);
-  for (Eigen::Index k = 0; k < n; ++k) {
-    core::JointVector<double> plus = v, minus = v;
-    plus(k) += kDeflectionStep;
-    minus(k) -= kDeflectionStep;
-    d.col(k) = ((gravity_forces(model, chain, plus) - gravity_forces(model, chain, minus)) / (2.0 * kDeflectionStep))
-                   .head(n)
-                   .cwiseProduct(compliances(model));
+// The firmware core's mass model (joint_map.hpp) of the model's links, payload and gravity.
+core::MassModel<double> mass_model(const RobotModel& model) {
+  core::MassModel<double> masses;
+  for (std::size_t b = 0; b < model.joints.size() && b < static_cast<std::size_t>(core::kMaxJoints); ++b) {
+    masses.link_mass_kg[b] = model.joints[b].mass_kg;
+    for (int k = 0; k < 3; ++k)
+      masses.link_centre_of_mass_m[b][static_cast<std::size_t>(k)] = model.joints[b].centre_of_mass_m(k);
   }
-  return d;
+  masses.payload_mass_kg = model.payload.mass_kg;
+  for (int k = 0; k < 3; ++k) {
+    masses.payload_centre_of_mass_m[static_cast<std::size_t>(k)] = model.payload.centre_of_mass_m(k);
+    masses.gravity_mps2[static_cast<std::size_t>(k)] = model.gravity_mps2(k);
+  }
+  return masses;
 }
+
+// G at chain variables v and its derivatives, from one forward kinematics pass at v. G is linear
+// in the masses, their centres (a mass held) and gravity, so a unit step's difference is the
+// derivative exactly. A link parameter or a chain variable moves every frame beyond its link
+// rigidly, by a twist: a point x moves by w x x + v0, gravity stays, so joint j's force changes as
+//   revolute, its axis z_j moved:  (w x z_j) . (P_j x g) + z_j . ((w x P_j) x g)
+//   revolute, z_j not moved:       z_j . ((w x D + m_D v0) x g)
+//   prismatic, moved:              m_j (w x z_j) . g   (not moved: 0)
+// with P_j = (sum m c over the bodies j moves) - m_j o_j, m_j their mass, and D, m_D the first
+// moment and mass of the bodies beyond the link (all that j moves there, the payload included).
+class GravityDerivatives {
+ public:
+  GravityDerivatives(const RobotModel& model, const core::PreparedChain<double>& chain,
+                     const core::JointVector<double>& v)
+      : chain_(chain), masses_(mass_model(model)), n_(static_cast<int>(model.joints.size())) {
+    core::joint_trig(chain, v, trig_);
+    core::forward_kinematics(chain, v, trig_, frames_);
+    core::gravity_forces(chain, frames_, masses_, forces_);
+    const Eigen::Map<const Vector3> g0(masses_.gravity_mps2.data());
+    g_ = frames_.base_T_frame[0].rotation * g0;
+    const auto place = [&](int frame, const std::array<double, 3>& c) {
+      return Vector3(frames_.base_T_frame[static_cast<std::size_t>(frame)] * Eigen::Map<const Vector3>(c.data()));
+    };
+    double mass = masses_.payload_mass_kg;
+    Vector3 moment = mass * place(n_, masses_.payload_centre_of_mass_m);
+    for (int b = n_ - 1; b >= 0; --b) {
+      const auto k = static_cast<std::size_t>(b);
+      mass += masses_.link_mass_kg[k];
+      moment += masses_.link_mass_kg[k] * place(b + 1, masses_.link_centre_of_mass_m[k]);
+      mass_[k] = mass;
+      moment_[k] = moment;
+    }
+  }
+  // The frames at v (the tool point the twists are given at).
+  const core::ChainFrames<double>& frames() const { return frames_; }
+  const std::array<core::SinCos<double>, core::kMaxJoints>& trig() const { return trig_; }
+  const core::JointVector<double>& forces() const { return forces_; }
+
+  // dG/d(id) for a mass, centre or gravity-direction parameter.
+  core::JointVector<double> by_mass_parameter(core::ParameterId id) const {
+    core::MassModel<double> stepped = masses_;
+    core::JointVector<double> out;
+    if (is_gravity_direction_parameter(id.kind)) {
+      const Vector3 g = (id.kind == kGravityRx ? Vector3::UnitX() : Vector3::UnitY())
+                            .cross(Eigen::Map<const Vector3>(masses_.gravity_mps2.data()));
+      std::copy(g.data(), g.data() + 3, stepped.gravity_mps2.begin());
+      core::gravity_forces(chain_, frames_, stepped, out);
+      return out;
+    }
+    if (id.kind == kLinkMass)
+      stepped.link_mass_kg[id.link] += 1.0;
+    else
+      stepped.link_centre_of_mass_m[id.link][static_cast<std::size_t>(id.kind) - static_cast<std::size_t>(kLinkCentreX)] += 1.0;
+    core::gravity_forces(chain_, frames_, stepped, out);
+    return out - forces_;
+  }
+
+  // dG for the rigid motion of every frame beyond link `link` by `twist`: [w x (p - o); w] at the
+  // tool point p of frames(), as the core's Jacobian columns are.
+  core::JointVector<double> by_motion(std::size_t link, const Eigen::Matrix<double, 6, 1>& twist) const {
+    const Vector3 w = twist.tail<3>();
+    const Vector3 v0 = twist.head<3>() - w.cross(frames_.base_T_tool.translation);
+    const Vector3 beyond = w.cross(moment_[link]) + mass_[link] * v0;  // w x D + m_D v0
+    core::JointVector<double> d = core::JointVector<double>::Zero();
+    for (int j = 0; j < n_; ++j) {
+      const auto k = static_cast<std::size_t>(j);
+      const core::PreparedLink<double>& joint = chain_.links[k];
+      const std::size_t f = joint.convention == core::LinkConvention::modified_dh ? k + 1 : k;
+      const Transform& frame = frames_.base_T_frame[f];
+      const Vector3 z = frame.rotation.col(2);
+      const bool moved = f > link;
+      if (joint.joint == core::JointType::revolute) {
+        if (moved) {
+          const Vector3 p = moment_[k] - mass_[k] * frame.translation;
+          d(j) = w.cross(z).dot(p.cross(g_)) + z.dot(w.cross(p).cross(g_));
+        } else {
+          d(j) = z.dot(beyond.cross(g_));
+        }
+      } else if (moved) {
+        d(j) = mass_[k] * w.cross(z).dot(g_);
+      }
+    }
+    return d;
+  }
+
+  // d(deflection)/d(v) at v: n x n, compliance_i dG_i/dv_k (a chain variable moves the frames
+  // beyond its link by its joint Jacobian column).
+  Eigen::MatrixXd deflection_by_values(const Eigen::VectorXd& compliance) const {
+    core::JointJacobian<double> joints;
+    core::joint_jacobian(chain_, frames_, joints);
+    Eigen::MatrixXd d(n_, n_);
+    for (int k = 0; k < n_; ++k)
+      d.col(k) = by_motion(static_cast<std::size_t>(k), joints.col(k)).head(n_).cwiseProduct(compliance);
+    return d;
+  }
+
+ private:
+  const core::PreparedChain<double>& chain_;
+  core::MassModel<double> masses_;
+  int n_;
+  std::array<core::SinCos<double>, core::kMaxJoints> trig_{};
+  core::ChainFrames<double> frames_;
+  core::JointVector<double> forces_ = core::JointVector<double>::Zero();
+  Vector3 g_ = Vector3::Zero();
+  std::array<double, core::kMaxJoints> mass_{};  // of the bodies joint j moves, payload included
+  std::array<Vector3, core::kMaxJoints> moment_{};
+};
 
 }  // namespace
 
@@ -276,17 +372,7 @@ ChainAtJoints chain_at_joints(const RobotModel& model, std::span<const double> q
 core::JointVector<double> gravity_forces(const RobotModel& model, const core::PreparedChain<double>& chain,
                                          const core::JointVector<double>& v) {
   // The firmware core's definition (joint_map.hpp), which the platform's correction runs in float.
-  core::MassModel<double> masses;
-  for (std::size_t b = 0; b < model.joints.size() && b < static_cast<std::size_t>(core::kMaxJoints); ++b) {
-    masses.link_mass_kg[b] = model.joints[b].mass_kg;
-    for (int k = 0; k < 3; ++k)
-      masses.link_centre_of_mass_m[b][static_cast<std::size_t>(k)] = model.joints[b].centre_of_mass_m(k);
-  }
-  masses.payload_mass_kg = model.payload.mass_kg;
-  for (int k = 0; k < 3; ++k) {
-    masses.payload_centre_of_mass_m[static_cast<std::size_t>(k)] = model.payload.centre_of_mass_m(k);
-    masses.gravity_mps2[static_cast<std::size_t>(k)] = model.gravity_mps2(k);
-  }
+  const core::MassModel<double> masses = mass_model(model);
   core::DeflectionWorkspace<double> ws;
   core::joint_trig(chain, v, ws.trig);
   core::forward_kinematics(chain, v, ws.trig, ws.frames);
@@ -301,7 +387,7 @@ Eigen::MatrixXd joint_jacobian(const RobotModel& model, std::span<const double> 
   const auto n = static_cast<Eigen::Index>(model.joint_count());
   if (is_plain(model)) return j.leftCols(n);
   Eigen::MatrixXd by_values = Eigen::MatrixXd::Identity(n, n);
-  if (has_compliance(model)) by_values += deflection_by_values(model, at.chain, at.coupled);
+  if (has_compliance(model)) by_values += GravityDerivatives(model, at.chain, at.coupled).deflection_by_values(compliances(model));
   return j.leftCols(n) * by_values * coupling_matrix(model) * scales(model).asDiagonal();
 }
 
@@ -391,12 +477,18 @@ Eigen::MatrixXd parameter_jacobian(const RobotModel& model, const ChainAtJoints&
   core::JointJacobian<double> joints;
   core::joint_jacobian(at.chain, at.frames, joints);
   const auto n = static_cast<Eigen::Index>(model.joints.size());
-  const bool compliance = has_compliance(model);
-  const core::JointVector<double> forces =
-      compliance ? gravity_forces(model, at.chain, at.coupled) : core::JointVector<double>::Zero();
+  // With a compliance, G and its derivatives at the values before the deflection, and the link
+  // parameters' motions of the chain there (their columns at those frames).
+  const std::optional<GravityDerivatives> gravity =
+      has_compliance(model) ? std::optional<GravityDerivatives>(std::in_place, model, at.chain, at.coupled)
+                            : std::nullopt;
+  core::ErrorMatrix<double> motions = core::ErrorMatrix<double>::Zero();
+  if (gravity && core::parameter_jacobian(at.chain, at.coupled, gravity->trig(), gravity->frames(), set, motions) !=
+                     core::ErrorModelStatus::ok)
+    throw std::invalid_argument("parameter_jacobian: a parameter names a joint the model does not have");
   const Eigen::VectorXd k = compliances(model);
   Eigen::MatrixXd by_values = Eigen::MatrixXd::Identity(n, n);
-  bool by_values_ready = !compliance;
+  bool by_values_ready = !gravity;
   Eigen::MatrixXd out(6, static_cast<Eigen::Index>(ids.size()));
   int geometric = 0;
   for (std::size_t c = 0; c < ids.size(); ++c) {
@@ -408,27 +500,15 @@ Eigen::MatrixXd parameter_jacobian(const RobotModel& model, const ChainAtJoints&
       throw std::invalid_argument("parameter_jacobian: a parameter names a joint the model does not have");
     const auto link = static_cast<Eigen::Index>(id.link);
     if (id.kind == kJointCompliance) {
-      out.col(col) = joints.col(link) * forces(link);
+      out.col(col) = joints.col(link) * gravity->forces()(link);
       continue;
     }
     if (is_mass_parameter(id.kind) || is_gravity_direction_parameter(id.kind)) {
-      // G is linear in a link's mass (its centre fixed), in its centre (its mass fixed) and in the
-      // gravity vector: a unit step's difference is the derivative exactly; a turn's derivative is
-      // G of the vector axis x g.
-      RobotModel stepped = model;
-      core::JointVector<double> dforces;
-      if (is_gravity_direction_parameter(id.kind)) {
-        stepped.gravity_mps2 = (id.kind == kGravityRx ? Vector3::UnitX() : Vector3::UnitY()).cross(model.gravity_mps2);
-        dforces = gravity_forces(stepped, at.chain, at.coupled);
-      } else {
-        add_joint_map_error(stepped, id, 1.0);
-        dforces = gravity_forces(stepped, at.chain, at.coupled) - forces;
-      }
-      out.col(col) = joints.leftCols(n) * dforces.head(n).cwiseProduct(k);
+      out.col(col) = joints.leftCols(n) * gravity->by_mass_parameter(id).head(n).cwiseProduct(k);
       continue;
     }
     if (id.kind == kJointScale || id.kind == kJointCoupling) {
-      if (!by_values_ready) by_values += deflection_by_values(model, at.chain, at.coupled);
+      if (!by_values_ready) by_values += gravity->deflection_by_values(k);
       by_values_ready = true;
       // A scale moves every variable reading k reaches; a coupling moves joint i by u_{i-1}.
       Eigen::VectorXd dv = Eigen::VectorXd::Zero(n);
@@ -441,23 +521,12 @@ Eigen::MatrixXd parameter_jacobian(const RobotModel& model, const ChainAtJoints&
       out.col(col) = joints.leftCols(n) * (by_values * dv);
       continue;
     }
-    out.col(col) = e.col(geometric++);
-    if (!compliance || id.kind > core::ParameterKind::link_beta) continue;
+    const int g = geometric++;
+    out.col(col) = e.col(g);
     // A link parameter moves the deflection too (base and tool motions do not: gravity is given
     // in frame 0 and the payload in the flange frame).
-    core::ParameterSet one;
-    one.count = 1;
-    one.ids[0] = id;
-    core::JointVector<double> dforces = core::JointVector<double>::Zero();
-    for (const double sign : {1.0, -1.0}) {
-      core::ErrorVector<double> step = core::ErrorVector<double>::Zero();
-      step(0) = sign * kDeflectionStep;
-      core::ChainModel<double> moved;
-      if (core::apply_parameter_errors(at.geometry, one, step, moved) != core::ErrorModelStatus::ok)
-        throw std::invalid_argument("parameter_jacobian: a parameter names a joint the model does not have");
-      dforces += sign * gravity_forces(model, prepared(moved), at.coupled);
-    }
-    out.col(col) += joints.leftCols(n) * (dforces.head(n) / (2.0 * kDeflectionStep)).cwiseProduct(k);
+    if (gravity && id.kind <= core::ParameterKind::link_beta)
+      out.col(col) += joints.leftCols(n) * gravity->by_motion(id.link, motions.col(g)).head(n).cwiseProduct(k);
   }
   return out;
 }

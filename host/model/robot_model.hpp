@@ -260,9 +260,9 @@ Eigen::MatrixXd parameter_jacobian(const RobotModel& model, std::span<const doub
 // The same for a model whose geometry is `chain` (identify's Parameterization keeps its own
 // chain), with the chain evaluated at readings q. Core kinds take the core's columns at the
 // deflected joint values, plus -- when the model has compliance -- the change of the deflection
-// with the parameter (central differences of G: the deflection is small, so its derivative is
-// accurate to about 1e-12 of the column). Throws std::invalid_argument for a link index the
-// chain does not have.
+// with the parameter (G's derivatives in closed form, from one forward kinematics pass: a link
+// parameter moves the chain beyond it rigidly, and G is linear in masses and gravity). Throws
+// std::invalid_argument for a link index the chain does not have.
 Eigen::MatrixXd parameter_jacobian(const RobotModel& model, const ChainAtJoints& at, std::span<const double> q,
                                    std::span<const core::ParameterId> ids);
 

@@ -167,6 +167,51 @@ TEST_CASE("joint and parameter Jacobians match central differences") {
   }
 }
 
+// The deflection's share of each column (compliance x dG/dparameter in closed form: a link
+// parameter or a joint moves the chain beyond it rigidly) against the kinematics itself:
+// deflections of several degrees, so a wrong share shows far above 1e-7.
+TEST_CASE("joint and parameter Jacobians with compliance, masses, a payload and gravity match central differences") {
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    RobotModel m = random_model(rng, 2 + trial % 7);
+    for (model::Joint& j : m.joints) {
+      j.mass_kg = 2.0 + u(rng);
+      j.centre_of_mass_m = {0.2 * u(rng), 0.2 * u(rng), 0.2 * u(rng)};
+      j.compliance = (j.type == core::JointType::revolute ? 2e-3 : 2e-4) * (1.0 + 0.5 * u(rng));
+      j.identify_mass = true;
+      if (u(rng) > 0.0) j.scale = 1.0 + 0.01 * u(rng);
+    }
+    m.payload.mass_kg = 1.5;
+    m.payload.centre_of_mass_m = {0.05, -0.02, 0.1};
+    m.gravity_mps2 = model::rotation_from_rpy({0.1 * u(rng), 0.1 * u(rng), 0.0}) * Eigen::Vector3d(0, 0, -9.81);
+    m.identify_gravity_direction = true;
+    const std::vector<double> q = random_q(rng, m.joint_count());
+    const double h = 1e-6;
+    const Eigen::MatrixXd jq = model::joint_jacobian(m, q);
+    for (int i = 0; i < m.joint_count(); ++i) {
+      std::vector<double> qp = q, qm = q;
+      qp[static_cast<std::size_t>(i)] += h;
+      qm[static_cast<std::size_t>(i)] -= h;
+      const Eigen::Matrix<double, 6, 1> numeric =
+          twist_difference(model::forward_kinematics(m, qp), model::forward_kinematics(m, qm)) / (2 * h);
+      INFO("trial ", trial, " joint ", i + 1);
+      CHECK((jq.col(i) - numeric).norm() < 1e-7 * std::max(1.0, numeric.norm()));
+    }
+    const std::vector<core::ParameterId> ids = model::all_parameters(m);
+    const Eigen::MatrixXd jp = model::parameter_jacobian(m, q, ids);
+    for (std::size_t k = 0; k < ids.size(); ++k) {
+      Eigen::VectorXd e = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(ids.size()));
+      e(static_cast<Eigen::Index>(k)) = h;
+      const Transform plus = model::forward_kinematics(model::apply_parameter_errors(m, ids, e), q);
+      const Transform minus = model::forward_kinematics(model::apply_parameter_errors(m, ids, -e), q);
+      const Eigen::Matrix<double, 6, 1> numeric = twist_difference(plus, minus) / (2 * h);
+      INFO("trial ", trial, " parameter ", model::parameter_name(ids[k]));
+      CHECK((jp.col(static_cast<Eigen::Index>(k)) - numeric).norm() < 1e-7 * std::max(1.0, numeric.norm()));
+    }
+  }
+}
+
 TEST_CASE("model files: read, write, read back") {
   const RobotModel m = model::parse_model(kSmall, "small.yaml");
   REQUIRE(m.joint_count() == 2);
