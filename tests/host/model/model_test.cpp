@@ -138,32 +138,40 @@ TEST_CASE("forward kinematics matches an independent composition, every conventi
   }
 }
 
+// The joint and parameter Jacobians of m at q against central differences of the forward
+// kinematics, each column within `tolerance` (relative to the column beyond 1).
+void check_jacobians(const RobotModel& m, const std::vector<double>& q, double tolerance) {
+  const double h = 1e-6;
+  const auto near = [&](const Eigen::Matrix<double, 6, 1>& column, const Transform& plus, const Transform& minus) {
+    const Eigen::Matrix<double, 6, 1> numeric = twist_difference(plus, minus) / (2 * h);
+    CHECK((column - numeric).norm() < tolerance * std::max(1.0, numeric.norm()));
+  };
+  const Eigen::MatrixXd jq = model::joint_jacobian(m, q);
+  for (int i = 0; i < m.joint_count(); ++i) {
+    std::vector<double> qp = q, qm = q;
+    qp[static_cast<std::size_t>(i)] += h;
+    qm[static_cast<std::size_t>(i)] -= h;
+    INFO("joint ", i + 1);
+    near(jq.col(i), model::forward_kinematics(m, qp), model::forward_kinematics(m, qm));
+  }
+  const std::vector<core::ParameterId> ids = model::all_parameters(m);
+  const Eigen::MatrixXd jp = model::parameter_jacobian(m, q, ids);
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    Eigen::VectorXd e = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(ids.size()));
+    e(static_cast<Eigen::Index>(k)) = h;
+    INFO("parameter ", model::parameter_name(ids[k]));
+    near(jp.col(static_cast<Eigen::Index>(k)), model::forward_kinematics(model::apply_parameter_errors(m, ids, e), q),
+         model::forward_kinematics(model::apply_parameter_errors(m, ids, -e), q));
+  }
+}
+
 TEST_CASE("joint and parameter Jacobians match central differences") {
   std::mt19937_64 rng(11);
   for (int trial = 0; trial < 20; ++trial) {
     const RobotModel m = random_model(rng, 2 + trial % 7);
     const std::vector<double> q = random_q(rng, m.joint_count());
-    const Eigen::MatrixXd jq = model::joint_jacobian(m, q);
-    const double h = 1e-6;
-    for (int i = 0; i < m.joint_count(); ++i) {
-      std::vector<double> qp = q, qm = q;
-      qp[static_cast<std::size_t>(i)] += h;
-      qm[static_cast<std::size_t>(i)] -= h;
-      const Eigen::Matrix<double, 6, 1> numeric =
-          twist_difference(model::forward_kinematics(m, qp), model::forward_kinematics(m, qm)) / (2 * h);
-      CHECK((jq.col(i) - numeric).norm() < 1e-8);
-    }
-    const std::vector<core::ParameterId> ids = model::all_parameters(m);
-    const Eigen::MatrixXd jp = model::parameter_jacobian(m, q, ids);
-    for (std::size_t k = 0; k < ids.size(); ++k) {
-      Eigen::VectorXd e = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(ids.size()));
-      e(static_cast<Eigen::Index>(k)) = h;
-      const Transform plus = model::forward_kinematics(model::apply_parameter_errors(m, ids, e), q);
-      const Transform minus = model::forward_kinematics(model::apply_parameter_errors(m, ids, -e), q);
-      const Eigen::Matrix<double, 6, 1> numeric = twist_difference(plus, minus) / (2 * h);
-      INFO("parameter ", model::parameter_name(ids[k]));
-      CHECK((jp.col(static_cast<Eigen::Index>(k)) - numeric).norm() < 1e-8);
-    }
+    INFO("trial ", trial);
+    check_jacobians(m, q, 1e-8);
   }
 }
 
@@ -186,29 +194,8 @@ TEST_CASE("joint and parameter Jacobians with compliance, masses, a payload and 
     m.payload.centre_of_mass_m = {0.05, -0.02, 0.1};
     m.gravity_mps2 = model::rotation_from_rpy({0.1 * u(rng), 0.1 * u(rng), 0.0}) * Eigen::Vector3d(0, 0, -9.81);
     m.identify_gravity_direction = true;
-    const std::vector<double> q = random_q(rng, m.joint_count());
-    const double h = 1e-6;
-    const Eigen::MatrixXd jq = model::joint_jacobian(m, q);
-    for (int i = 0; i < m.joint_count(); ++i) {
-      std::vector<double> qp = q, qm = q;
-      qp[static_cast<std::size_t>(i)] += h;
-      qm[static_cast<std::size_t>(i)] -= h;
-      const Eigen::Matrix<double, 6, 1> numeric =
-          twist_difference(model::forward_kinematics(m, qp), model::forward_kinematics(m, qm)) / (2 * h);
-      INFO("trial ", trial, " joint ", i + 1);
-      CHECK((jq.col(i) - numeric).norm() < 1e-7 * std::max(1.0, numeric.norm()));
-    }
-    const std::vector<core::ParameterId> ids = model::all_parameters(m);
-    const Eigen::MatrixXd jp = model::parameter_jacobian(m, q, ids);
-    for (std::size_t k = 0; k < ids.size(); ++k) {
-      Eigen::VectorXd e = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(ids.size()));
-      e(static_cast<Eigen::Index>(k)) = h;
-      const Transform plus = model::forward_kinematics(model::apply_parameter_errors(m, ids, e), q);
-      const Transform minus = model::forward_kinematics(model::apply_parameter_errors(m, ids, -e), q);
-      const Eigen::Matrix<double, 6, 1> numeric = twist_difference(plus, minus) / (2 * h);
-      INFO("trial ", trial, " parameter ", model::parameter_name(ids[k]));
-      CHECK((jp.col(static_cast<Eigen::Index>(k)) - numeric).norm() < 1e-7 * std::max(1.0, numeric.norm()));
-    }
+    INFO("trial ", trial);
+    check_jacobians(m, random_q(rng, m.joint_count()), 1e-7);
   }
 }
 
