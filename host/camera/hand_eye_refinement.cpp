@@ -253,9 +253,10 @@ ChainRefinement refine_chain(const std::vector<const BoardDetection*>& detection
     problem.solve();
     ++out.rounds;
     const ChainNoise next = problem.variance_components(out.sigma);
-    const bool converged = close(next.corner_px, out.sigma.corner_px) &&
-                           close(next.pose_rotation_rad, out.sigma.pose_rotation_rad) &&
-                           close(next.pose_translation_m, out.sigma.pose_translation_m);
+    // Poses held exact leave one group, whose scale moves no estimate: its first estimate is final.
+    const bool converged = !correct_poses || (close(next.corner_px, out.sigma.corner_px) &&
+                                              close(next.pose_rotation_rad, out.sigma.pose_rotation_rad) &&
+                                              close(next.pose_translation_m, out.sigma.pose_translation_m));
     out.sigma = next;
     if (converged) break;
   }

@@ -26,7 +26,8 @@
 //
 // Cost: each round one Ceres solve (Levenberg-Marquardt, dense Schur with the corrections
 // eliminated, warm-started) and one dense inverse of the (12 + 6 n)^2 normal matrix (n views); the
-// shared AprilGrid/Vicon set's 30 views take 3 rounds, exact simulated poses up to 20. Errors:
+// shared AprilGrid/Vicon set's 30 views take 3 rounds, exact simulated poses up to 20 (poses held
+// exact, correct_poses false: one round, the corners' scale moving no estimate). Errors:
 // CalibrationError when Ceres reports an unusable solution.
 #pragma once
 

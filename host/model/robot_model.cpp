@@ -190,10 +190,12 @@ class GravityDerivatives {
       core::gravity_forces(chain_, frames_, stepped, out);
       return out;
     }
-    if (id.kind == kLinkMass)
+    if (id.kind == kLinkMass) {
       stepped.link_mass_kg[id.link] += 1.0;
-    else
-      stepped.link_centre_of_mass_m[id.link][static_cast<std::size_t>(id.kind) - static_cast<std::size_t>(kLinkCentreX)] += 1.0;
+    } else {
+      const auto axis = static_cast<std::size_t>(id.kind) - static_cast<std::size_t>(kLinkCentreX);
+      stepped.link_centre_of_mass_m[id.link][axis] += 1.0;
+    }
     core::gravity_forces(chain_, frames_, stepped, out);
     return out - forces_;
   }
@@ -387,7 +389,8 @@ Eigen::MatrixXd joint_jacobian(const RobotModel& model, std::span<const double> 
   const auto n = static_cast<Eigen::Index>(model.joint_count());
   if (is_plain(model)) return j.leftCols(n);
   Eigen::MatrixXd by_values = Eigen::MatrixXd::Identity(n, n);
-  if (has_compliance(model)) by_values += GravityDerivatives(model, at.chain, at.coupled).deflection_by_values(compliances(model));
+  if (has_compliance(model))
+    by_values += GravityDerivatives(model, at.chain, at.coupled).deflection_by_values(compliances(model));
   return j.leftCols(n) * by_values * coupling_matrix(model) * scales(model).asDiagonal();
 }
 
