@@ -502,12 +502,14 @@ Eigen::MatrixXd parameter_jacobian(const RobotModel& model, const ChainAtJoints&
         (id.kind == kJointCoupling && id.link < 1))
       throw std::invalid_argument("parameter_jacobian: a parameter names a joint the model does not have");
     const auto link = static_cast<Eigen::Index>(id.link);
-    if (id.kind == kJointCompliance) {
-      out.col(col) = joints.col(link) * gravity->forces()(link);
-      continue;
-    }
-    if (is_mass_parameter(id.kind) || is_gravity_direction_parameter(id.kind)) {
-      out.col(col) = joints.leftCols(n) * gravity->by_mass_parameter(id).head(n).cwiseProduct(k);
+    if (id.kind == kJointCompliance || is_mass_parameter(id.kind) || is_gravity_direction_parameter(id.kind)) {
+      // A model without a compliance does not deflect: these columns are zero.
+      if (!gravity)
+        out.col(col).setZero();
+      else if (id.kind == kJointCompliance)
+        out.col(col) = joints.col(link) * gravity->forces()(link);
+      else
+        out.col(col) = joints.leftCols(n) * gravity->by_mass_parameter(id).head(n).cwiseProduct(k);
       continue;
     }
     if (id.kind == kJointScale || id.kind == kJointCoupling) {

@@ -197,6 +197,13 @@ TEST_CASE("joint and parameter Jacobians with compliance, masses, a payload and 
     INFO("trial ", trial);
     check_jacobians(m, random_q(rng, m.joint_count()), 1e-7);
   }
+  // Named on a model without a compliance (`--params compliance2`), the deflection's parameters
+  // move nothing: zero columns, as the model deflects nowhere.
+  RobotModel rigid = random_model(rng, 3);
+  rigid.joints[1].mass_kg = 2.0;
+  const std::vector<core::ParameterId> ids = {
+      {model::kJointCompliance, 1}, {model::kLinkMass, 1}, {model::kLinkCentreZ, 1}, {model::kGravityRx, 0}};
+  CHECK(model::parameter_jacobian(rigid, random_q(rng, 3), ids).isZero());
 }
 
 TEST_CASE("model files: read, write, read back") {
