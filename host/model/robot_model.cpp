@@ -353,7 +353,6 @@ Transform forward_kinematics(const RobotModel& model, std::span<const double> q)
 ChainAtJoints evaluate_chain(const RobotModel& model, const core::ChainModel<double>& chain,
                              std::span<const double> q) {
   ChainAtJoints at;
-  at.geometry = chain;
   core::prepare_chain(chain, at.chain);
   at.coupled = coupled_values(model, q);
   at.q = at.coupled;

@@ -188,7 +188,6 @@ core::JointVector<double> joint_vector(std::span<const double> q);
 // chain's variables (through the joint map, deflection included), coupled the same before the
 // deflection.
 struct ChainAtJoints {
-  core::ChainModel<double> geometry;
   core::PreparedChain<double> chain;
   core::JointVector<double> q;
   core::JointVector<double> coupled;
