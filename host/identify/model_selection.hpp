@@ -19,9 +19,10 @@
 //                       Robots publishes, it is chosen and predicts 0.406 mm held out against
 //                       geometry+scales' 0.428 (300 rows), 0.432 against 0.443 out of range
 //   geometry+sag        every parameter, a compliance<i> for every joint and each link's mass<i>
-//                       and centre of mass com_*<i> (no priors; only when the model has neither
-//                       masses nor a compliance, as most public URDFs): identified in two stages
-//                       and a gauge, masses and compliances never negative (sag.hpp)
+//                       and centre of mass com_*<i> (priors centred on the start, their widths
+//                       chosen by the data; only when the model has neither masses nor a
+//                       compliance, as most public URDFs): identified in two stages and a gauge,
+//                       masses and compliances never negative (sag.hpp)
 //   geometry+scales     every parameter and a scale<i> (gear ratio, prior 1 %) for each joint
 //                       the model file gives none (only when there is such a joint): on the UR10
 //                       set the readings' scales are identified to about 0.01 % and differ from 1

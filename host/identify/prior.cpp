@@ -20,7 +20,8 @@ double default_sigma(const PriorOptions& o, core::ParameterId id) {
   using K = core::ParameterKind;
   if (id.kind == model::kJointScale) return o.scale;
   if (id.kind == model::kJointCompliance) return o.compliance;
-  if (model::is_mass_parameter(id.kind)) return std::numeric_limits<double>::infinity();
+  if (id.kind == model::kLinkMass) return o.mass_kg;
+  if (model::is_mass_parameter(id.kind)) return o.centre_m;
   if (id.kind == model::kJointCoupling) return o.coupling;
   if (model::is_gravity_direction_parameter(id.kind)) return o.gravity_direction_rad;
   switch (id.kind) {

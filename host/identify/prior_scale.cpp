@@ -15,6 +15,8 @@ namespace {
 
 int class_of_kind(core::ParameterKind kind) {
   using K = core::ParameterKind;
+  if (kind == model::kLinkMass) return static_cast<int>(PriorClass::link_mass);
+  if (model::is_mass_parameter(kind)) return static_cast<int>(PriorClass::mass_centre);
   if (model::is_joint_map_parameter(kind)) return static_cast<int>(PriorClass::non_geometric);
   if (kind == K::link_d || kind == K::link_a) return static_cast<int>(PriorClass::link_length);
   if (kind <= K::link_beta) return static_cast<int>(PriorClass::link_angle);
@@ -40,8 +42,15 @@ std::string class_sigmas(PriorClass c, const PriorOptions& o, double scale) {
     case PriorClass::measured_point:
       std::snprintf(text, sizeof text, "%.3g mm, %.3g deg", o.tool_length_m * f * 1e3, o.tool_angle_rad * f * kDeg);
       break;
+    case PriorClass::link_mass:
+      std::snprintf(text, sizeof text, "%.3g kg", o.mass_kg * f);
+      break;
+    case PriorClass::mass_centre:
+      std::snprintf(text, sizeof text, "%.3g mm", o.centre_m * f * 1e3);
+      break;
     default:
-      std::snprintf(text, sizeof text, "scale %.3g %%", o.scale * f * 100.0);
+      std::snprintf(text, sizeof text, "scale %.3g %%, gravity direction %.3g deg", o.scale * f * 100.0,
+                    o.gravity_direction_rad * f * kDeg);
       break;
   }
   return text;
@@ -77,6 +86,10 @@ const char* prior_class_name(PriorClass c) {
       return "registration";
     case PriorClass::measured_point:
       return "measured point";
+    case PriorClass::link_mass:
+      return "link masses";
+    case PriorClass::mass_centre:
+      return "mass centres";
     default:
       return "non-geometric";
   }

@@ -12,7 +12,10 @@
 //   link angles      theta, alpha, beta of every link
 //   registration     base_* (the device-to-robot registration)
 //   measured point   tool_* (the measured point or the tool, known to a few millimetres at best)
-//   non-geometric    scale<i> (compliance<i> has no default prior, so no class)
+//   non-geometric    scale<i>, coupling<i>_<i-1>, gravity_rx, gravity_ry (compliance<i> has no
+//                    default prior, so no class)
+//   link masses      mass<i> (geometry+sag's, in its gauge: sag.hpp)
+//   mass centres     com_x<i> .. com_z<i> (a class of their own: a length has no ratio to a mass)
 // A parameter whose prior the user named (--prior, a model file's `priors:`) keeps it as given
 // and is in no class: the user's word wins for what it names.
 //
@@ -59,15 +62,16 @@
 
 namespace kincal::identify {
 
-enum class PriorClass { link_length, link_angle, registration, measured_point, non_geometric };
-inline constexpr int kPriorClasses = 5;
+enum class PriorClass { link_length, link_angle, registration, measured_point, non_geometric, link_mass, mass_centre };
+inline constexpr int kPriorClasses = 7;
 
 // Less than this many parameters' worth of a class determined by the data (gamma_c at the default
 // scale): the class keeps its default (see above). Half a parameter: one parameter the data
 // determine alone counts (gamma just below 1), one they see as much as its prior does not.
 inline constexpr double kMinSeenParameters = 0.5;
 
-// "link lengths", "link angles", "registration", "measured point", "non-geometric".
+// "link lengths", "link angles", "registration", "measured point", "non-geometric", "link masses",
+// "mass centres".
 const char* prior_class_name(PriorClass c);
 
 // How a class's scale was chosen.

@@ -20,6 +20,10 @@
 // Gravity's direction (robot_model.hpp's gravity_rx, gravity_ry) is held in stage 1 and
 // identified in stage 2, for the same reason; the two stages serve geometry+gravity too (the
 // model's own masses: no gauge, only the direction waits for stage 1's compliances).
+// Priors: the masses and centres of stage 2 are drawn toward the start (1 kg per link at its
+// frame's origin, prior.hpp's widths, each class's scale chosen by the evidence: prior_scale.hpp),
+// so that on a handful of rows the deflection keeps about stage 1's shape and only the data's
+// evidence moves the masses -- a free mass and centre per link fitted the noise of 20 rows.
 // Bounds: compliances and masses never negative (problem.hpp). The result is an ordinary model
 // with masses and compliances, which every command reads; the masses are in the gauge's units
 // (kilograms only up to the common factor), as the report's group name says.
