@@ -538,16 +538,20 @@ void add_identify_command(CLI::App& app, int& status) {
       cmd->add_option(
              "--prior", a->prior,
              "prior sigma of a parameter's deviation from the nominal, NAME=SIGMA with a unit (e.g. "
-             "a5=0.5mm,theta5=0.2deg,base_x=inf); defaults: 1 mm lengths, 0.5 deg angles, base 100 mm / 10 deg, "
-             "tool 10 mm / 5 deg, scale 0.01; these win over the model file's priors:")
+             "a5=0.5mm,theta5=0.2deg,base_x=inf); defaults, each class rescaled by the data: 1 mm lengths, 0.5 deg "
+             "angles, base 100 mm / 10 deg, "
+             "tool 10 mm / 5 deg, scale 0.01, an identified mass 1 kg and its centre 0.1 m; these win over the "
+             "model file's priors:")
           ->delimiter(',');
   cmd->add_option("--model-select", a->model_select,
-                  "auto (default, with at least 100 rows): the candidate model with the lowest mean of its 5-fold and "
-                  "out-of-range cross-validated RMS (registration, joint-offsets, geometry-x2, geometry, "
-                  "geometry-x0.5, geometry-noprior, geometry+nongeometric when the model has scales or "
-                  "compliances, geometry+gravity when its links have masses and it declares no compliance, "
-                  "geometry+scales when a joint has no scale); off: every parameter, default priors; or a "
-                  "candidate's name");
+                  "auto (default, with at least 20 rows): the candidate model chosen by cross-validation (5 folds "
+                  "from 100 rows, 10 below, and an out-of-range fold; the default geometry stands unless a "
+                  "candidate scores lower and predicts better row by row) among registration, joint-offsets, "
+                  "geometry-x2, geometry, geometry-x0.5, geometry-noprior, geometry+nongeometric when the model has "
+                  "scales or compliances, geometry+gravity when its links have masses and it declares no "
+                  "compliance, geometry+sag when it has neither, geometry+scales when a joint has no scale, "
+                  "geometry+couplings when a revolute joint follows a revolute one; off: every parameter, default "
+                  "priors; or a candidate's name");
   cmd->add_flag("--no-prior", a->no_prior,
                 "no priors: plain least squares (the parameters the data see poorly may run off)")
       ->excludes(prior);

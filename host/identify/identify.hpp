@@ -70,10 +70,11 @@
 // prior alone would. Each parameter's prior share of its posterior information is reported, and
 // a change beyond 3 prior sigmas is flagged in the report.
 // The widths of the priors' classes (link lengths, link angles, registration, measured point,
-// non-geometric) are the data's (prior_scale.hpp, issue #41): each noise pass, after the REML of
-// s_p and s_o, the evidence chooses each class's scale of its default widths at the solution, and
-// the next solve uses them, until the noise and the widths both settle; the report says what each
-// class got and why. Parameters whose prior the user named keep it.
+// non-geometric, link masses, mass centres) are the data's (prior_scale.hpp, issue #41): each
+// noise pass, after the REML of s_p and s_o, the evidence chooses each class's scale of its
+// default widths at the solution, and the next solve uses them, until the noise and the widths
+// both settle; the report says what each class got and why. Parameters whose prior the user
+// named keep it.
 //
 // Physical bounds (problem.hpp, issue #41): a compliance never goes negative (a Ceres lower
 // bound; the first-order step projected), so every model identify writes loads in predict,

@@ -80,8 +80,8 @@ std::pair<std::string, double> parse_prior_entry(const std::string& entry) {
   const std::size_t eq = entry.find('=');
   const auto fail = [&](const std::string& why) -> std::pair<std::string, double> {
     throw model::InputError("--prior '" + entry + "': " + why +
-                            " (expected NAME=SIGMA with a unit: mm, m, deg or rad, none for scale<i>, "
-                            "compliance<i> and coupling<i>_<i-1>; inf for no prior)");
+                            " (expected NAME=SIGMA with a unit: mm, m, deg or rad, kg for mass<i>, none for "
+                            "scale<i>, compliance<i> and coupling<i>_<i-1>; inf for no prior)");
   };
   if (eq == std::string::npos || eq == 0) return fail("no NAME=");
   const std::string name = entry.substr(0, eq), value = entry.substr(eq + 1);
@@ -97,7 +97,7 @@ std::pair<std::string, double> parse_prior_entry(const std::string& entry) {
     per_unit = 1e-3;
   } else if (unit == "deg") {
     per_unit = std::numbers::pi / 180.0;
-  } else if (unit != "m" && unit != "rad" && !unit.empty()) {
+  } else if (unit != "m" && unit != "rad" && unit != "kg" && !unit.empty()) {
     return fail("unknown unit '" + unit + "'");
   }
   if (!(number > 0.0)) return fail("the sigma must be positive");

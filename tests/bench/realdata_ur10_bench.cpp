@@ -71,6 +71,10 @@
 //                                          the 995 training rows inside the central 70 % of every
 //                                          joint's range (over those rows), judge every other row;
 //                                          _fixed_priors_ the same before
+//   realdata_ur10_sag_heldout_rms_mm_nN    ur10.yaml with its masses taken out, geometry+sag (its
+//                                          masses' priors, the default) on N training rows;
+//                                          _sag_free_masses_ the same without those priors (before),
+//                                          realdata_ur10_sag_over_free_masses_nN the ratio
 //   sim_service_arm_heldout_over_noprior   a simulated service arm (tests/host/identify/simulation.hpp:
 //                                          8 joints with a prismatic torso, 3 mm / 0.5 deg errors,
 //                                          a mocap's 0.2 mm, 37 rows, below model selection's 100):
@@ -83,6 +87,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 #include <span>
 #include <string>
@@ -262,6 +267,30 @@ void issue41_extrapolation(const model::RobotModel& nominal, const model::Datase
          run(fixed.chosen.model, train, judged, fixed.chosen.options, selection_scores(fixed)).rms_m * 1e3, "mm");
 }
 
+// The arm's masses taken out of its model (as most public URDFs come): geometry+sag on the rows of
+// each training size, its masses and centres drawn toward the start by the priors whose widths
+// the evidence chooses (the default), and free (no prior on them: before).
+void sag_without_masses(model::RobotModel nominal, const model::Dataset& all, const realdata::Split& split,
+                        const model::Dataset& held_out) {
+  nominal.payload.mass_kg = 0.0;
+  for (model::Joint& j : nominal.joints) j.mass_kg = 0.0;
+  const identify::Candidate c = identify::find_candidate(nominal, {}, "geometry+sag");
+  identify::IdentifyOptions free = c.options;
+  for (std::size_t i = 1; i <= nominal.joints.size(); ++i)
+    for (const char* p : {"mass", "com_x", "com_y", "com_z"})
+      free.prior.sigma.emplace_back(p + std::to_string(i), std::numeric_limits<double>::infinity());
+  for (int n : {30, 100, 300}) {
+    const model::Dataset train =
+        realdata::subset(all, std::vector<int>(split.train_order.begin(), split.train_order.begin() + n));
+    const std::string suffix = "_n" + std::to_string(n);
+    const double drawn = run(c.model, train, held_out, c.options).rms_m,
+                 unbound = run(c.model, train, held_out, free).rms_m;
+    figure("realdata_ur10_sag_heldout_rms_mm" + suffix, drawn * 1e3, "mm");
+    figure("realdata_ur10_sag_free_masses_heldout_rms_mm" + suffix, unbound * 1e3, "mm");
+    figure("realdata_ur10_sag_over_free_masses" + suffix, drawn / unbound, "ratio");
+  }
+}
+
 // The simulated sagging sweep sets above.
 void sagging_sweeps(const model::RobotModel& puma) {
   for (const int per_joint : {6, 12}) {
@@ -295,6 +324,7 @@ int main() {
   const model::Dataset all = realdata::import_ur10(KINCAL_REALDATA_DIR).data;
   const realdata::Split split = realdata::split_rows(static_cast<int>(all.rows.size()), 500);
   const model::Dataset held_out = realdata::subset(all, split.held_out);
+  sag_without_masses(nominal, all, split, held_out);
   double worst_ratio = 0.0, worst_rejection_ratio = 0.0;
   for (int n : {30, 100, 300}) {
     const std::vector<int> rows(split.train_order.begin(), split.train_order.begin() + n);
