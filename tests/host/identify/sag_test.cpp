@@ -174,7 +174,7 @@ TEST_CASE("on a handful of rows the masses' priors keep geometry+sag from fittin
   // Measured: 0.050 mm RMS pooled against 0.099 free; case by case from 0.17 to 1.56 times the free
   // fit's (heavy6r seed 21: 0.252 mm free, 0.042 drawn), the priors' gain is the blow-ups avoided.
   CHECK(std::sqrt(drawn2) < 0.7 * std::sqrt(free2));
-  CHECK(classes == 2 * 9);  // the data chose both classes' widths in every fit
+  CHECK(classes == 2 * 9);  // both classes, each with its own scale, in every fit
 }
 
 TEST_CASE("geometry+sag is a candidate exactly when the model has neither masses nor a compliance") {
