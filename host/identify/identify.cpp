@@ -643,6 +643,8 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
   // Solve, estimate the model error from the residuals (REML) and the priors' widths
   // (prior_scale.hpp), re-weight, until both settle.
   const auto fit = [&] {
+    PriorScales two_passes_ago;
+    bool damped = false;  // the widths' estimates cycled: each update goes half way from then on
     for (int pass = 0; pass < 20; ++pass) {
       weights = noise_weights(instrument, components, result.orientation_used);
       if (options.method == Method::first_order) {
@@ -676,9 +678,12 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
         next = reml(e, j, rows, instrument, orientation_given2, components, estimate_position, estimate_orientation,
                     size, negligible_position2);
       }
-      const PriorScales scales =
+      PriorScales scales =
           update_prior_scales(param, delta, data, noise_weights(instrument, next, result.orientation_used), rows,
                               result.prior_centre, default_sigma, options.prior, result.prior_scales);
+      damped = damped || (pass >= 2 && scales_moved(scales, result.prior_scales, 1e-3) &&
+                          !scales_moved(scales, two_passes_ago, 1e-3));
+      if (damped) scales = halfway_scales(result.prior_scales, scales);
       const auto moved = [](double a2, double b2) {
         return std::abs(std::sqrt(a2) - std::sqrt(b2)) > 1e-3 * std::sqrt(std::max(a2, b2));
       };
@@ -686,6 +691,7 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
                            !moved(next.orientation2, components.orientation2) &&
                            !scales_moved(scales, result.prior_scales, 1e-3);
       components = next;
+      two_passes_ago = result.prior_scales;
       result.prior_scales = scales;
       result.prior_sigma = scaled_sigmas(default_sigma, scales);
       prior_weight = prior_weights(options.prior, result.prior_sigma);

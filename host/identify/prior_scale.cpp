@@ -214,6 +214,14 @@ bool scales_moved(const PriorScales& a, const PriorScales& b, double relative) {
   return false;
 }
 
+PriorScales halfway_scales(const PriorScales& from, const PriorScales& to) {
+  PriorScales out = to;
+  if (from.classes.size() != to.classes.size()) return out;
+  for (std::size_t c = 0; c < out.classes.size(); ++c)
+    out.classes[c].scale = std::sqrt(from.classes[c].scale * to.classes[c].scale);
+  return out;
+}
+
 std::string format_prior_scales(const PriorScales& scales) {
   if (!scales.estimated) return "";
   const PriorOptions& options = scales.options;
