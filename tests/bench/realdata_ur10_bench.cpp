@@ -87,7 +87,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 #include <numbers>
 #include <span>
 #include <string>
@@ -276,9 +275,7 @@ void sag_without_masses(model::RobotModel nominal, const model::Dataset& all, co
   for (model::Joint& j : nominal.joints) j.mass_kg = 0.0;
   const identify::Candidate c = identify::find_candidate(nominal, {}, "geometry+sag");
   identify::IdentifyOptions free = c.options;
-  for (std::size_t i = 1; i <= nominal.joints.size(); ++i)
-    for (const char* p : {"mass", "com_x", "com_y", "com_z"})
-      free.prior.sigma.emplace_back(p + std::to_string(i), std::numeric_limits<double>::infinity());
+  simulation::free_masses(free.prior, nominal.joints.size());
   for (int n : {30, 100, 300}) {
     const model::Dataset train =
         realdata::subset(all, std::vector<int>(split.train_order.begin(), split.train_order.begin() + n));

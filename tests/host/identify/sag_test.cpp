@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <numbers>
 #include <random>
 #include <string>
@@ -159,9 +158,7 @@ TEST_CASE("on a handful of rows the masses' priors keep geometry+sag from fittin
       o.rejection_gate = false;
       const identify::IdentifyResult drawn = identify::identify(c.model, train, o);
       identify::IdentifyOptions free = o;
-      for (std::size_t i = 1; i <= nominal.joints.size(); ++i)
-        for (const char* p : {"mass", "com_x", "com_y", "com_z"})
-          free.prior.sigma.emplace_back(p + std::to_string(i), std::numeric_limits<double>::infinity());
+      simulation::free_masses(free.prior, nominal.joints.size());
       const double drawn_m = simulation::prediction_rms(drawn.model, truth, held_out);
       const double free_m = simulation::prediction_rms(identify::identify(c.model, train, free).model, truth, held_out);
       MESSAGE(std::string(name), " seed ", seed, ": held out ", free_m * 1e3, " mm (masses free), ", drawn_m * 1e3,

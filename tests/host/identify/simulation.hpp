@@ -7,12 +7,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
 
+#include "host/identify/prior.hpp"
 #include "host/identify/problem.hpp"
 #include "host/model/dataset.hpp"
 #include "host/model/model_file.hpp"
@@ -20,6 +23,14 @@
 #include "host/sim/robot.hpp"
 
 namespace kincal::simulation {
+
+// `prior` with no prior on any link's mass or centre of mass (mass<i>, com_*<i>) of a model with
+// `joints` joints: geometry+sag's masses free, as they were before their priors (issue #41).
+inline void free_masses(identify::PriorOptions& prior, std::size_t joints) {
+  for (std::size_t i = 1; i <= joints; ++i)
+    for (const char* p : {"mass", "com_x", "com_y", "com_z"})
+      prior.sigma.emplace_back(p + std::to_string(i), std::numeric_limits<double>::infinity());
+}
 
 // Measurements of `truth` at the configurations: position noise sigma_m per axis (recorded as
 // the sigma column when record_sigma), orientation noise sigma_rad (rotation vector per axis)
