@@ -539,8 +539,8 @@ void add_identify_command(CLI::App& app, int& status) {
              "--prior", a->prior,
              "prior sigma of a parameter's deviation from the nominal, NAME=SIGMA with a unit (e.g. "
              "a5=0.5mm,theta5=0.2deg,base_x=inf); defaults, each class rescaled by the data: 1 mm lengths, "
-             "0.5 deg angles, base 100 mm / 10 deg, tool 10 mm / 5 deg, scale 0.01, an identified mass 1 kg and "
-             "its centre 0.1 m; these win over the model file's priors:")
+             "0.5 deg angles, base 100 mm / 10 deg, tool 10 mm / 5 deg, scale and coupling 0.01 (each its own class), "
+             "an identified mass 1 kg and its centre 0.1 m; these win over the model file's priors:")
           ->delimiter(',');
   cmd->add_option("--model-select", a->model_select,
                   "auto (default, with at least 20 rows): the candidate model chosen by cross-validation (5 folds "

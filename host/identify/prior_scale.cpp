@@ -13,23 +13,24 @@ namespace kincal::identify {
 
 namespace {
 
-int class_of_kind(core::ParameterKind kind) {
+PriorClass class_of_kind(core::ParameterKind kind) {
   using K = core::ParameterKind;
-  if (kind == model::kLinkMass) return static_cast<int>(PriorClass::link_mass);
-  if (model::is_mass_parameter(kind)) return static_cast<int>(PriorClass::mass_centre);
-  if (model::is_joint_map_parameter(kind)) return static_cast<int>(PriorClass::non_geometric);
-  if (kind == K::link_d || kind == K::link_a) return static_cast<int>(PriorClass::link_length);
-  if (kind <= K::link_beta) return static_cast<int>(PriorClass::link_angle);
-  if (kind <= K::base_rz) return static_cast<int>(PriorClass::registration);
-  return static_cast<int>(PriorClass::measured_point);
+  if (kind == model::kLinkMass) return PriorClass::link_mass;
+  if (model::is_mass_parameter(kind)) return PriorClass::mass_centre;
+  if (model::is_gravity_direction_parameter(kind)) return PriorClass::gravity_direction;
+  if (model::is_joint_map_parameter(kind)) return PriorClass::joint_ratio;
+  if (kind == K::link_d || kind == K::link_a) return PriorClass::link_length;
+  if (kind <= K::link_beta) return PriorClass::link_angle;
+  if (kind <= K::base_rz) return PriorClass::registration;
+  return PriorClass::measured_point;
 }
 
 // The class's default widths as the report prints them, times `scale`.
-std::string class_sigmas(PriorClass c, const PriorOptions& o, double scale) {
+std::string class_sigmas(const ClassScale& c, const PriorOptions& o, double scale) {
   constexpr double kDeg = 180.0 / std::numbers::pi;
   const double f = scale / o.strength;
   char text[96];
-  switch (c) {
+  switch (c.kind) {
     case PriorClass::link_length:
       std::snprintf(text, sizeof text, "%.3g mm", o.length_m * f * 1e3);
       break;
@@ -48,9 +49,12 @@ std::string class_sigmas(PriorClass c, const PriorOptions& o, double scale) {
     case PriorClass::mass_centre:
       std::snprintf(text, sizeof text, "%.3g mm", o.centre_m * f * 1e3);
       break;
+    case PriorClass::gravity_direction:
+      std::snprintf(text, sizeof text, "%.3g deg", o.gravity_direction_rad * f * kDeg);
+      break;
     default:
-      std::snprintf(text, sizeof text, "scale %.3g %%, gravity direction %.3g deg", o.scale * f * 100.0,
-                    o.gravity_direction_rad * f * kDeg);
+      std::snprintf(text, sizeof text, "%.3g %%",
+                    (c.parameter.rfind("scale", 0) == 0 ? o.scale : o.coupling) * f * 100.0);
       break;
   }
   return text;
@@ -90,8 +94,10 @@ const char* prior_class_name(PriorClass c) {
       return "link masses";
     case PriorClass::mass_centre:
       return "mass centres";
+    case PriorClass::gravity_direction:
+      return "gravity direction";
     default:
-      return "non-geometric";
+      return "joint ratio";
   }
 }
 
@@ -100,19 +106,26 @@ PriorScales initial_prior_scales(const PriorOptions& options, const ParameterIds
   PriorOptions defaults = options;
   defaults.sigma.clear();
   const Eigen::VectorXd sigma = prior_sigmas(defaults, ids, joint_count, "prior");
-  std::vector<int> count(kPriorClasses, 0);
+  std::vector<int> kind_of;  // each parameter's PriorClass, or -1 for none
   for (std::size_t k = 0; k < ids.size(); ++k) {
     const std::string name = model::parameter_name(ids[k]);
     const bool named = std::any_of(options.sigma.begin(), options.sigma.end(), [&](const auto& entry) {
       return model::parameter_name(model::parse_parameter_name(entry.first, joint_count)) == name;
     });
-    const int c = named || !std::isfinite(sigma(static_cast<Eigen::Index>(k))) ? -1 : class_of_kind(ids[k].kind);
-    s.class_of.push_back(c);
-    if (c >= 0) ++count[static_cast<std::size_t>(c)];
+    kind_of.push_back(named || !std::isfinite(sigma(static_cast<Eigen::Index>(k)))
+                          ? -1
+                          : static_cast<int>(class_of_kind(ids[k].kind)));
   }
-  for (int c = 0; c < kPriorClasses; ++c)
-    if (count[static_cast<std::size_t>(c)] > 0)
-      s.classes.push_back({static_cast<PriorClass>(c), count[static_cast<std::size_t>(c)]});
+  s.class_of.assign(ids.size(), -1);
+  for (int kind = 0; kind <= static_cast<int>(PriorClass::mass_centre); ++kind)
+    for (std::size_t k = 0; k < ids.size(); ++k) {
+      if (kind_of[k] != kind) continue;
+      const bool own = static_cast<PriorClass>(kind) == PriorClass::joint_ratio;
+      if (own || s.classes.empty() || s.classes.back().kind != static_cast<PriorClass>(kind))
+        s.classes.push_back({static_cast<PriorClass>(kind), own ? model::parameter_name(ids[k]) : ""});
+      ++s.classes.back().parameters;
+      s.class_of[k] = static_cast<int>(s.classes.size()) - 1;
+    }
   s.estimated = options.estimate_scales && options.strength > 0.0 && !s.classes.empty();
   s.options = options;
   return s;
@@ -121,9 +134,9 @@ PriorScales initial_prior_scales(const PriorOptions& options, const ParameterIds
 Eigen::VectorXd scaled_sigmas(const Eigen::VectorXd& sigmas, const PriorScales& scales) {
   Eigen::VectorXd out = sigmas;
   if (!scales.estimated) return out;
-  for (const ClassScale& c : scales.classes)
-    for (std::size_t k = 0; k < scales.class_of.size(); ++k)
-      if (scales.class_of[k] == static_cast<int>(c.kind)) out(static_cast<Eigen::Index>(k)) *= c.scale;
+  for (std::size_t k = 0; k < scales.class_of.size(); ++k)
+    if (scales.class_of[k] >= 0)
+      out(static_cast<Eigen::Index>(k)) *= scales.classes[static_cast<std::size_t>(scales.class_of[k])].scale;
   return out;
 }
 
@@ -134,6 +147,7 @@ PriorScales update_prior_scales(const Eigen::MatrixXd& information, const Eigen:
   PriorScales next = current;
   if (!next.estimated) return next;
   const Eigen::Index p = delta.size();
+  const std::size_t classes = next.classes.size();
   const Eigen::VectorXd b = sigmas / options.strength;  // the default sigma of each parameter
   // 1 / (scale b)^2 at each class's scale; the fixed priors (named, no class) as they are.
   const auto weights2 = [&](const std::vector<double>& scale) {
@@ -146,50 +160,61 @@ PriorScales update_prior_scales(const Eigen::MatrixXd& information, const Eigen:
     }
     return w2;
   };
-  // gamma_c and the squared normalized deviation of every class at the scales `scale`.
-  const auto gammas = [&](const std::vector<double>& scale, const LinearPosterior& post, std::vector<double>& gamma,
-                          std::vector<double>& deviation2) {
-    gamma.assign(kPriorClasses, 0.0);
-    deviation2.assign(kPriorClasses, 0.0);
+  // gamma_c and, per class, the scale the evidence asks for at the scales `scale` (MacKay's
+  // fixed point's next step; a joint ratio's maximum in closed form, 0 for none).
+  std::vector<double> gamma, wanted;
+  const auto evidence = [&](const std::vector<double>& scale, const LinearPosterior& post) {
+    gamma.assign(classes, 0.0);
+    std::vector<double> deviation2(classes, 0.0);
+    wanted.assign(classes, 0.0);
     for (Eigen::Index k = 0; k < p; ++k) {
       const int c = next.class_of[static_cast<std::size_t>(k)];
       if (c < 0) continue;
       const auto u = static_cast<std::size_t>(c);
       const double prior2 = scale[u] * b(k) * scale[u] * b(k);
+      const double deviation = post.delta(k) - centre(k);
       gamma[u] += 1.0 - std::min(1.0, post.variance(k) / prior2);
-      deviation2[u] += (post.delta(k) - centre(k)) * (post.delta(k) - centre(k)) / (b(k) * b(k));
+      deviation2[u] += deviation * deviation / (b(k) * b(k));
+      if (next.classes[u].kind == PriorClass::joint_ratio) {
+        const double seen = 1.0 / std::max(post.variance(k), 1e-300) - 1.0 / prior2;       // s
+        const double alone = seen > 0.0 ? deviation * (seen + 1.0 / prior2) / seen : 0.0;  // m - centre
+        const double width2 = seen > 0.0 ? alone * alone - 1.0 / seen : 0.0;
+        wanted[u] = width2 > 0.0 ? std::sqrt(width2) / b(k) : 0.0;
+      }
     }
+    for (std::size_t u = 0; u < classes; ++u)
+      if (next.classes[u].kind != PriorClass::joint_ratio)
+        wanted[u] = std::sqrt(deviation2[u] / std::max(gamma[u], 1e-12));
   };
-  std::vector<double> ones(kPriorClasses, 1.0), gamma, deviation2;
-  gammas(ones, linear_posterior(information, gradient, delta, centre, weights2(ones)), gamma, deviation2);
-  std::vector<double> scale = ones;
-  for (ClassScale& c : next.classes) {
-    const auto u = static_cast<std::size_t>(c.kind);
+  const std::vector<double> ones(classes, 1.0);
+  evidence(ones, linear_posterior(information, gradient, delta, centre, weights2(ones)));
+  std::vector<double> scale(classes, 1.0);
+  for (std::size_t u = 0; u < classes; ++u) {
+    ClassScale& c = next.classes[u];
     c.seen_at_default = gamma[u];
     scale[u] = c.seen_at_default < kMinSeenParameters ? 1.0 : c.scale;
   }
   for (int iteration = 0; iteration < 200; ++iteration) {
-    const LinearPosterior post = linear_posterior(information, gradient, delta, centre, weights2(scale));
-    gammas(scale, post, gamma, deviation2);
+    evidence(scale, linear_posterior(information, gradient, delta, centre, weights2(scale)));
     double moved = 0.0;
-    for (ClassScale& c : next.classes) {
-      const auto u = static_cast<std::size_t>(c.kind);
+    for (std::size_t u = 0; u < classes; ++u) {
+      ClassScale& c = next.classes[u];
       c.determined = gamma[u];
       if (c.seen_at_default < kMinSeenParameters) {
         c.reason = ScaleReason::barely_seen;
         continue;
       }
-      const double wanted = std::sqrt(deviation2[u] / std::max(gamma[u], 1e-12));
-      const double bounded = std::clamp(wanted, options.min_scale, options.max_scale);
-      c.reason = wanted < options.min_scale   ? ScaleReason::lower_bound
-                 : wanted > options.max_scale ? ScaleReason::upper_bound
-                                              : ScaleReason::evidence;
+      const double lowest = c.kind == PriorClass::joint_ratio ? options.min_ratio_scale : options.min_scale;
+      const double bounded = std::clamp(wanted[u], lowest, options.max_scale);
+      c.reason = wanted[u] < lowest              ? ScaleReason::lower_bound
+                 : wanted[u] > options.max_scale ? ScaleReason::upper_bound
+                                                 : ScaleReason::evidence;
       moved = std::max(moved, std::abs(std::log(bounded / scale[u])));
       scale[u] = bounded;
     }
     if (moved < 1e-4) break;
   }
-  for (ClassScale& c : next.classes) c.scale = scale[static_cast<std::size_t>(c.kind)];
+  for (std::size_t u = 0; u < classes; ++u) next.classes[u].scale = scale[u];
   return next;
 }
 
@@ -227,9 +252,16 @@ std::string format_prior_scales(const PriorScales& scales) {
   const PriorOptions& options = scales.options;
   char line[256];
   std::snprintf(line, sizeof line,
-                "prior widths chosen by the data (evidence, type-II maximum likelihood; %g to %g x the defaults):\n",
+                "prior widths chosen by the data (evidence, type-II maximum likelihood; %g to %g x the defaults",
                 options.min_scale, options.max_scale);
   std::string out = line;
+  const bool ratios = std::any_of(scales.classes.begin(), scales.classes.end(),
+                                  [](const ClassScale& c) { return c.kind == PriorClass::joint_ratio; });
+  if (ratios) {
+    std::snprintf(line, sizeof line, ", a joint ratio's own from %g", options.min_ratio_scale);
+    out += line;
+  }
+  out += "):\n";
   for (const ClassScale& c : scales.classes) {
     std::string why;
     char figures[128];
@@ -250,8 +282,9 @@ std::string format_prior_scales(const PriorScales& scales) {
               std::to_string(c.parameters) + " parameters determined)";
         break;
     }
-    std::snprintf(line, sizeof line, "  %-15s %7.3g x  sigma %-20s (%s)\n", prior_class_name(c.kind), c.scale,
-                  class_sigmas(c.kind, options, c.scale).c_str(), why.c_str());
+    const std::string label = c.parameter.empty() ? prior_class_name(c.kind) : c.parameter;
+    std::snprintf(line, sizeof line, "  %-17s %7.3g x  sigma %-20s (%s)\n", label.c_str(), c.scale,
+                  class_sigmas(c, options, c.scale).c_str(), why.c_str());
     out += line;
   }
   return out;

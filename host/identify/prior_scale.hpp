@@ -12,8 +12,13 @@
 //   link angles      theta, alpha, beta of every link
 //   registration     base_* (the device-to-robot registration)
 //   measured point   tool_* (the measured point or the tool, known to a few millimetres at best)
-//   non-geometric    scale<i>, coupling<i>_<i-1>, gravity_rx, gravity_ry (compliance<i> has no
-//                    default prior, so no class)
+//   gravity direction  gravity_rx, gravity_ry (compliance<i> has no default prior, so no class)
+//   joint ratio      scale<i>, coupling<i>_<i-1>: each a class of its own (automatic relevance
+//                    determination): a gear's ratio or a transmission's coupling is wrong on one
+//                    joint, not across a population of them, and one class for all let the data's
+//                    one scaled joint widen every joint's prior (the zoo's scaled cases: five
+//                    scales fitted at their noise, 1.2x the oracle's held-out error, which frees
+//                    only the true one)
 //   link masses      mass<i> (geometry+sag's, in its gauge: sag.hpp)
 //   mass centres     com_x<i> .. com_z<i> (a class of their own: a length has no ratio to a mass)
 // A parameter whose prior the user named (--prior, a model file's `priors:`) keeps it as given
@@ -28,10 +33,17 @@
 //                                                                  parameters, 0..n_c)
 //   lambda_c^2 = sum_{k in c} ((delta_k - centre_k) / b_k)^2 / gamma_c
 // iterated (delta the linear MAP step at each lambda) until every lambda_c moves by less than
-// 1e-4 relative. identify alternates it with the REML of the model-error components s_p, s_o:
-// solve, REML of the noise at the solution, the scales at the solution and that noise, solve
-// again, until both settle (coordinate ascent on one marginal likelihood; the noise's REML
-// treats the parameters as free, as before).
+// 1e-4 relative. A joint ratio's class of one takes its maximum in closed form instead (M. E.
+// Tipping and A. C. Faul, "Fast marginal likelihood maximisation for sparse Bayesian models",
+// AISTATS 2003, the others' priors held): with s = 1 / Sigma_kk - 1 / (lambda b)^2
+// the data's information on the parameter with the others integrated out, and m - centre =
+// (delta - centre) (s + 1 / (lambda b)^2) / s its estimate from the data alone, the evidence's
+// width is (lambda b)^2 = (m - centre)^2 - 1 / s, and none (the lower bound) when the estimate is
+// within its own standard error of the centre: the fixed point above reaches it in as many
+// iterations as the ratio of the two is close to 1. identify alternates it with the REML of the model-error components
+// s_p, s_o: solve, REML of the noise at the solution, the scales at the solution and that noise, solve again, until
+// both settle (coordinate ascent on one marginal likelihood; the noise's REML treats the parameters as free, as
+// before).
 //
 // Guards (a class's evidence is a chi-square with about gamma_c degrees of freedom: a handful
 // of parameters give a noisy estimate):
@@ -42,7 +54,9 @@
 //                 below a tenth the default (0.1 mm, 0.05 deg: less than the UR10's own
 //                 identified link changes) the prior would hold a class at its nominal on the
 //                 word of a few noisy parameters; at a hundred times (100 mm, 50 deg) it no longer
-//                 constrains anything an arm could have, i.e. least squares
+//                 constrains anything an arm could have, i.e. least squares; a joint ratio's
+//                 lower bound is min_ratio_scale, by default 1e-4 (1 ppm: a joint the data do
+//                 not call scaled is held at its nominal ratio)
 // Off with PriorOptions::estimate_scales = false (the fixed-width candidates of model selection)
 // or strength 0 (no prior).
 //
@@ -62,16 +76,24 @@
 
 namespace kincal::identify {
 
-enum class PriorClass { link_length, link_angle, registration, measured_point, non_geometric, link_mass, mass_centre };
-inline constexpr int kPriorClasses = 7;
+enum class PriorClass {
+  link_length,
+  link_angle,
+  registration,
+  measured_point,
+  gravity_direction,
+  joint_ratio,
+  link_mass,
+  mass_centre
+};
 
 // Less than this many parameters' worth of a class determined by the data (gamma_c at the default
 // scale): the class keeps its default (see above). Half a parameter: one parameter the data
 // determine alone counts (gamma just below 1), one they see as much as its prior does not.
 inline constexpr double kMinSeenParameters = 0.5;
 
-// "link lengths", "link angles", "registration", "measured point", "non-geometric", "link masses",
-// "mass centres".
+// "link lengths", "link angles", "registration", "measured point", "gravity direction", "joint ratio",
+// "link masses", "mass centres".
 const char* prior_class_name(PriorClass c);
 
 // How a class's scale was chosen.
@@ -79,6 +101,7 @@ enum class ScaleReason { evidence, lower_bound, upper_bound, barely_seen };
 
 struct ClassScale {
   PriorClass kind = PriorClass::link_length;
+  std::string parameter;         // a joint ratio's one parameter (scale3, coupling3_2); empty for the others
   int parameters = 0;            // identified parameters of the class with a default prior
   double scale = 1.0;            // lambda_c: multiplies the class's default sigmas
   double determined = 0.0;       // gamma_c at the chosen scale
@@ -88,8 +111,8 @@ struct ClassScale {
 
 struct PriorScales {
   bool estimated = false;           // the stage ran (estimate_scales, a prior, a class present)
-  std::vector<int> class_of;        // of each identified parameter: a PriorClass, or -1 for none
-  std::vector<ClassScale> classes;  // those with parameters, in PriorClass order
+  std::vector<int> class_of;        // of each identified parameter: its index in classes, or -1 for none
+  std::vector<ClassScale> classes;  // those with parameters, in PriorClass order (joint ratios by parameter)
   PriorOptions options;             // the default widths and bounds it scales (for the report)
 };
 

@@ -62,7 +62,8 @@
 //                                          held-out rows): how well positions alone determine it
 // Issue #41: the priors' widths chosen by the data (identify/prior_scale.hpp).
 //   realdata_ur10_prior_scale_<class>[_nN|_extrapolation]   the scale the data chose for each
-//                                          class of priors (x its default width) in the default
+//                                          class of priors (x its default width; a joint ratio by
+//                                          its parameter, scale3) in the default
 //                                          identify's fit (plain: N = 300)
 //   realdata_ur10_fixed_priors_heldout_rms_mm[_nN], realdata_ur10_extrapolation_fixed_priors_rms_mm
 //                                          the same defaults (model selection included) with the
@@ -192,7 +193,7 @@ identify::IdentifyOptions fixed_priors() {
 // The scale the data chose for each class of priors in `r`.
 void prior_scale_figures(const identify::IdentifyResult& r, const std::string& suffix) {
   for (const identify::ClassScale& c : r.prior_scales.classes) {
-    std::string name = identify::prior_class_name(c.kind);
+    std::string name = c.parameter.empty() ? identify::prior_class_name(c.kind) : c.parameter;
     std::replace(name.begin(), name.end(), ' ', '_');
     std::replace(name.begin(), name.end(), '-', '_');
     figure("realdata_ur10_prior_scale_" + name + suffix, c.scale, "x_default");
