@@ -65,7 +65,7 @@ int run_import(const ImportArgs& a) {
     }
     const model::ImportResult r = model::import_measurements_file(a.in, o);
     const std::vector<std::string> findings =
-        nominal ? identify::implausibilities(*nominal, r.data) : std::vector<std::string>{};
+        nominal ? identify::implausibilities(*nominal, r.data) : identify::implausibilities(r.data);
     std::ostringstream text;
     model::write_dataset(text, r.data);
     files::write_file_atomically(a.out, text.str());

@@ -218,6 +218,20 @@ std::vector<std::string> implausibilities(const model::RobotModel& nominal, cons
   return found;
 }
 
+std::vector<std::string> implausibilities(const model::Dataset& data) {
+  std::vector<model::Vector3> measured;
+  for (const model::Measurement& r : data.rows) measured.push_back(r.position);
+  if (measured.size() < 3) return {};
+  const model::Vector3 centre = median_point(measured);
+  std::vector<double> distance;
+  for (const model::Vector3& x : measured) distance.push_back((x - centre).norm());
+  const double spread = median(distance);
+  if (spread <= kMaxSpread_m) return {};
+  return {"the measured points lie a median " + number(spread) +
+          " m from their median point, beyond any arm's reach (" + number(kMaxSpread_m) +
+          " m); millimetres given as metres? (--model checks the data against the robot)"};
+}
+
 void require_plausible(const model::RobotModel& nominal, const model::Dataset& data, const std::string& override_flag,
                        const PlausibilityOptions& options) {
   const std::vector<std::string> found = implausibilities(nominal, data, options);

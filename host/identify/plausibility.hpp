@@ -41,6 +41,12 @@ struct PlausibilityOptions {
 std::vector<std::string> implausibilities(const model::RobotModel& nominal, const model::Dataset& data,
                                           const PlausibilityOptions& options = {});
 
+// Without a model (import without --model): the measured points' median distance from their
+// median point above kMaxSpread_m (50 m; the largest arms reach 4 m, so a 1 m workspace in
+// millimetres read as metres).
+inline constexpr double kMaxSpread_m = 50.0;
+std::vector<std::string> implausibilities(const model::Dataset& data);
+
 // Throws model::InputError "FILE: implausible data: ..." listing every finding and naming
 // `override_flag` (e.g. "--accept-implausible") to proceed deliberately.
 void require_plausible(const model::RobotModel& nominal, const model::Dataset& data, const std::string& override_flag,
