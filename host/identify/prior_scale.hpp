@@ -39,11 +39,12 @@
 // the data's information on the parameter with the others integrated out, and m - centre =
 // (delta - centre) (s + 1 / (lambda b)^2) / s its estimate from the data alone, the evidence's
 // width is (lambda b)^2 = (m - centre)^2 - 1 / s, and none (the lower bound) when the estimate is
-// within its own standard error of the centre: the fixed point above reaches it in as many
-// iterations as the ratio of the two is close to 1. identify alternates it with the REML of the model-error components
-// s_p, s_o: solve, REML of the noise at the solution, the scales at the solution and that noise, solve again, until
-// both settle (coordinate ascent on one marginal likelihood; the noise's REML treats the parameters as free, as
-// before).
+// within its own standard error of the centre (the fixed point above gets there too, but slowly:
+// each step shrinks the width by the ratio of the two, near 1 at the edge).
+// identify alternates the scales with the REML of the model-error components s_p, s_o: solve,
+// REML of the noise at the solution, the scales at the solution and that noise, solve again,
+// until both settle (coordinate ascent on one marginal likelihood; the noise's REML treats the
+// parameters as free, as before).
 //
 // Guards (a class's evidence is a chi-square with about gamma_c degrees of freedom: a handful
 // of parameters give a noisy estimate):
