@@ -89,7 +89,8 @@ std::vector<double> joint_values(const ChainErrors& e, const std::vector<double>
   return theta;
 }
 
-// root_T_joint_i after each joint's motion, at joint values theta.
+}  // namespace
+
 std::vector<Pose> joint_frames(const Chain& chain, const ChainErrors& e, const std::vector<double>& theta) {
   std::vector<Pose> frames(chain.joints.size());
   Pose t = Pose::Identity();
@@ -100,8 +101,6 @@ std::vector<Pose> joint_frames(const Chain& chain, const ChainErrors& e, const s
   }
   return frames;
 }
-
-}  // namespace
 
 Pose small_motion(const Vector6& t_r) {
   Pose t = Pose::Identity();

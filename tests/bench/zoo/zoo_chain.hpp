@@ -53,6 +53,10 @@ struct ChainErrors {
   explicit ChainErrors(std::size_t joints = 0);
 };
 
+// root_T_joint_i after each joint's motion (the frame its axis turns or slides it in), at joint
+// values theta (after the readings' scale, zero and coupling; no compliance).
+std::vector<Pose> joint_frames(const Chain& chain, const ChainErrors& errors, const std::vector<double>& theta);
+
 // root_T_flange of the chain with errors at the controller's readings q.
 Pose forward(const Chain& chain, const ChainErrors& errors, const std::vector<double>& q);
 
