@@ -60,7 +60,6 @@ void set_geometry_errors(Truth& t, const Chain& chain, double lo_m, double hi_m,
     t.errors.zero[i] =
         chain.joints[i].prismatic ? signed_uniform(rng, lo_m, hi_m) : signed_uniform(rng, lo_rad, hi_rad);
   }
-  t.errors.zero.back() = 0.0;
 }
 
 // The frame the last axis and the one before it define (standard DH's frame n-1): z along the
@@ -91,33 +90,6 @@ Pose flange_placement(const Chain& chain, const ChainErrors& errors) {
   const Pose flange =
       joint_frames(chain, errors, std::vector<double>(chain.joints.size(), 0.0)).back() * chain.last_T_flange;
   return last_axes_frame(chain, errors).inverse() * flange;
-}
-
-// No measurement of a point or frame on the last body tells the flange's slide along and turn
-// about the last axis from the measured point's own offset: they are where the nominal geometry
-// puts them relative to the frame the last two axes define, the only reference a model can have
-// (kincal holds DH's theta_n and d_n there). The truth's origin errors move the last axis; the
-// flange is then slid along and turned about that axis back to its nominal place, exactly. (A
-// first-order rule -- no slide or turn in the last joint's origin error -- left the flange up to
-// 0.02 mm from anywhere the data could put it with degree-sized errors: the TCP's error 3.3 times
-// the measured point's, from a choice no measurement can show.)
-void place_flange_as_nominal(Truth& t, const Chain& chain) {
-  const Pose nominal = flange_placement(chain, ChainErrors(chain.joints.size()));
-  int column = 0;  // the flange's axis farthest from the last axis: its turn about it is best defined
-  nominal.linear().row(2).cwiseAbs().minCoeff(&column);
-  const auto slide_and_turn = [&](const Pose& actual) {
-    const Eigen::Vector3d a = nominal.linear().col(column), b = actual.linear().col(column);
-    return Eigen::Vector2d(nominal.translation().z() - actual.translation().z(),
-                           std::remainder(std::atan2(a.y(), a.x()) - std::atan2(b.y(), b.x()), 2.0 * M_PI));
-  };
-  const Eigen::Vector2d change = slide_and_turn(flange_placement(chain, t.errors));
-  const Eigen::Vector3d axis = chain.joints.back().axis;
-  const Pose moved = small_motion(t.errors.origin.back()) * Eigen::AngleAxisd(change(1), axis) *
-                     Eigen::Translation3d(change(0) * axis);
-  const Eigen::AngleAxisd turn(moved.linear());
-  t.errors.origin.back() << moved.translation(), turn.angle() * turn.axis();
-  if (slide_and_turn(flange_placement(chain, t.errors)).norm() > 1e-12)
-    throw std::logic_error("place_flange_as_nominal: the flange did not come back to its nominal place");
 }
 
 // Compliance on every revolute joint whose gravity torque reaches 10 % of the largest: 0.05-0.2 deg
@@ -202,6 +174,34 @@ std::string number(double v) {
 }
 
 }  // namespace
+
+// Exactly, not to first order: no slide or turn in the last joint's origin error (the rule before)
+// left the flange up to 0.02 mm from anywhere a fit could put it with degree-sized errors -- the
+// TCP's error 3.3 times the measured point's, from a choice no measurement can show. kincal holds
+// DH's theta_n and d_n, the same place.
+void place_flange_as_nominal(Truth& t, const Chain& chain) {
+  const Pose nominal = flange_placement(chain, ChainErrors(chain.joints.size()));
+  int column = 0;  // the flange's axis farthest from the last axis: its turn about it is best defined
+  nominal.linear().row(2).cwiseAbs().minCoeff(&column);
+  const auto slide_and_turn = [&](const Pose& actual) {
+    const Eigen::Vector3d a = nominal.linear().col(column), b = actual.linear().col(column);
+    return Eigen::Vector2d(nominal.translation().z() - actual.translation().z(),
+                           std::remainder(std::atan2(a.y(), a.x()) - std::atan2(b.y(), b.x()), 2.0 * M_PI));
+  };
+  const Eigen::Vector3d axis = chain.joints.back().axis;
+  Vector6& last = t.errors.origin.back();
+  const auto set_last = [&](const Pose& origin_error) {
+    const Eigen::AngleAxisd turn(origin_error.linear());
+    last << origin_error.translation(), turn.angle() * turn.axis();
+  };
+  // The last joint's zero turns the flange about the same axis: folded into its origin first.
+  set_last(small_motion(last) * Eigen::AngleAxisd(t.errors.zero.back(), axis));
+  t.errors.zero.back() = 0.0;
+  const Eigen::Vector2d change = slide_and_turn(flange_placement(chain, t.errors));
+  set_last(small_motion(last) * Eigen::AngleAxisd(change(1), axis) * Eigen::Translation3d(change(0) * axis));
+  if (slide_and_turn(flange_placement(chain, t.errors)).norm() > 1e-12)
+    throw std::logic_error("place_flange_as_nominal: the flange did not come back to its nominal place");
+}
 
 // Names in the enums' order.
 const char* name(Instrument i) {

@@ -41,6 +41,13 @@ struct Row {
 
 Truth make_truth(const Chain& chain, Instrument instrument, ErrorClass error_class, std::mt19937& rng);
 
+// Slides the flange along and turns it about the last axis to where the nominal chain puts it
+// relative to the last two axes' common normal: what no measurement on the last body can tell from
+// the measured point's offset, so the truth's place for it and the only one a fit can have (the
+// oracle's, at the TCP). Throws std::runtime_error for a chain whose last two joints are not two
+// revolute joints with axes at least 0.1 rad from parallel.
+void place_flange_as_nominal(Truth& t, const Chain& chain);
+
 // n configurations within the joint limits with the flange above the base and the point in the
 // device's sight (a 40 deg cone for trackers, the field of view and a board facing the camera).
 std::vector<std::vector<double>> configurations(const Chain& chain, const Truth& truth, int n, std::mt19937& rng);
