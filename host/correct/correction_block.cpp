@@ -62,6 +62,12 @@ shared::CorrectionParameters correction_block(const model::RobotModel& controlle
   // when the controller's model has no compliance: its masses then act on nothing.
   const bool controller_sags = std::any_of(controller.joints.begin(), controller.joints.end(),
                                            [](const model::Joint& j) { return j.compliance.value_or(0.0) != 0.0; });
+  // A calibration writes a link's centre of mass anew where it moved the frame it is given in (the
+  // mass stays on its body: model::carry_centres_of_mass); carried back to the controller's
+  // geometry it is the controller's own, and the block's one set is the controller's (in the
+  // calibrated chain's deflection off by the geometry's change times the sag: second order).
+  model::RobotModel carried_back = identified;
+  model::carry_centres_of_mass(carried_back, b, a);
   for (int j = 0; j < n; ++j) {
     const model::Joint& ja = controller.joints[static_cast<std::size_t>(j)];
     const model::Joint& jb = identified.joints[static_cast<std::size_t>(j)];
@@ -70,7 +76,9 @@ shared::CorrectionParameters correction_block(const model::RobotModel& controlle
       throw model::InputError("correction block: " + name +
                               "'s coupling row differs between the models (an identified coupling): the block carries "
                               "the controller's row only; correct on the PC (kincal correct) instead");
-    const bool masses_differ = ja.mass_kg != jb.mass_kg || ja.centre_of_mass_m != jb.centre_of_mass_m;
+    const bool masses_differ =
+        ja.mass_kg != jb.mass_kg ||
+        (carried_back.joints[static_cast<std::size_t>(j)].centre_of_mass_m - ja.centre_of_mass_m).norm() > 1e-9;
     if (masses_differ && controller_sags)
       throw model::InputError("correction block: " + name +
                               "'s mass differs between the models while the controller's model has a compliance: the "

@@ -105,6 +105,7 @@ void Parameterization::set(std::span<const double> delta) {
   core::ChainModel<double> current;
   if (core::apply_parameter_errors(start_chain_, chosen, errors, current) != core::ErrorModelStatus::ok)
     throw std::invalid_argument("Parameterization: a parameter names a joint the model does not have");
+  model::carry_centres_of_mass(current_, start_chain_, current);
   core::prepare_chain(current, prepared_);
   current_chain_ = current;
   base_exp_t_ = Eigen::AngleAxisd(base_r.norm(), base_r.norm() > 0 ? base_r.normalized() : Eigen::Vector3d::UnitZ())

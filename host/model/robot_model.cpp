@@ -11,6 +11,45 @@ namespace kincal::model {
 
 namespace {
 
+// Whether link parameter `kind` of a revolute joint's link acts after the joint's motion in the
+// link transform (firmware/core/link_model.hpp's conventions): it places the next axis on the
+// body the joint turns, and that body's mass stays where it is (carry_centres_of_mass).
+bool beyond_motion(core::LinkConvention convention, core::ParameterKind kind) {
+  using K = core::ParameterKind;
+  switch (convention) {
+    case core::LinkConvention::standard_dh:  // Rz(theta) | Tz(d) Tx(a) Rx(alpha)
+      return kind == K::link_d || kind == K::link_a || kind == K::link_alpha;
+    case core::LinkConvention::doty:  // Tz(d) Rz(theta) | Ry(beta) Tx(a) Rx(alpha)
+      return kind == K::link_beta || kind == K::link_a || kind == K::link_alpha;
+    case core::LinkConvention::modified_dh:  // Rx(alpha) Tx(a) Rz(theta) | Tz(d)
+      return kind == K::link_d;
+  }
+  return false;
+}
+
+// A revolute joint's link with a mass given (a URDF's, a model file's), not identified: its centre
+// is kept on the body (carry_centres_of_mass). An identified centre (geometry+sag's) has no given
+// place, and carried it let 10 rows of the zoo's SIA10F run off (131 mm out of range).
+bool carries_given_mass(const Joint& j) {
+  return j.type == core::JointType::revolute && j.mass_kg != 0.0 && !j.identify_mass;
+}
+
+// That part of a link's transform: frame i in the frame that turns with joint i.
+Eigen::Isometry3d beyond_motion_transform(const core::Link<double>& link) {
+  const core::LinkParameters<double>& p = link.parameters;
+  const Eigen::Isometry3d tz(Eigen::Translation3d(0.0, 0.0, p.d_m)), tx(Eigen::Translation3d(p.a_m, 0.0, 0.0));
+  const Eigen::Isometry3d rx(Eigen::AngleAxisd(p.alpha_rad, Vector3::UnitX()));
+  switch (link.convention) {
+    case core::LinkConvention::standard_dh:
+      return tz * tx * rx;
+    case core::LinkConvention::doty:
+      return Eigen::Isometry3d(Eigen::AngleAxisd(p.beta_rad, Vector3::UnitY())) * tx * rx;
+    case core::LinkConvention::modified_dh:
+      return tz;
+  }
+  return Eigen::Isometry3d::Identity();
+}
+
 double& variable_parameter(core::LinkParameters<double>& p, core::JointType type) {
   return type == core::JointType::revolute ? p.theta_rad : p.d_m;
 }
@@ -168,8 +207,9 @@ class GravityDerivatives {
     Vector3 moment = mass * place(n_, masses_.payload_centre_of_mass_m);
     for (int b = n_ - 1; b >= 0; --b) {
       const auto k = static_cast<std::size_t>(b);
+      own_moment_[k] = masses_.link_mass_kg[k] * place(b + 1, masses_.link_centre_of_mass_m[k]);
       mass += masses_.link_mass_kg[k];
-      moment += masses_.link_mass_kg[k] * place(b + 1, masses_.link_centre_of_mass_m[k]);
+      moment += own_moment_[k];
       mass_[k] = mass;
       moment_[k] = moment;
     }
@@ -201,11 +241,15 @@ class GravityDerivatives {
   }
 
   // dG for the rigid motion of every frame beyond link `link` by `twist`: [w x (p - o); w] at the
-  // tool point p of frames(), as the core's Jacobian columns are.
-  core::JointVector<double> by_motion(std::size_t link, const Eigen::Matrix<double, 6, 1>& twist) const {
+  // tool point p of frames(), as the core's Jacobian columns are; the link's own mass moves too
+  // unless `own_mass_stays` (a parameter beyond its joint's motion: carry_centres_of_mass).
+  core::JointVector<double> by_motion(std::size_t link, const Eigen::Matrix<double, 6, 1>& twist,
+                                      bool own_mass_stays = false) const {
     const Vector3 w = twist.tail<3>();
     const Vector3 v0 = twist.head<3>() - w.cross(frames_.base_T_tool.translation);
-    const Vector3 beyond = w.cross(moment_[link]) + mass_[link] * v0;  // w x D + m_D v0
+    const Vector3 moment = moment_[link] - (own_mass_stays ? own_moment_[link] : Vector3::Zero());
+    const double mass = mass_[link] - (own_mass_stays ? masses_.link_mass_kg[link] : 0.0);
+    const Vector3 beyond = w.cross(moment) + mass * v0;  // w x D + m_D v0
     core::JointVector<double> d = core::JointVector<double>::Zero();
     for (int j = 0; j < n_; ++j) {
       const auto k = static_cast<std::size_t>(j);
@@ -249,6 +293,7 @@ class GravityDerivatives {
   Vector3 g_ = Vector3::Zero();
   std::array<double, core::kMaxJoints> mass_{};  // of the bodies joint j moves, payload included
   std::array<Vector3, core::kMaxJoints> moment_{};
+  std::array<Vector3, core::kMaxJoints> own_moment_{};  // link j's own m c
 };
 
 }  // namespace
@@ -529,8 +574,11 @@ Eigen::MatrixXd parameter_jacobian(const RobotModel& model, const ChainAtJoints&
     out.col(col) = e.col(g);
     // A link parameter moves the deflection too (base and tool motions do not: gravity is given
     // in frame 0 and the payload in the flange frame).
-    if (gravity && id.kind <= core::ParameterKind::link_beta)
-      out.col(col) += joints.leftCols(n) * gravity->by_motion(id.link, motions.col(g)).head(n).cwiseProduct(k);
+    if (gravity && id.kind <= core::ParameterKind::link_beta) {
+      const model::Joint& joint = model.joints[id.link];
+      const bool stays = carries_given_mass(joint) && beyond_motion(joint.convention, id.kind);
+      out.col(col) += joints.leftCols(n) * gravity->by_motion(id.link, motions.col(g), stays).head(n).cwiseProduct(k);
+    }
   }
   return out;
 }
@@ -553,9 +601,22 @@ RobotModel apply_parameter_errors(const RobotModel& model, std::span<const core:
   core::ErrorVector<double> e = core::ErrorVector<double>::Zero();
   for (int k = 0; k < set.count; ++k) e(k) = geometric_errors[static_cast<std::size_t>(k)];
   core::ChainModel<double> actual;
-  if (core::apply_parameter_errors(to_chain(model), set, e, actual) != core::ErrorModelStatus::ok)
+  const core::ChainModel<double> before = to_chain(model);
+  if (core::apply_parameter_errors(before, set, e, actual) != core::ErrorModelStatus::ok)
     throw std::invalid_argument("apply_parameter_errors: a parameter names a joint the model does not have");
-  return from_chain(out, actual);
+  out = from_chain(out, actual);
+  carry_centres_of_mass(out, before, actual);
+  return out;
+}
+
+void carry_centres_of_mass(RobotModel& model, const core::ChainModel<double>& before,
+                           const core::ChainModel<double>& after) {
+  for (std::size_t i = 0; i < model.joints.size() && i < static_cast<std::size_t>(core::kMaxJoints); ++i) {
+    Joint& j = model.joints[i];
+    if (!carries_given_mass(j)) continue;
+    j.centre_of_mass_m = beyond_motion_transform(after.links[i]).inverse() *
+                         (beyond_motion_transform(before.links[i]) * j.centre_of_mass_m);
+  }
 }
 
 void add_joint_map_error(RobotModel& model, core::ParameterId id, double error) {

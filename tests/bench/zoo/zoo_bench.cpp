@@ -21,10 +21,12 @@
 // (48 clean cases; the third class alternates between a scaled and a coupled joint), the robots in
 // turn, and each of the 6 mistakes planted twice on a clean case's data (12 cases).
 //
-// Usage: zoo_bench [--cases N] [--filter TEXT] [--work DIR] [--kincal PATH]
+// Usage: zoo_bench [--cases N] [--filter TEXT] [--work DIR] [--kincal PATH] [--draw N] [--robot URDF]
 //   --cases N: the first N cases of the design; --filter: only cases whose label (robot/instrument/
 //   class/size/mistake) contains TEXT; --work: the folder the cases' files are kept in;
-//   --identify-arg ARG: an argument added to identify's defaults (repeat it), to judge a non-default.
+//   --identify-arg ARG: an argument added to identify's defaults (repeat it), to judge a non-default;
+//   --draw N: another draw of the design (design()), to see how the figures spread; --robot URDF:
+//   that robot (repeat it) instead of the zoo's, the design's cases on it in turn.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -78,17 +80,24 @@ struct CaseResult {
   std::vector<std::string> notes;  // what failed, or what caught the mistake
 };
 
-std::vector<Robot> zoo_robots(const std::string& corpus, const std::string& robots, const std::string& zoo) {
+// The zoo's robots: every URDF of the corpus, the project's UR10 and the torso lift.
+std::vector<std::string> zoo_robot_paths(const std::string& corpus, const std::string& robots, const std::string& zoo) {
   std::vector<std::string> paths;
   for (const fs::directory_entry& e : fs::recursive_directory_iterator(corpus))
     if (e.path().extension() == ".urdf") paths.push_back(e.path().string());
   std::sort(paths.begin(), paths.end());
   paths.push_back(robots + "/ur10.urdf");
   paths.push_back(zoo + "/torso_lift_6r.urdf");
+  return paths;
+}
+
+std::vector<Robot> read_robots(const std::vector<std::string>& paths) {
   std::vector<Robot> out;
   for (const std::string& p : paths) {
     try {
       Chain c = read_chain(p);
+      Truth flange_placeable(c.joints.size());
+      place_flange_as_nominal(flange_placeable, c);  // throws for a chain the truth cannot be made for
       std::cout << "robot " << fs::path(p).stem().string() << ": " << c.joints.size() << " joints, " << c.root_link
                 << " -> " << c.flange_link << ", masses " << (c.masses_from_urdf ? "from the URDF" : "assumed") << '\n';
       out.push_back(Robot{fs::path(p).stem().string(), std::move(c)});
@@ -99,20 +108,22 @@ std::vector<Robot> zoo_robots(const std::string& corpus, const std::string& robo
   return out;
 }
 
-std::vector<CaseSpec> design(const std::vector<Robot>& robots) {
+// draw 0 is the benchmark's; another moves every seed by 1000 draw and turns the robots by `draw`
+// places, for how the figures spread over truths, noise and robots the figures did not see.
+std::vector<CaseSpec> design(const std::vector<Robot>& robots, int draw) {
   const int sizes[] = {20, 40, 100, 300};
   std::vector<CaseSpec> cases;
   for (int k = 0; k < 48; ++k) {
     CaseSpec c;
     c.index = k;
-    c.robot = &robots[static_cast<std::size_t>(k) % robots.size()];
+    c.robot = &robots[static_cast<std::size_t>(k + draw) % robots.size()];
     c.instrument = static_cast<Instrument>(k % 4);
     c.size = sizes[(k / 4) % 4];
     const int cls = (k / 16) % 3;
     c.error_class = cls == 0   ? ErrorClass::precise
                     : cls == 1 ? ErrorClass::service
                                : (k % 2 == 0 ? ErrorClass::scaled : ErrorClass::coupled);
-    c.seed = 41000u + static_cast<unsigned>(k);
+    c.seed = 41000u + 1000u * static_cast<unsigned>(draw) + static_cast<unsigned>(k);
     cases.push_back(c);
   }
   const Mistake mistakes[] = {Mistake::mirrored,          Mistake::joints_swapped, Mistake::positions_swapped,
@@ -523,20 +534,30 @@ struct Ratios {
 
 int main(int argc, char** argv) {
   CLI::App app{"zoo benchmark (issues #41, #42)"};
-  int max_cases = 1000;
+  int max_cases = 1000, draw = 0;
   std::string filter, work = (fs::temp_directory_path() / "kincal_zoo").string(), kincal = KINCAL_CLI;
-  std::vector<std::string> identify_args;
+  std::vector<std::string> identify_args, robot_paths;
   app.add_option("--cases", max_cases, "run the first N cases of the design");
   app.add_option("--filter", filter, "run the cases whose label (robot/instrument/class/size/mistake) holds TEXT");
   app.add_option("--work", work, "folder for the cases' files (kept)");
   app.add_option("--kincal", kincal, "the kincal command");
+  app.add_option("--robot", robot_paths, "judge this URDF's robot instead of the zoo's (repeat it)")
+      ->check(CLI::ExistingFile)
+      ->allow_extra_args(false);
+  app.add_option("--draw", draw, "another draw of the design: other seeds, robots turned by N places (0: the figures')")
+      ->check(CLI::Range(0, 1000));
   app.add_option("--identify-arg", identify_args, "an argument added to identify's (repeat it; judges a non-default)")
       ->allow_extra_args(false);
   CLI11_PARSE(app, argc, argv);
   work = fs::absolute(work).string();
 
-  const std::vector<Robot> robots = zoo_robots(ZOO_URDF_CORPUS_DIR, ZOO_ROBOTS_DIR, ZOO_SOURCE_DIR);
-  const std::vector<CaseSpec> all = design(robots);
+  const std::vector<Robot> robots = read_robots(
+      robot_paths.empty() ? zoo_robot_paths(ZOO_URDF_CORPUS_DIR, ZOO_ROBOTS_DIR, ZOO_SOURCE_DIR) : robot_paths);
+  if (robots.empty()) {
+    std::cerr << "zoo_bench: no robot to judge\n";
+    return 1;
+  }
+  const std::vector<CaseSpec> all = design(robots, draw);
   std::vector<CaseSpec> cases;
   for (const CaseSpec& c : all)
     if (c.index < max_cases && c.label().find(filter) != std::string::npos) cases.push_back(c);

@@ -1,6 +1,7 @@
 // host/model: model files, datasets, kinematics and Jacobians, axes, URDF.
 #include <doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -204,6 +205,55 @@ TEST_CASE("joint and parameter Jacobians with compliance, masses, a payload and 
   const std::vector<core::ParameterId> ids = {
       {model::kJointCompliance, 1}, {model::kLinkMass, 1}, {model::kLinkCentreZ, 1}, {model::kGravityRx, 0}};
   CHECK(model::parameter_jacobian(rigid, random_q(rng, 3), ids).isZero());
+}
+
+// A calibration that moves the next axis on a body moves the frame a link's centre of mass is
+// given in (frame i, at the link's far end), not the mass: it keeps its place on the body its
+// joint turns, as a URDF's <inertial> in its link's frame does. theta (and d of Doty's links, before
+// the motion) move the body and the mass with it.
+TEST_CASE("a link's centre of mass stays on the body its joint turns when a calibration moves the next axis") {
+  std::mt19937_64 rng(31);
+  using K = core::ParameterKind;
+  for (const core::LinkConvention convention :
+       {core::LinkConvention::standard_dh, core::LinkConvention::modified_dh, core::LinkConvention::doty}) {
+    RobotModel m = random_model(rng, 3);
+    for (model::Joint& j : m.joints) j.type = core::JointType::revolute;
+    m.joints[1].convention = convention;
+    m.joints[1].parameters.beta_rad = convention == core::LinkConvention::doty ? 0.2 : 0.0;
+    m.joints[1].mass_kg = 3.0;
+    m.joints[1].centre_of_mass_m = {0.15, -0.1, 0.2};
+    const std::vector<double> q = random_q(rng, 3);
+    const auto centre = [&](const RobotModel& model) {
+      return Eigen::Vector3d(model::chain_at_joints(model, q).frames.base_T_frame[2] *
+                             model.joints[1].centre_of_mass_m);
+    };
+    const auto frame = [&](const RobotModel& model) {
+      return Eigen::Vector3d(model::chain_at_joints(model, q).frames.base_T_frame[2].translation);
+    };
+    const std::vector<K> beyond =
+        convention == core::LinkConvention::standard_dh ? std::vector<K>{K::link_d, K::link_a, K::link_alpha}
+        : convention == core::LinkConvention::doty      ? std::vector<K>{K::link_beta, K::link_a, K::link_alpha}
+                                                        : std::vector<K>{K::link_d};
+    for (const K kind : {K::link_d, K::link_theta, K::link_a, K::link_alpha, K::link_beta}) {
+      if (kind == K::link_beta && convention != core::LinkConvention::doty) continue;
+      const std::vector<core::ParameterId> ids = {{kind, 1}};
+      const RobotModel moved = model::apply_parameter_errors(m, ids, Eigen::VectorXd::Constant(1, 0.05));
+      INFO("convention ", static_cast<int>(convention), ", parameter ", model::parameter_name(ids[0]));
+      const bool stays = std::find(beyond.begin(), beyond.end(), kind) != beyond.end();
+      if (stays) {
+        CHECK((frame(moved) - frame(m)).norm() + (model::chain_at_joints(moved, q).frames.base_T_frame[2].rotation -
+                                                  model::chain_at_joints(m, q).frames.base_T_frame[2].rotation)
+                                                     .norm() >
+              1e-3);                                        // the frame moved ...
+        CHECK((centre(moved) - centre(m)).norm() < 1e-12);  // ... the mass did not
+      } else {
+        CHECK((centre(moved) - centre(m)).norm() > 1e-3);  // the body and its mass moved
+      }
+      // Undone, the centre comes back where it was given.
+      const RobotModel back = model::apply_parameter_errors(moved, ids, Eigen::VectorXd::Constant(1, -0.05));
+      CHECK((back.joints[1].centre_of_mass_m - m.joints[1].centre_of_mass_m).norm() < 1e-12);
+    }
+  }
 }
 
 TEST_CASE("model files: read, write, read back") {
