@@ -839,9 +839,6 @@ IdentifyResult gated(const RobotModel& nominal, const model::Dataset& data, cons
         nominal, options, identify_ungated(nominal, data, first_sag_stage(nominal, options)).model, data);
     IdentifyResult r = gated(second.model, data, second.options, with_rule);
     finish_sag_model(r.model);
-    // The table's nominal compliance is the arm's, not stage 1's (the record counts from it too):
-    // a compliance of 57 urad/Nm printed as a change of 0.04 from stage 1 read as none at all.
-    for (std::size_t i = 0; i < r.start.joints.size(); ++i) r.start.joints[i].compliance = nominal.joints[i].compliance;
     r.notes.push_back(second.note);
     return r;
   }
