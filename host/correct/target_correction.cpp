@@ -47,6 +47,7 @@ std::vector<TargetResult> TargetCorrector::correct(const std::vector<Target>& ta
       r.platform_step_used = c.platform_step_used;
       r.refined = c.refined;
       r.nominal = t.q;
+      judge_by_spread(r, false, orientation_);
       limit_change(r, t.q, joints_.calibrated_arm(), c.goal, orientation_);
     } else {
       const std::vector<double>& start = t.q.empty() ? seed : t.q;
@@ -62,10 +63,11 @@ std::vector<TargetResult> TargetCorrector::correct(const std::vector<Target>& ta
       // readings nearest the reference.
       const std::vector<double>& reference = t.q.empty() ? r.nominal : t.q;
       r.solution = cartesian_.solve_calibrated(t.pose, t.orientation, r.nominal, reference);
+      judge_by_spread(r, frame_ == TargetFrame::device, t.orientation);
       limit_change(r, reference, cartesian_.calibrated_arm(), cartesian_.in_base(t.pose), t.orientation);
       r.command = model::forward_kinematics(nominal_arm_, r.solution.q);
     }
-    if (covariance_)
+    if (covariance_)  // at the readings sent (the joint-change limit may have changed them)
       r.spread =
           predicted_spread(calibrated_, *covariance_, r.solution.q, t.cartesian && frame_ == TargetFrame::device);
     seed = r.nominal;
@@ -85,6 +87,16 @@ TargetCorrector::JointChange TargetCorrector::largest_change(const std::vector<d
     out = {change / limit, static_cast<int>(i), change};
   }
   return out;
+}
+
+void TargetCorrector::judge_by_spread(TargetResult& r, bool with_base, bool orientation) const {
+  if (!covariance_ || r.solution.outcome == Outcome::reached) return;
+  const PoseSpread spread = predicted_spread(calibrated_, *covariance_, r.solution.q, with_base);
+  if (r.solution.residual_m > kWithinSpread * spread.position_m ||
+      (orientation && r.solution.residual_rad > kWithinSpread * spread.orientation_rad))
+    return;
+  r.short_of = r.solution.outcome;
+  r.solution.outcome = Outcome::reached;
 }
 
 void TargetCorrector::limit_change(TargetResult& r, const std::vector<double>& reference, const model::RobotModel& arm,
@@ -120,6 +132,7 @@ void TargetCorrector::limit_change(TargetResult& r, const std::vector<double>& r
   if (r.change_over_limit <= 1.0 || r.solution.outcome != Outcome::reached) return;
   const Eigen::Matrix<double, 6, 1> correction = pose_residual(goal, model::forward_kinematics(arm, reference));
   r.solution.outcome = Outcome::joint_change_limit;
+  r.short_of.reset();
   r.solution.q = reference;
   r.solution.residual_m = correction.head<3>().norm();
   r.solution.residual_rad = orientation ? correction.tail<3>().norm() : 0.0;

@@ -22,6 +22,15 @@
 // its change named in the result. The reference: a joint target's own readings; a Cartesian
 // target's own seed reading (what the user's controller goes to) when it has one, else the
 // controller's (nominal) solution from the seed before it.
+//
+// Reached within the prediction's spread: a goal at the edge of what the calibrated model reaches
+// (a stretched elbow, a joint at its limit) may be missed by the model by hundredths of a
+// millimetre where the model itself predicts to a tenth, and the real arm reaches it. With a
+// covariance, a solve that stops short with a residual of at most kWithinSpread times the
+// predicted spread at its readings (position, and orientation where the goal has one) counts as
+// reached -- its error on the arm is then the model's own, at most 12 % more -- and the solve's own
+// outcome is kept beside it (TargetResult::short_of); the joint-change limit holds as for any
+// reached target.
 #pragma once
 
 #include <cstddef>
@@ -41,6 +50,10 @@ namespace kincal::correct {
 // (20 million) would have taken gigabytes; more are refused as the one past it is read.
 inline constexpr std::size_t kMaxTargets = 1000000;
 
+// A residual this fraction of the predicted spread, or less, counts as reached (see the top):
+// sqrt(1 + 0.5^2) = 1.12 times the model's own error on the arm.
+inline constexpr double kWithinSpread = 0.5;
+
 struct Target {
   int line = 0;
   bool cartesian = false;
@@ -59,6 +72,8 @@ struct TargetResult {
   Solution solution;                                 // the readings to send, outcome and residual (frame 0 to tool)
   bool platform_step_used = false, refined = false;  // joint targets: as JointCorrection
   std::optional<PoseSpread> spread;
+  // Reached within the predicted spread (see the top): the solve's own outcome.
+  std::optional<Outcome> short_of;
   std::vector<double> nominal;  // the controller's readings for the target (the next one's seed)
   // The largest change of a reading from the reference, as a fraction of the limit, and its joint
   // (0-based) and size (rad or m).
@@ -97,6 +112,10 @@ class TargetCorrector {
     double change = 0.0;      // rad or m
   };
   JointChange largest_change(const std::vector<double>& q, const std::vector<double>& reference) const;
+
+  // r.spread at r.solution's readings (with a covariance); a solve short of its goal by at most
+  // kWithinSpread of it counts as reached (see the top).
+  void judge_by_spread(TargetResult& r, bool with_base, bool orientation) const;
 
   // Fills r's change fields against `reference`; refuses r (see the top) beyond the limit, with
   // its residual to `goal` (frame 0) on `arm`.

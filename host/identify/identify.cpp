@@ -838,7 +838,7 @@ IdentifyResult gated(const RobotModel& nominal, const model::Dataset& data, cons
     const SagStage second = second_sag_stage(
         nominal, options, identify_ungated(nominal, data, first_sag_stage(nominal, options)).model, data);
     IdentifyResult r = gated(second.model, data, second.options, with_rule);
-    finish_sag_model(r.model);
+    finish_sag_result(r, nominal);
     r.notes.push_back(second.note);
     return r;
   }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 namespace kincal::identify {
@@ -92,7 +93,16 @@ SagStage second_sag_stage(const RobotModel& model, const IdentifyOptions& option
   return s;
 }
 
-void finish_sag_model(RobotModel& model) {
+void finish_sag_result(IdentifyResult& r, const RobotModel& nominal) {
+  for (std::size_t k = 0; k < r.identifiability.identified.size(); ++k) {
+    const core::ParameterId id = r.identifiability.identified[k];
+    if (id.kind != model::kJointCompliance) continue;
+    std::optional<double>& start = r.start.joints.at(id.link).compliance;
+    const std::optional<double>& own = nominal.joints.at(id.link).compliance;
+    r.change(static_cast<Eigen::Index>(k)) += start.value_or(0.0) - own.value_or(0.0);
+    start = own;
+  }
+  RobotModel& model = r.model;
   double carried_kg = model.payload.mass_kg;
   for (std::size_t i = model.joints.size(); i-- > 0;) {
     carried_kg += model.joints[i].mass_kg;

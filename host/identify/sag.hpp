@@ -63,13 +63,15 @@ struct SagStage {
 SagStage second_sag_stage(const RobotModel& model, const IdentifyOptions& options, const RobotModel& first,
                           const model::Dataset& data);
 
-// The candidate's result made a model every command reads as a calibration of `nominal`'s arm:
+// Stage 2's result `r` made a calibration of `nominal`'s arm (the stage-1 model's start):
 //  - a compliance whose joint carries no mass (every mass after it identified as 0) cannot act and
 //    model files refuse it: removed (the predictions do not change);
 //  - the calibration record counts every compliance left from zero, the nominal's (stage 1's
 //    values and the gauge's held one included), so that undoing the record (what `correct` and
 //    `export` take the controller's model from) gives back an arm that does not sag rather than
-//    one sagging by stage 1's compliances under the start's masses.
-void finish_sag_model(RobotModel& model);
+//    one sagging by stage 1's compliances under the start's masses;
+//  - the report's start and changes count each compliance from `nominal`'s too (from stage 1's,
+//    a compliance stage 2 took back to 0 was printed as a change of -87 urad/Nm).
+void finish_sag_result(IdentifyResult& r, const RobotModel& nominal);
 
 }  // namespace kincal::identify

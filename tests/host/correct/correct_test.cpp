@@ -318,6 +318,49 @@ TEST_CASE("target corrector: a redundant goal just past the limit in the smalles
   CHECK(refused.solution.q == q);
 }
 
+TEST_CASE("target corrector: a goal the model misses by less than half its predicted spread counts as reached") {
+  // The PUMA stretched toward a point far out of reach; goals just past that stretch, by a fifth and
+  // by three times the spread the model's covariance predicts there.
+  model::RobotModel m = robot("puma560.yaml");
+  m.base_T_frame0 = model::Transform{};
+  for (model::Joint& j : m.joints) j.lower = -(j.upper = std::numeric_limits<double>::infinity());
+  m.calibration = model::CalibrationRecord{};
+  m.calibration->parameters = {{"a2", 0.0, 1e-4}, {"d3", 0.0, 1e-4}, {"theta2", 0.0, 1e-4}};
+  const auto covariance = correct::record_covariance(m);
+  REQUIRE(covariance);
+  const std::vector<double> seed = {0.1, -0.4, 0.3, 0.2, -0.5, 0.7};
+  model::Transform far = model::forward_kinematics(m, seed);
+  far.translation *= 5.0;
+  correct::SolveOptions to_the_end;  // the stretch to a tolerance far below the spread
+  to_the_end.max_iterations = 2000;
+  const correct::Solution stretched = correct::solve_pose(m, far, false, seed, to_the_end);
+  REQUIRE(stretched.outcome != correct::Outcome::reached);
+  INFO("stretched after ", stretched.iterations, " iterations, residual ", stretched.residual_m);
+  const model::Vector3 edge = model::forward_kinematics(m, stretched.q).translation;
+  const model::Vector3 out = (far.translation - edge).normalized();
+  const double spread = correct::predicted_spread(m, *covariance, stretched.q, false).position_m;
+  REQUIRE(spread > 1e-5);
+  const auto target = [&](double beyond) {
+    model::Transform goal = far;
+    goal.translation = edge + beyond * spread * out;
+    return std::vector<correct::Target>{{2, true, stretched.q, goal, false}};
+  };
+  correct::TargetCorrector with(m, m, correct::TargetFrame::base, covariance);
+  const correct::TargetResult near = with.correct(target(0.2), {}, "t.csv").front();
+  INFO("near: residual ", near.solution.residual_m, " of a spread ", spread);
+  CHECK(near.solution.outcome == correct::Outcome::reached);
+  REQUIRE(near.short_of);
+  CHECK(*near.short_of != correct::Outcome::reached);
+  CHECK(near.solution.residual_m > 0.1 * spread);  // the model's miss is kept and reported
+  CHECK(near.solution.residual_m <= correct::kWithinSpread * spread);
+  const correct::TargetResult beyond = with.correct(target(3.0), {}, "t.csv").front();
+  CHECK(beyond.solution.outcome != correct::Outcome::reached);
+  CHECK(!beyond.short_of);
+  // Without a covariance there is no spread to be within.
+  correct::TargetCorrector without(m, m, correct::TargetFrame::base, std::nullopt);
+  CHECK(without.correct(target(0.2), {}, "t.csv").front().solution.outcome != correct::Outcome::reached);
+}
+
 TEST_CASE("Cartesian targets: base and device frames give the same readings; the seed's wrist is kept") {
   model::RobotModel start = robot("puma560.yaml");
   start.base_T_frame0 = model::Transform{};
