@@ -297,9 +297,12 @@ constexpr const char* kDefaultCandidate = "geometry";
 // How many standard errors of the rows' paired differences a candidate's held-out errors must lie
 // below the one it replaces (the rejection gate's kGateT, identify.cpp).
 constexpr double kBeatsT = 2.0;
+// The out-of-range fold's RMS counts in the score when its training rows give at least this many
+// equations per parameter of the largest candidate judged (the header's Score).
+constexpr int kRangeEquationsPerParameter = 5;
 
 // The paired t of `a`'s held-out position errors against `b`'s, one difference per row: its
-// K-fold errors' difference, plus its out-of-range errors' when the score counts that fold.
+// K-fold errors' difference, plus its out-of-range errors' when the rule counts that fold.
 double row_paired_t(const CrossValidation& a, const CrossValidation& b, bool any_range) {
   std::vector<double> d(a.kfold_rows.size(), 0.0);  // by row: the K folds hold every row once
   for (std::size_t i = 0; i < a.kfold_rows.size(); ++i)
@@ -312,14 +315,18 @@ double row_paired_t(const CrossValidation& a, const CrossValidation& b, bool any
 }
 
 // The chosen candidate and the figures that decided, in words.
-std::string reason_for(const Selection& s, int chosen, bool any_range) {
+std::string reason_for(const Selection& s, int chosen, bool any_range, bool range_scored) {
   const CandidateScore& x = s.scores[static_cast<std::size_t>(chosen)];
   std::ostringstream reason;
   reason.setf(std::ios::fixed);
   reason.precision(4);
-  const std::string score = any_range ? "mean of the K-fold and out-of-range RMS"
-                                      : "K-fold RMS (no out-of-range fold: no rows in range, none out of it, or a "
-                                        "candidate that cannot be identified from those in range)";
+  const std::string score =
+      range_scored ? "mean of the K-fold and out-of-range RMS"
+      : any_range
+          ? "K-fold RMS (the out-of-range fold's rows give fewer than " + std::to_string(kRangeEquationsPerParameter) +
+                " equations per parameter: its errors count row by row only)"
+          : "K-fold RMS (no out-of-range fold: no rows in range, none out of it, or a candidate that cannot "
+            "be identified from those in range)";
   const std::string rule = "a candidate must have a lower " + score +
                            " than the default and held-out position errors lower row by row, by " +
                            std::to_string(static_cast<int>(kBeatsT)) +
@@ -382,12 +389,19 @@ Selection select_model(const RobotModel& nominal, const model::Dataset& data, co
                         candidates[c].holds, 0.0, "", cv.why});
   }
   // The out-of-range fold counts when every candidate the K folds could judge was identified on
-  // its in-range rows: a fold that only the small models can be fitted to would favour them.
+  // its in-range rows: a fold that only the small models can be fitted to would favour them. Its
+  // RMS counts in the score only when those rows are enough for the largest of them (the
+  // header's Score).
   const bool any_range = std::all_of(s.scores.begin(), s.scores.end(), [](const CandidateScore& x) {
     return x.kfold_rms_m < 0.0 || x.out_of_range_rms_m >= 0.0;
   });
+  int equations = 0, parameters = 0;
+  for (int i : range.inside) equations += data.rows[static_cast<std::size_t>(i)].orientation ? 6 : 3;
+  for (const CandidateScore& x : s.scores)
+    if (x.kfold_rms_m >= 0.0) parameters = std::max(parameters, x.parameters);
+  const bool range_scored = any_range && equations >= kRangeEquationsPerParameter * parameters;
   for (CandidateScore& x : s.scores)
-    if (x.kfold_rms_m >= 0.0) x.score_m = any_range ? 0.5 * (x.kfold_rms_m + x.out_of_range_rms_m) : x.kfold_rms_m;
+    if (x.kfold_rms_m >= 0.0) x.score_m = range_scored ? 0.5 * (x.kfold_rms_m + x.out_of_range_rms_m) : x.kfold_rms_m;
   const int best = choose_candidate(s.scores, validations, any_range);
   if (best < 0) {
     std::string why;
@@ -401,7 +415,7 @@ Selection select_model(const RobotModel& nominal, const model::Dataset& data, co
   s.chosen_cross_validation = scoring.folds == options.folds
                                   ? std::move(validations[static_cast<std::size_t>(best)])
                                   : cross_validate(s.chosen.model, data, s.chosen.options, options);
-  s.reason = reason_for(s, best, any_range);
+  s.reason = reason_for(s, best, any_range, range_scored);
   return s;
 }
 
