@@ -58,7 +58,7 @@
 // 36 parameters, it preferred geometry+scales, 0.985 mm against 1.31, over the true couplings,
 // which the K folds favoured 0.44 against 0.62, and left 10.9 times the oracle's held-out error;
 // scored by the K folds, the couplings: 1.04), where row by row its rows still add their evidence
-// (the shared UR10's first 30 training rows: geometry+scales beats geometry at paired t -2.0 with
+// (the UR10 bench's 30 training rows: geometry+scales beats geometry at paired t -2.0 with
 // them, 0.4658 mm held out against 0.4807; its extrapolation split has 463 rows in range).
 // A candidate that cannot be identified on some K-fold training rows (too few of them, a
 // joint that never moved there) is out.
