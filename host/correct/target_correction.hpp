@@ -113,8 +113,9 @@ class TargetCorrector {
   };
   JointChange largest_change(const std::vector<double>& q, const std::vector<double>& reference) const;
 
-  // r.spread at r.solution's readings (with a covariance); a solve short of its goal by at most
-  // kWithinSpread of it counts as reached (see the top).
+  // With a covariance, a solve short of its goal by at most kWithinSpread of the predicted spread
+  // at its readings counts as reached (see the top); r.spread itself is set after the joint-change
+  // limit, at the readings sent.
   void judge_by_spread(TargetResult& r, bool with_base, bool orientation) const;
 
   // Fills r's change fields against `reference`; refuses r (see the top) beyond the limit, with
