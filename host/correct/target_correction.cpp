@@ -48,7 +48,7 @@ std::vector<TargetResult> TargetCorrector::correct(const std::vector<Target>& ta
       r.refined = c.refined;
       r.nominal = t.q;
       judge_by_spread(r, false, orientation_);
-      limit_change(r, t.q, joints_.calibrated_arm(), c.goal, orientation_);
+      limit_change(r, t.q, joints_.calibrated_arm(), c.goal, false, orientation_);
     } else {
       const std::vector<double>& start = t.q.empty() ? seed : t.q;
       if (start.empty())
@@ -64,7 +64,8 @@ std::vector<TargetResult> TargetCorrector::correct(const std::vector<Target>& ta
       const std::vector<double>& reference = t.q.empty() ? r.nominal : t.q;
       r.solution = cartesian_.solve_calibrated(t.pose, t.orientation, r.nominal, reference);
       judge_by_spread(r, frame_ == TargetFrame::device, t.orientation);
-      limit_change(r, reference, cartesian_.calibrated_arm(), cartesian_.in_base(t.pose), t.orientation);
+      limit_change(r, reference, cartesian_.calibrated_arm(), cartesian_.in_base(t.pose), frame_ == TargetFrame::device,
+                   t.orientation);
       r.command = model::forward_kinematics(nominal_arm_, r.solution.q);
     }
     if (covariance_)  // at the readings sent (the joint-change limit may have changed them)
@@ -100,7 +101,7 @@ void TargetCorrector::judge_by_spread(TargetResult& r, bool with_base, bool orie
 }
 
 void TargetCorrector::limit_change(TargetResult& r, const std::vector<double>& reference, const model::RobotModel& arm,
-                                   const model::Transform& goal, bool orientation) const {
+                                   const model::Transform& goal, bool with_base, bool orientation) const {
   JointChange c = largest_change(r.solution.q, reference);
   if (c.over_limit > 1.0 && r.solution.outcome == Outcome::reached) {
     // The nearest readings are the smallest change in the solves' 2-norm; a redundant arm can
@@ -117,11 +118,17 @@ void TargetCorrector::limit_change(TargetResult& r, const std::vector<double>& r
       box = box && j.lower <= j.upper;
     }
     if (box) {
-      const Solution again = solve_pose(within, goal, orientation, r.solution.q, cartesian_.options(), reference);
-      const JointChange a = largest_change(again.q, reference);
-      if (again.outcome == Outcome::reached && a.over_limit <= 1.0) {
-        r.solution = again;
-        r.refined = r.refined || r.platform_step_used;  // a joint target's readings: the Newton solve's now
+      // Held within the limit, a goal the unbounded solve met may be missed by what the model
+      // cannot tell (near a singularity, a hundredth of a degree of its error is a tenth of a
+      // degree of a joint): judged by the spread as any solve is.
+      TargetResult again = r;
+      again.solution = solve_pose(within, goal, orientation, r.solution.q, cartesian_.options(), reference);
+      again.short_of.reset();
+      judge_by_spread(again, with_base, orientation);
+      const JointChange a = largest_change(again.solution.q, reference);
+      if (again.solution.outcome == Outcome::reached && a.over_limit <= 1.0) {
+        again.refined = r.refined || r.platform_step_used;  // a joint target's readings: the Newton solve's now
+        r = std::move(again);
         c = a;
       }
     }

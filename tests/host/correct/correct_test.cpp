@@ -361,6 +361,46 @@ TEST_CASE("target corrector: a goal the model misses by less than half its predi
   CHECK(without.correct(target(0.2), {}, "t.csv").front().solution.outcome != correct::Outcome::reached);
 }
 
+TEST_CASE("target corrector: held within the limit, a goal missed by less than half the spread counts as reached") {
+  // A full pose on the 6-joint PUMA has one solution near the seed; with the limit just below its
+  // largest turn, the solve held within the limit misses the goal by a hair (near a singularity,
+  // what the model cannot tell apart): reached when the model's predicted spread is more than
+  // twice that miss, refused and named when it is less.
+  model::RobotModel start = robot("puma560.yaml");
+  start.base_T_frame0 = model::Transform{};
+  const model::RobotModel calibrated = perturbed(start, 2e-3, 2e-3, 6);
+  const std::vector<double> q = {0.1, -0.4, 0.3, 0.2, -0.5, 0.7};
+  const std::vector<correct::Target> targets = {{3, true, q, model::forward_kinematics(start, q), true}};
+  const correct::TargetResult smallest =
+      correct::TargetCorrector(start, calibrated, correct::TargetFrame::base, std::nullopt)
+          .correct(targets, {}, "t.csv")
+          .front();
+  REQUIRE(smallest.solution.outcome == correct::Outcome::reached);
+  correct::JointChangeLimit limit;
+  limit.revolute_rad = 0.99 * smallest.change;
+  const auto with_sigma = [&](double sigma) {
+    model::RobotModel m = calibrated;
+    m.calibration = model::CalibrationRecord{};
+    m.calibration->parameters = {{"a2", 0.0, sigma}, {"d3", 0.0, sigma}, {"theta2", 0.0, sigma}};
+    const auto covariance = correct::record_covariance(m);
+    REQUIRE(covariance);
+    return correct::TargetCorrector(start, m, correct::TargetFrame::base, covariance, {}, limit)
+        .correct(targets, {}, "t.csv")
+        .front();
+  };
+  const correct::TargetResult wide = with_sigma(1e-3);
+  INFO("held within the limit: residual ", wide.solution.residual_m, " m, ", wide.solution.residual_rad, " rad");
+  CHECK(wide.solution.outcome == correct::Outcome::reached);
+  REQUIRE(wide.short_of);
+  CHECK(*wide.short_of != correct::Outcome::reached);
+  CHECK(wide.change_over_limit <= 1.0);
+  CHECK(wide.solution.residual_m > 1e-9);
+  const correct::TargetResult narrow = with_sigma(1e-9);
+  CHECK(narrow.solution.outcome == correct::Outcome::joint_change_limit);
+  CHECK(narrow.solution.q == q);
+  CHECK(narrow.change_over_limit > 1.0);
+}
+
 TEST_CASE("Cartesian targets: base and device frames give the same readings; the seed's wrist is kept") {
   model::RobotModel start = robot("puma560.yaml");
   start.base_T_frame0 = model::Transform{};
