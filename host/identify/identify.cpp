@@ -586,6 +586,11 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
     for (const auto& id : candidate_parameters(result.start))
       if (!contains(fixed, id)) candidates.push_back(id);
   }
+  const std::vector<HeldFixed> unloaded =
+      requested.empty() ? unloaded_compliances(result.start, data, candidates) : std::vector<HeldFixed>{};
+  for (const HeldFixed& h : unloaded)
+    candidates.erase(
+        std::find_if(candidates.begin(), candidates.end(), [&](core::ParameterId id) { return same_id(id, h.id); }));
   for (const auto& id : candidates)
     if (id.kind >= core::ParameterKind::tool_rx && !model::is_joint_map_parameter(id.kind) &&
         result.start.tool == model::ToolKind::point)
@@ -600,13 +605,19 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
     stacked(all, data, weights, rows, r, &j);
     result.identifiability = analyze_identifiability(j, candidates);
   }
+  result.identifiability.held_fixed.insert(result.identifiability.held_fixed.end(), unloaded.begin(), unloaded.end());
   if (!requested.empty() && !result.identifiability.held_fixed.empty()) {
     std::string what;
     for (const HeldFixed& h : result.identifiability.held_fixed)
       what += "\n  " + model::parameter_name(h.id) + ": " + h.reason;
     throw InputError(data.source + ": the data cannot identify the requested parameters:" + what);
   }
-  for (const auto& id : fixed) result.identifiability.held_fixed.push_back({id, "fixed on request"});
+  for (const std::string& name : options.fixed) {
+    const auto because = options.fixed_because.find(name);
+    const std::string reason = because == options.fixed_because.end() ? "fixed on request" : because->second;
+    for (const auto& id : parameter_entry_ids(name, result.start.joint_count()))
+      result.identifiability.held_fixed.push_back({id, reason});
+  }
   const ParameterIds& ids = result.identifiability.identified;
   const int p = static_cast<int>(ids.size());
   const int p_structural = static_cast<int>(structural.identified.size());

@@ -108,6 +108,7 @@
 // from); an unknown parameter name; cpa without single-joint sweeps.
 #pragma once
 
+#include <map>
 #include <optional>
 #include <span>
 #include <string>
@@ -130,7 +131,10 @@ enum class Start { nominal, cpa };
 struct IdentifyOptions {
   Method method = Method::full;
   Start start = Start::nominal;
-  std::vector<std::string> fixed;      // parameter names, or "base" / "tool" for all six
+  std::vector<std::string> fixed;  // parameter names, or "base" / "tool" for all six
+  // Why a name in `fixed` is held when the user did not ask for it (a candidate model's structure,
+  // a sag stage's gauge), as the printout says; a name without one is "fixed on request".
+  std::map<std::string, std::string> fixed_because;
   std::vector<std::string> requested;  // non-empty: identify exactly these (error if not identifiable)
   double sigma_m = 0.0;                // instrument position sigma of rows without covariance; 0: none
   double orientation_sigma_rad = 0.0;  // instrument orientation sigma; 0: none

@@ -26,7 +26,10 @@ Candidate make(std::string name, std::string description, const RobotModel& mode
   Candidate c{std::move(name), std::move(description), model, base};
   c.options.prior.strength *= strength;
   if (strength != 1.0) c.options.prior.estimate_scales = false;
-  c.options.fixed.insert(c.options.fixed.end(), fixed.begin(), fixed.end());
+  for (const std::string& f : fixed) {
+    c.options.fixed.push_back(f);
+    c.options.fixed_because.emplace(f, "not in the candidate " + c.name);
+  }
   return c;
 }
 

@@ -8,6 +8,8 @@
 
 #include <Eigen/Geometry>
 
+#include "host/model/model_file.hpp"
+
 namespace kincal::identify {
 
 namespace {
@@ -195,8 +197,18 @@ PhysicalBounds physical_bounds(const Parameterization& p) {
     const model::Joint& joint = p.start().joints.at(p.ids()[k].link);
     if (kind == model::kJointCompliance) {
       b.lower(i) = -joint.compliance.value_or(0.0);
+      b.upper(i) = model::kMaxCompliance - joint.compliance.value_or(0.0);
     } else if (kind == model::kLinkMass) {
       b.lower(i) = -joint.mass_kg;
+      b.upper(i) = model::kMaxMass_kg - joint.mass_kg;
+    } else if (kind == model::kJointScale) {
+      b.lower(i) = model::kMinScale - joint.scale.value_or(1.0);
+      b.upper(i) = model::kMaxScale - joint.scale.value_or(1.0);
+    } else if (kind == model::kJointCoupling) {
+      const std::size_t from = p.ids()[k].link - 1U;
+      const double at = from < joint.coupling.size() ? joint.coupling[from] : 0.0;
+      b.lower(i) = -model::kMaxCoupling - at;
+      b.upper(i) = model::kMaxCoupling - at;
     } else if (model::is_mass_parameter(kind)) {  // a centre of mass coordinate
       if (!size) size = arm_size_m(p.start());
       const double at =

@@ -90,8 +90,11 @@ Eigen::Matrix<double, 6, 1> small_motion(const Transform& a, const Transform& b)
 // mass<i> (model/robot_model.hpp's identify_mass) never goes negative, and an identified centre of
 // mass stays within the arm's size (the sum of its links' lengths at zero and the tool's offset
 // from the last frame): a link whose mass goes to 0 with its first moment kept would otherwise
-// carry its centre off to kilometres. The solve keeps to them (Ceres bounds; the first-order step
-// is clamped to them).
+// carry its centre off to kilometres. Each joint-map parameter also keeps to the model file's own
+// range (model_file.hpp: a compliance at most kMaxCompliance, a mass kMaxMass_kg, a scale within
+// [kMinScale, kMaxScale], a coupling within kMaxCoupling): a Kinova Gen3's first joint, its axis
+// 7 urad off vertical in its URDF, took a compliance of 1.86 rad/(N m) that predict then refused.
+// The solve keeps to them (Ceres bounds; the first-order step is clamped to them).
 struct PhysicalBounds {
   Eigen::VectorXd lower, upper;
 };

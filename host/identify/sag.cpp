@@ -38,8 +38,10 @@ bool needs_sag_start(const RobotModel& model, const IdentifyOptions& options) {
 IdentifyOptions first_sag_stage(const RobotModel& model, const IdentifyOptions& options) {
   IdentifyOptions first = options;
   for (const core::ParameterId& id : model::all_parameters(model))
-    if (model::is_mass_parameter(id.kind) || model::is_gravity_direction_parameter(id.kind))
+    if (model::is_mass_parameter(id.kind) || model::is_gravity_direction_parameter(id.kind)) {
       first.fixed.push_back(model::parameter_name(id));
+      first.fixed_because.emplace(first.fixed.back(), "the sag's first stage: compliances under the start's masses");
+    }
   return first;
 }
 
@@ -56,6 +58,7 @@ SagStage second_sag_stage(const RobotModel& model, const IdentifyOptions& option
       const core::ParameterId id = model::parse_parameter_name(name, static_cast<int>(s.model.joints.size()));
       if (model::is_joint_map_parameter(id.kind)) continue;
       s.options.fixed.push_back(name);
+      s.options.fixed_because.emplace(name, "held as the sag's first stage held it");
       held += (held.empty() ? "" : ", ") + name;
     }
   // The reference: the joint whose deflection compliance_i |G_i| is largest over the data's poses.
@@ -83,6 +86,7 @@ SagStage second_sag_stage(const RobotModel& model, const IdentifyOptions& option
   const auto reference = static_cast<std::uint8_t>(largest - sag.begin());
   const std::string name = model::parameter_name({model::kJointCompliance, reference});
   s.options.fixed.push_back(name);
+  s.options.fixed_because.emplace(name, "the sag's gauge: only compliance x first moment is observable");
   std::ostringstream note;
   note << "sag: only compliance x first moment is observable; gauge: " << name << " held at "
        << *s.model.joints[reference].compliance * 1e6 << " urad/Nm (its first-stage value with " << kStartMass_kg
@@ -91,6 +95,36 @@ SagStage second_sag_stage(const RobotModel& model, const IdentifyOptions& option
   if (!held.empty()) note << "; held as the first stage held them (not separable without the masses): " << held;
   s.note = note.str();
   return s;
+}
+
+std::vector<HeldFixed> unloaded_compliances(const RobotModel& model, const model::Dataset& data,
+                                            const ParameterIds& candidates) {
+  std::vector<HeldFixed> out;
+  const bool any = std::any_of(candidates.begin(), candidates.end(),
+                               [](core::ParameterId id) { return id.kind == model::kJointCompliance; });
+  if (!any) return out;
+  std::vector<double> largest(model.joints.size(), 0.0);
+  for (const model::Measurement& m : data.rows) {
+    const model::ChainAtJoints at = model::chain_at_joints(model, m.q);
+    const core::JointVector<double> g = model::gravity_forces(model, at.chain, at.coupled);
+    for (std::size_t i = 0; i < largest.size(); ++i)
+      largest[i] = std::max(largest[i], std::abs(g(static_cast<Eigen::Index>(i))));
+  }
+  const auto kind_of = [&](std::size_t i) { return model.joints[i].type; };
+  for (const core::ParameterId id : candidates) {
+    if (id.kind != model::kJointCompliance) continue;
+    double most = 0.0;
+    for (std::size_t i = 0; i < largest.size(); ++i)
+      if (kind_of(i) == kind_of(id.link)) most = std::max(most, largest[i]);
+    const double share = most > 0.0 ? largest[id.link] / most : 0.0;
+    if (share > kUnloadedShare) continue;
+    std::ostringstream reason;
+    reason.precision(2);
+    reason << "gravity barely loads the joint: its largest load over the data is " << share * 100.0
+           << " % of the most loaded joint's";
+    out.push_back({id, reason.str()});
+  }
+  return out;
 }
 
 void finish_sag_result(IdentifyResult& r, const RobotModel& nominal) {

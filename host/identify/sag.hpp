@@ -63,6 +63,17 @@ struct SagStage {
 SagStage second_sag_stage(const RobotModel& model, const IdentifyOptions& options, const RobotModel& first,
                           const model::Dataset& data);
 
+// A joint that gravity barely loads over the data -- its largest torque (a prismatic joint's force)
+// at most kUnloadedShare of the most loaded joint's of its kind, at the model's own masses and
+// gravity: a first axis standing vertical -- gives its compliance nothing to act with but the
+// small tilt that loads it, and the fit trades one against the other (a Kinova Gen3's first axis,
+// 7 urad off vertical in its URDF: a compliance of 1.86 rad/(N m), its standard deviation 1441,
+// and the predicted spread at every target tens of millimetres). Each such compliance among
+// `candidates`, with the reason identify prints for holding it fixed.
+inline constexpr double kUnloadedShare = 0.01;
+std::vector<HeldFixed> unloaded_compliances(const RobotModel& model, const model::Dataset& data,
+                                            const ParameterIds& candidates);
+
 // Stage 2's result `r` made a calibration of `nominal`'s arm (the stage-1 model's start):
 //  - a compliance whose joint carries no mass (every mass after it identified as 0) cannot act and
 //    model files refuse it: removed (the predictions do not change);

@@ -310,8 +310,9 @@ bool path_between(const Tree& tree, const std::string& base, const std::string& 
   return true;
 }
 
-// The mass of `link` and of the links fixed to it off the chain (recursively), with their centre
-// of mass in `link`'s frame.
+// The mass of `link` and of the links hanging off it outside the chain (recursively, through
+// fixed, revolute, continuous and prismatic joints at their zero), with their centre of mass in
+// `link`'s frame.
 UrdfMass rigid_mass(const Tree& tree, const std::map<std::string, std::vector<const UrdfJoint*>>& children,
                     const std::set<std::string>& on_chain, const std::string& link) {
   UrdfMass m;
@@ -326,7 +327,7 @@ UrdfMass rigid_mass(const Tree& tree, const std::map<std::string, std::vector<co
     }
     if (const auto below = children.find(name); below != children.end())
       for (const UrdfJoint* j : below->second)
-        if (j->type == UrdfJointType::fixed && !on_chain.contains(j->child_link))
+        if (!std::isnan(j->lower) && !on_chain.contains(j->child_link))  // NaN: floating or planar
           todo.emplace_back(j->child_link, pose * j->parent_T_joint);
   }
   if (m.mass_kg > 0.0) m.centre_m = moment / m.mass_kg;

@@ -22,11 +22,13 @@
 // turn, and each of the 6 mistakes planted twice on a clean case's data (12 cases).
 //
 // Usage: zoo_bench [--cases N] [--filter TEXT] [--work DIR] [--kincal PATH] [--draw N] [--robot URDF]
+//                  [--tip-link LINK]
 //   --cases N: the first N cases of the design; --filter: only cases whose label (robot/instrument/
 //   class/size/mistake) contains TEXT; --work: the folder the cases' files are kept in;
 //   --identify-arg ARG: an argument added to identify's defaults (repeat it), to judge a non-default;
 //   --draw N: another draw of the design (design()), to see how the figures spread; --robot URDF:
-//   that robot (repeat it) instead of the zoo's, the design's cases on it in turn.
+//   that robot (repeat it) instead of the zoo's, the design's cases on it in turn; --tip-link: its
+//   chain's last link, where a gripper's or a camera's leaf lies deeper than the flange.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -91,11 +93,11 @@ std::vector<std::string> zoo_robot_paths(const std::string& corpus, const std::s
   return paths;
 }
 
-std::vector<Robot> read_robots(const std::vector<std::string>& paths) {
+std::vector<Robot> read_robots(const std::vector<std::string>& paths, const std::string& tip_link) {
   std::vector<Robot> out;
   for (const std::string& p : paths) {
     try {
-      Chain c = read_chain(p);
+      Chain c = read_chain(p, tip_link);
       Truth flange_placeable(c.joints.size());
       place_flange_as_nominal(flange_placeable, c);  // throws for a chain the truth cannot be made for
       std::cout << "robot " << fs::path(p).stem().string() << ": " << c.joints.size() << " joints, " << c.root_link
@@ -537,6 +539,7 @@ int main(int argc, char** argv) {
   int max_cases = 1000, draw = 0;
   std::string filter, work = (fs::temp_directory_path() / "kincal_zoo").string(), kincal = KINCAL_CLI;
   std::vector<std::string> identify_args, robot_paths;
+  std::string tip_link;
   app.add_option("--cases", max_cases, "run the first N cases of the design");
   app.add_option("--filter", filter, "run the cases whose label (robot/instrument/class/size/mistake) holds TEXT");
   app.add_option("--work", work, "folder for the cases' files (kept)");
@@ -544,6 +547,9 @@ int main(int argc, char** argv) {
   app.add_option("--robot", robot_paths, "judge this URDF's robot instead of the zoo's (repeat it)")
       ->check(CLI::ExistingFile)
       ->allow_extra_args(false);
+  app.add_option("--tip-link", tip_link,
+                 "with --robot: the chain's last link (default: tool0, flange, else the deepest leaf)")
+      ->needs("--robot");
   app.add_option("--draw", draw, "another draw of the design: other seeds, robots turned by N places (0: the figures')")
       ->check(CLI::Range(0, 1000));
   app.add_option("--identify-arg", identify_args, "an argument added to identify's (repeat it; judges a non-default)")
@@ -552,7 +558,8 @@ int main(int argc, char** argv) {
   work = fs::absolute(work).string();
 
   const std::vector<Robot> robots = read_robots(
-      robot_paths.empty() ? zoo_robot_paths(ZOO_URDF_CORPUS_DIR, ZOO_ROBOTS_DIR, ZOO_SOURCE_DIR) : robot_paths);
+      robot_paths.empty() ? zoo_robot_paths(ZOO_URDF_CORPUS_DIR, ZOO_ROBOTS_DIR, ZOO_SOURCE_DIR) : robot_paths,
+      tip_link);
   if (robots.empty()) {
     std::cerr << "zoo_bench: no robot to judge\n";
     return 1;

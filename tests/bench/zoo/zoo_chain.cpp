@@ -2,6 +2,7 @@
 
 #include <fstream>
 #include <functional>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -34,8 +35,14 @@ int moving_joints_to_root(urdf::LinkConstSharedPtr link) {
   return n;
 }
 
-// The chain's last link: tool0, else flange, else the leaf with the most moving joints above it.
-urdf::LinkConstSharedPtr flange_link(const urdf::ModelInterface& model) {
+// The chain's last link: `tip` when named, else tool0, else flange, else the leaf with the most
+// moving joints above it.
+urdf::LinkConstSharedPtr flange_link(const urdf::ModelInterface& model, const std::string& tip,
+                                     const std::string& urdf_path) {
+  if (!tip.empty()) {
+    if (urdf::LinkConstSharedPtr link = model.getLink(tip)) return link;
+    throw std::runtime_error(urdf_path + ": no link named " + tip);
+  }
   for (const char* name : {"tool0", "flange"})
     if (urdf::LinkConstSharedPtr link = model.getLink(name)) return link;
   urdf::LinkConstSharedPtr best;
@@ -44,8 +51,29 @@ urdf::LinkConstSharedPtr flange_link(const urdf::ModelInterface& model) {
   return best;
 }
 
-// Lumps the links that move with each joint (its child and the fixed joints' children after it).
+// Adds `link`'s mass (at joint_T_link) and that of every link hanging off it outside the chain --
+// a gripper, a camera, a tool beyond the flange, their own joints at zero -- to joint c.
+void add_hanging_masses(ChainJoint& c, const urdf::Link& link, const Pose& joint_T_link,
+                        const std::set<std::string>& on_path, bool& any) {
+  if (link.inertial && link.inertial->mass > 0.0) {
+    const Eigen::Vector3d com = joint_T_link * pose_of(link.inertial->origin).translation();
+    const double m = link.inertial->mass;
+    c.com_m = (c.com_m * c.mass_kg + com * m) / (c.mass_kg + m);
+    c.mass_kg += m;
+    any = true;
+  }
+  for (const urdf::JointSharedPtr& j : link.child_joints)
+    if (!on_path.count(j->child_link_name))
+      for (const urdf::LinkSharedPtr& child : link.child_links)
+        if (child->name == j->child_link_name)
+          add_hanging_masses(c, *child, joint_T_link * pose_of(j->parent_to_joint_origin_transform), on_path, any);
+}
+
+// Lumps the links that move with each joint: its child, the fixed joints' children after it on the
+// chain, and what hangs off those outside the chain (a real arm carries its gripper's weight).
 void add_masses(Chain& chain, const std::vector<urdf::JointConstSharedPtr>& path, const urdf::ModelInterface& model) {
+  std::set<std::string> on_path;
+  for (const urdf::JointConstSharedPtr& j : path) on_path.insert(j->child_link_name);
   int joint = -1;
   Pose joint_T_link = Pose::Identity();
   for (const urdf::JointConstSharedPtr& j : path) {
@@ -55,14 +83,9 @@ void add_masses(Chain& chain, const std::vector<urdf::JointConstSharedPtr>& path
     } else {
       joint_T_link = joint_T_link * pose_of(j->parent_to_joint_origin_transform);
     }
-    const urdf::LinkConstSharedPtr link = model.getLink(j->child_link_name);
-    if (joint < 0 || !link->inertial || link->inertial->mass <= 0.0) continue;
-    ChainJoint& c = chain.joints[static_cast<std::size_t>(joint)];
-    const Eigen::Vector3d com = joint_T_link * pose_of(link->inertial->origin).translation();
-    const double m = link->inertial->mass;
-    c.com_m = (c.com_m * c.mass_kg + com * m) / (c.mass_kg + m);
-    c.mass_kg += m;
-    chain.masses_from_urdf = true;
+    if (joint < 0) continue;
+    add_hanging_masses(chain.joints[static_cast<std::size_t>(joint)], *model.getLink(j->child_link_name), joint_T_link,
+                       on_path, chain.masses_from_urdf);
   }
   if (chain.masses_from_urdf) return;
   for (std::size_t i = 0; i < chain.joints.size(); ++i) {
@@ -113,7 +136,7 @@ Pose small_motion(const Vector6& t_r) {
 ChainErrors::ChainErrors(std::size_t joints)
     : origin(joints, Vector6::Zero()), zero(joints, 0.0), scale(joints, 0.0), compliance_rad_per_nm(joints, 0.0) {}
 
-Chain read_chain(const std::string& urdf_path) {
+Chain read_chain(const std::string& urdf_path, const std::string& tip_link) {
   Chain chain;
   chain.urdf_path = urdf_path;
   std::ifstream in(urdf_path);
@@ -123,7 +146,7 @@ Chain read_chain(const std::string& urdf_path) {
   chain.urdf_text = text.str();
   const urdf::ModelInterfaceSharedPtr model = parse(chain.urdf_text, urdf_path);
   chain.root_link = model->getRoot()->name;
-  urdf::LinkConstSharedPtr tip = flange_link(*model);
+  urdf::LinkConstSharedPtr tip = flange_link(*model, tip_link, urdf_path);
   chain.flange_link = tip->name;
   std::vector<urdf::JointConstSharedPtr> path;
   for (urdf::LinkConstSharedPtr link = tip; link->parent_joint; link = link->getParent())

@@ -37,10 +37,11 @@ struct Chain {
   bool masses_from_urdf = false;   // else assumed: 8 kg per link at the middle of the link
 };
 
-// The main arm chain of a URDF: root to `tool0`, else to `flange`, else to the leaf with the most
-// moving joints. Throws std::runtime_error naming the file when urdfdom refuses it, when the chain
-// holds a mimic joint or a joint type other than revolute, continuous, prismatic and fixed.
-Chain read_chain(const std::string& urdf_path);
+// The main arm chain of a URDF: root to `tip_link` when named, else to `tool0`, else to `flange`,
+// else to the leaf with the most moving joints. Throws std::runtime_error naming the file when
+// urdfdom refuses it, when the named link is absent, when the chain holds a mimic joint or a joint
+// type other than revolute, continuous, prismatic and fixed.
+Chain read_chain(const std::string& urdf_path, const std::string& tip_link = "");
 
 // What the truth changes on the nominal chain, and what the oracle fits (one structure for both).
 struct ChainErrors {

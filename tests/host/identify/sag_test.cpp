@@ -122,6 +122,12 @@ TEST_CASE("an arm that sags under masses its model does not have: geometry+sag p
         note->substr(note->find("gauge: ") + 7, note->find(" held") - note->find("gauge: ") - 7);
     const std::vector<std::string>& fixed = m.calibration->held_fixed;
     CHECK(std::find(fixed.begin(), fixed.end(), reference) != fixed.end());
+    // Nothing was fixed on request: each held parameter says why the sag held it.
+    for (const identify::HeldFixed& h : sag.result.identifiability.held_fixed) {
+      INFO(model::parameter_name(h.id), ": ", h.reason);
+      CHECK(h.reason != "fixed on request");
+      if (model::parameter_name(h.id) == reference) CHECK(h.reason.find("the sag's gauge") == 0);
+    }
     int masses = 0;
     for (const core::ParameterId& id : sag.result.identifiability.identified) masses += id.kind == model::kLinkMass;
     CHECK(masses >= 2);

@@ -378,6 +378,38 @@ TEST_CASE("urdf: UR10 from its description, calibrated and written back with mes
   CHECK(changed == 6);
 }
 
+TEST_CASE("urdf: the last joint carries what hangs off the chain -- a gripper's fingers behind their own joints") {
+  // A 2-joint arm to its flange; a gripper fixed to the flange with a finger behind a revolute
+  // knuckle (a mimic of nothing on the chain) and a floating object beside it. Joint 2 carries
+  // its link, the gripper and the finger (at the knuckle's zero), never the floating object.
+  const std::string text = R"(<robot name="r">
+  <link name="base"/><link name="l1"/>
+  <link name="l2"><inertial><origin xyz="0.1 0 0"/><mass value="2"/></inertial></link>
+  <link name="flange"/>
+  <link name="gripper"><inertial><origin xyz="0 0 0.05"/><mass value="1"/></inertial></link>
+  <link name="finger"><inertial><origin xyz="0 0.02 0"/><mass value="0.5"/></inertial></link>
+  <link name="object"><inertial><mass value="100"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.3" rpy="1.5708 0 0"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="to_flange" type="fixed"><parent link="l2"/><child link="flange"/><origin xyz="0.4 0 0"/></joint>
+  <joint name="to_gripper" type="fixed"><parent link="flange"/><child link="gripper"/><origin xyz="0 0 0.01"/></joint>
+  <joint name="knuckle" type="revolute"><parent link="gripper"/><child link="finger"/><origin xyz="0 0 0.1"/>
+    <axis xyz="1 0 0"/><limit lower="0" upper="0.8" effort="1" velocity="1"/></joint>
+  <joint name="loose" type="floating"><parent link="l2"/><child link="object"/></joint>
+</robot>)";
+  const UrdfChain chain = parse_urdf_chain(text, "gripper.urdf", {"", "flange"});
+  REQUIRE(chain.masses.size() == 3);  // j1, j2, to_flange: each joint's child with what hangs off it
+  CHECK(chain.masses[0].mass_kg == 0.0);
+  CHECK(chain.masses[1].mass_kg == doctest::Approx(2.0));  // l2 alone: the floating object is not carried
+  CHECK((chain.masses[1].centre_m - Vector3(0.1, 0, 0)).norm() < 1e-12);
+  // The flange's: the gripper's 1 kg at (0, 0, 0.06) and the finger's 0.5 kg at (0, 0.02, 0.11).
+  CHECK(chain.masses[2].mass_kg == doctest::Approx(1.5));
+  const Vector3 centre = (1.0 * Vector3(0, 0, 0.06) + 0.5 * Vector3(0, 0.02, 0.11)) / 1.5;
+  CHECK((chain.masses[2].centre_m - centre).norm() < 1e-12);
+}
+
 TEST_CASE("urdf: <inertial> masses deflect the UR10 under gravity as UR's DH-frame table (ur10.yaml) does") {
   RobotModel from_urdf = load_model(std::string(KINCAL_ROBOTS_DIR) + "/ur10.urdf", {"", "tool0"});
   RobotModel from_table = load_model(std::string(KINCAL_ROBOTS_DIR) + "/ur10.yaml");
