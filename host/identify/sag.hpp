@@ -69,8 +69,10 @@ SagStage second_sag_stage(const RobotModel& model, const IdentifyOptions& option
 // small tilt that loads it, and the fit trades one against the other (a Kinova Gen3's first axis,
 // 7 urad off vertical in its URDF: a compliance of 1.86 rad/(N m), its standard deviation 1441,
 // and the predicted spread at every target tens of millimetres). Each such compliance among
-// `candidates`, with the reason identify prints for holding it fixed.
-inline constexpr double kUnloadedShare = 0.01;
+// `candidates`, with the reason identify prints for holding it fixed. The share: that axis's load
+// was 7e-6 of the most loaded joint's, a wrist's on the zoo's arms and the UR10 0.2 % to 1 % (a
+// compliance there is real, and 1 % held the UR10's wrist), an axis exactly vertical 1e-16.
+inline constexpr double kUnloadedShare = 1e-4;
 std::vector<HeldFixed> unloaded_compliances(const RobotModel& model, const model::Dataset& data,
                                             const ParameterIds& candidates);
 
