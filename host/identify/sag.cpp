@@ -27,6 +27,19 @@ bool identifies_masses(const RobotModel& model) {
   return std::any_of(model.joints.begin(), model.joints.end(), [](const model::Joint& j) { return j.identify_mass; });
 }
 
+// Each joint's largest |G_i| (robot_model.hpp's gravity_forces: N m, or N for a prismatic joint)
+// over the data's poses.
+std::vector<double> largest_gravity_loads(const RobotModel& model, const model::Dataset& data) {
+  std::vector<double> largest(model.joints.size(), 0.0);
+  for (const model::Measurement& m : data.rows) {
+    const model::ChainAtJoints at = model::chain_at_joints(model, m.q);
+    const core::JointVector<double> g = model::gravity_forces(model, at.chain, at.coupled);
+    for (std::size_t i = 0; i < largest.size(); ++i)
+      largest[i] = std::max(largest[i], std::abs(g(static_cast<Eigen::Index>(i))));
+  }
+  return largest;
+}
+
 }  // namespace
 
 bool needs_sag_start(const RobotModel& model, const IdentifyOptions& options) {
@@ -62,13 +75,8 @@ SagStage second_sag_stage(const RobotModel& model, const IdentifyOptions& option
       held += (held.empty() ? "" : ", ") + name;
     }
   // The reference: the joint whose deflection compliance_i |G_i| is largest over the data's poses.
-  std::vector<double> sag(s.model.joints.size(), 0.0);
-  for (const model::Measurement& m : data.rows) {
-    const model::ChainAtJoints at = model::chain_at_joints(s.model, m.q);
-    const core::JointVector<double> g = model::gravity_forces(s.model, at.chain, at.coupled);
-    for (std::size_t i = 0; i < sag.size(); ++i)
-      sag[i] = std::max(sag[i], s.model.joints[i].compliance.value_or(0.0) * std::abs(g(static_cast<Eigen::Index>(i))));
-  }
+  std::vector<double> sag = largest_gravity_loads(s.model, data);
+  for (std::size_t i = 0; i < sag.size(); ++i) sag[i] *= s.model.joints[i].compliance.value_or(0.0);
   const auto largest = std::max_element(sag.begin(), sag.end());
   if (largest == sag.end() || !(*largest > 0.0)) {
     for (model::Joint& j : s.model.joints) j.identify_mass = false;
@@ -103,13 +111,7 @@ std::vector<HeldFixed> unloaded_compliances(const RobotModel& model, const model
   const bool any = std::any_of(candidates.begin(), candidates.end(),
                                [](core::ParameterId id) { return id.kind == model::kJointCompliance; });
   if (!any) return out;
-  std::vector<double> largest(model.joints.size(), 0.0);
-  for (const model::Measurement& m : data.rows) {
-    const model::ChainAtJoints at = model::chain_at_joints(model, m.q);
-    const core::JointVector<double> g = model::gravity_forces(model, at.chain, at.coupled);
-    for (std::size_t i = 0; i < largest.size(); ++i)
-      largest[i] = std::max(largest[i], std::abs(g(static_cast<Eigen::Index>(i))));
-  }
+  const std::vector<double> largest = largest_gravity_loads(model, data);
   const auto kind_of = [&](std::size_t i) { return model.joints[i].type; };
   for (const core::ParameterId id : candidates) {
     if (id.kind != model::kJointCompliance) continue;

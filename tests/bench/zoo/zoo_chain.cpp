@@ -62,11 +62,10 @@ void add_hanging_masses(ChainJoint& c, const urdf::Link& link, const Pose& joint
     c.mass_kg += m;
     any = true;
   }
-  for (const urdf::JointSharedPtr& j : link.child_joints)
-    if (!on_path.count(j->child_link_name))
-      for (const urdf::LinkSharedPtr& child : link.child_links)
-        if (child->name == j->child_link_name)
-          add_hanging_masses(c, *child, joint_T_link * pose_of(j->parent_to_joint_origin_transform), on_path, any);
+  for (const urdf::LinkSharedPtr& child : link.child_links)
+    if (!on_path.count(child->name))
+      add_hanging_masses(c, *child, joint_T_link * pose_of(child->parent_joint->parent_to_joint_origin_transform),
+                         on_path, any);
 }
 
 // Lumps the links that move with each joint: its child, the fixed joints' children after it on the
