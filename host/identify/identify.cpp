@@ -801,7 +801,15 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
     {
       const Eigen::VectorXd w = prior_weights(options.prior, out.prior_sigma);  // the result's own widths
       const Eigen::MatrixXd info = j.transpose() * j + Eigen::MatrixXd(w.cwiseAbs2().asDiagonal());
-      out.covariance = info.ldlt().solve(Eigen::MatrixXd::Identity(info.rows(), info.cols()));
+      out.at_bound = on_bound(physical_bounds(param), at);
+      std::vector<Eigen::Index> free;
+      for (Eigen::Index k = 0; k < p; ++k)
+        if (!out.at_bound[static_cast<std::size_t>(k)]) free.push_back(k);
+      const Eigen::MatrixXd free_info = info(free, free);
+      out.covariance = Eigen::MatrixXd::Zero(p, p);
+      const Eigen::MatrixXd free_covariance =
+          free_info.ldlt().solve(Eigen::MatrixXd::Identity(free_info.rows(), free_info.cols()));
+      out.covariance(free, free) = free_covariance;
       out.stddev = out.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
       out.prior_share = out.covariance.diagonal().cwiseProduct(w.cwiseAbs2()).cwiseMin(1.0);
     }
@@ -1002,14 +1010,20 @@ std::string format_report(const IdentifyResult& r) {
     const bool priors = r.prior_sigma.size() == r.change.size();
     out << "parameter        change          stddev" << (priors ? "           prior sigma  from data" : "") << '\n';
     std::string beyond;
+    bool any_bound = false;
     for (std::size_t k = 0; k < r.identifiability.identified.size(); ++k) {
       const core::ParameterId id = r.identifiability.identified[k];
       const model::DisplayUnit u = model::display_unit(r.model, id);
       const auto i = static_cast<Eigen::Index>(k);
       char line[200];
-      int at = std::snprintf(line, sizeof line, "  %-10s %12.5f %-4s %10.5f %-4s", model::parameter_name(id).c_str(),
-                             r.change(i) * u.per_si, u.name, r.stddev(i) * u.per_si, u.name);
-      if (priors && std::isfinite(r.prior_sigma(i))) {
+      const bool bound = k < r.at_bound.size() && r.at_bound[k];
+      int at =
+          bound ? std::snprintf(line, sizeof line, "  %-10s %12.5f %-4s %15s", model::parameter_name(id).c_str(),
+                                r.change(i) * u.per_si, u.name, "at its bound")
+                : std::snprintf(line, sizeof line, "  %-10s %12.5f %-4s %10.5f %-4s", model::parameter_name(id).c_str(),
+                                r.change(i) * u.per_si, u.name, r.stddev(i) * u.per_si, u.name);
+      any_bound = any_bound || bound;
+      if (priors && !bound && std::isfinite(r.prior_sigma(i))) {
         std::snprintf(line + at, sizeof line - static_cast<std::size_t>(at), " %10.5f %-4s %5.1f %%",
                       r.prior_sigma(i) * u.per_si, u.name, 100.0 * (1.0 - r.prior_share(i)));
         const double sigmas = std::abs(r.change(i) - r.prior_centre(i)) / r.prior_sigma(i);
@@ -1021,11 +1035,14 @@ std::string format_report(const IdentifyResult& r) {
                         r.prior_sigma(i) * u.per_si, u.name);
           beyond += warn;
         }
-      } else if (priors) {
+      } else if (priors && !bound) {
         std::snprintf(line + at, sizeof line - static_cast<std::size_t>(at), " %10s      %5.1f %%", "none", 100.0);
       }
       out << line << '\n';
     }
+    if (any_bound)
+      out << "(at its bound: the solve ended on the parameter's physical bound -- a compliance or a mass at 0, a "
+             "model file's limit -- which holds it; the other stddevs are given it)\n";
     if (priors)
       out << "(from data: the share of a parameter's posterior information that the measurements give, the rest is "
              "its prior's)\n"

@@ -63,7 +63,8 @@
 // Priors (full and first-order; prior.hpp): each identified parameter's deviation from the
 // nominal has a Gaussian prior, whatever the start (from cpa, the nominal expressed in the start's
 // parameters by a fit of its tool poses at the data's configurations is the prior's centre); the solve is the maximum a
-// posteriori estimate and the covariance the inverse of the posterior information J^T J + diag(1 / sigma^2). The noise
+// posteriori estimate and the covariance the inverse of the posterior information J^T J + diag(1 / sigma^2) (over the
+// parameters not on a physical bound: at_bound). The noise
 // model's REML counts the prior rows as observations of known variance; the outlier test judges each row against the
 // data alone (the leverage of the data's own fit: a sweep's end that alone sees a direction keeps it). Exact
 // dependencies (identifiability.hpp) are still held fixed: the data cannot split them, so the
@@ -194,12 +195,17 @@ struct IdentifyResult {
   Identifiability identifiability;
   Eigen::VectorXd change;  // of identifiability.identified, SI
   Eigen::VectorXd stddev;
-  Eigen::VectorXd prior_sigma;     // of change, SI; infinity where there is none (as the data scaled it)
-  PriorScales prior_scales;        // the width each class of priors was given, and why (prior_scale.hpp)
-  Eigen::VectorXd prior_centre;    // of change, SI: the nominal in the start's parameters (0 from the nominal)
-  Eigen::VectorXd prior_share;     // of each parameter's posterior information, 0..1 (1 - data share)
-  AccuracyStats residuals;         // over the measurements used
-  Eigen::MatrixXd covariance;      // of change, SI
+  Eigen::VectorXd prior_sigma;   // of change, SI; infinity where there is none (as the data scaled it)
+  PriorScales prior_scales;      // the width each class of priors was given, and why (prior_scale.hpp)
+  Eigen::VectorXd prior_centre;  // of change, SI: the nominal in the start's parameters (0 from the nominal)
+  Eigen::VectorXd prior_share;   // of each parameter's posterior information, 0..1 (1 - data share)
+  AccuracyStats residuals;       // over the measurements used
+  Eigen::MatrixXd covariance;    // of change, SI (0 in the rows and columns of a parameter at_bound)
+  // Of change: the parameter ended on a physical bound (problem.hpp). The bound holds it, so the
+  // covariance is that of the others given it (its stddev 0): its linearized variance would
+  // say nothing (a compliance pinned at kMaxCompliance had sd 1441 rad/(N m)) and would swell
+  // every predicted spread that correct's "reached within the spread" trusts.
+  std::vector<bool> at_bound;
   std::vector<int> outlier_lines;  // source lines of rejected measurements
   std::vector<Rejection> rejections;
   RejectionGate rejection_gate;

@@ -220,6 +220,16 @@ PhysicalBounds physical_bounds(const Parameterization& p) {
   return b;
 }
 
+std::vector<bool> on_bound(const PhysicalBounds& b, std::span<const double> delta) {
+  std::vector<bool> on(delta.size(), false);
+  for (std::size_t k = 0; k < delta.size(); ++k) {
+    const auto i = static_cast<Eigen::Index>(k);
+    for (const double bound : {b.lower(i), b.upper(i)})
+      if (std::isfinite(bound) && std::abs(delta[k] - bound) <= 1e-9 * std::abs(bound)) on[k] = true;
+  }
+  return on;
+}
+
 std::vector<Matrix6> instrument_covariances(const model::Dataset& data, double sigma_m, double orientation_sigma_rad) {
   std::vector<Matrix6> c;
   for (const model::Measurement& m : data.rows) {

@@ -99,6 +99,9 @@ struct PhysicalBounds {
   Eigen::VectorXd lower, upper;
 };
 PhysicalBounds physical_bounds(const Parameterization& p);
+// Of each change in `delta`: on its lower or upper bound (to a part in 1e9 of the bound; the
+// solve clamps to them exactly).
+std::vector<bool> on_bound(const PhysicalBounds& b, std::span<const double> delta);
 
 using Matrix6 = model::Matrix6;
 

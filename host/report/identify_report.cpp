@@ -164,7 +164,8 @@ ParameterRow parameter_row(const identify::IdentifyResult& r, std::size_t k) {
   // The nominal in the start's parameters: the prior's centre (0 but from a cpa start).
   row.nominal = parameter_value(r.start, r.start, ids[k]) + (priors ? r.prior_centre(i) : 0.0);
   row.identified = parameter_value(r.model, r.start, ids[k]);
-  if (i < r.stddev.size()) row.stddev = r.stddev(i);
+  row.at_bound = k < r.at_bound.size() && r.at_bound[k];
+  if (i < r.stddev.size() && !row.at_bound) row.stddev = r.stddev(i);
   if (priors && std::isfinite(r.prior_sigma(i))) row.prior_sigma = r.prior_sigma(i);
   if (priors && i < r.prior_share.size()) row.data_share = 1.0 - r.prior_share(i);
   return row;

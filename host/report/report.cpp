@@ -190,7 +190,8 @@ std::string model_table(const RunContext& c) {
   html += "</tr>";
   const int columns = 5 + (priors ? 2 : 0) + (truth ? 2 : 0) + (truth && identifiable ? 1 : 0);
   std::string group;
-  bool first = true, any_off = false, any_fixed = false, any_absorbed = false, any_beyond_prior = false;
+  bool first = true, any_off = false, any_fixed = false, any_bound = false, any_absorbed = false,
+       any_beyond_prior = false;
   for (const ParameterRow& p : run.parameters) {
     if (first || p.group != group)
       html +=
@@ -206,8 +207,11 @@ std::string model_table(const RunContext& c) {
     any_beyond_prior = any_beyond_prior || beyond_prior;
     html += "<tr><td>" + escape_html(p.name) + "</td>" + cell(value_text(u, p.nominal)) +
             cell(value_text(u, p.identified)) + cell(delta_text(u, change), beyond_prior ? "n off" : "n") +
-            (p.stddev ? cell(delta_text(u, *p.stddev)) : cell("held fixed", "fixed"));
-    any_fixed = any_fixed || !p.stddev;
+            (p.stddev     ? cell(delta_text(u, *p.stddev))
+             : p.at_bound ? cell("at its bound", "fixed")
+                          : cell("held fixed", "fixed"));
+    any_fixed = any_fixed || (!p.stddev && !p.at_bound);
+    any_bound = any_bound || p.at_bound;
     if (priors)
       html += cell(p.prior_sigma ? delta_text(u, *p.prior_sigma) : "none") +
               cell(p.data_share ? format("%.1f %%", 100.0 * *p.data_share) : "");
@@ -238,6 +242,10 @@ std::string model_table(const RunContext& c) {
     html +=
         "<li><span class=\"fixed\">held fixed</span>: not identified from these data (see Identifiability); "
         "kept at its starting value</li>";
+  if (any_bound)
+    html +=
+        "<li><span class=\"fixed\">at its bound</span>: the solve ended on the parameter's physical bound (a "
+        "compliance or a mass at 0, a model file's limit), which holds it; the other 1-sigmas are given it</li>";
   if (identifiable)
     html +=
         "<li>true, as the data identify it: the true model fitted in the identified parameters with the "

@@ -77,7 +77,7 @@ struct ParameterRow {
   Quantity quantity = Quantity::length_m;
   double nominal = 0.0;          // SI
   double identified = 0.0;       // SI
-  std::optional<double> stddev;  // 1-sigma, SI; absent for a parameter held fixed
+  std::optional<double> stddev;  // 1-sigma, SI; absent for a parameter held fixed or at_bound
   std::optional<double> truth;   // SI; simulated data only
   // The true value as the data can identify it (simulated data only): the true model fitted in
   // the identified parameters, the held-fixed ones at their starting values -- what a solve
@@ -90,6 +90,7 @@ struct ParameterRow {
   // prior), and the share of the parameter's posterior information the data give, 0..1.
   std::optional<double> prior_sigma;
   std::optional<double> data_share;
+  bool at_bound = false;  // ended on its physical bound, which holds it (identify.hpp)
 };
 
 struct HeldFixed {

@@ -70,10 +70,22 @@ TEST_CASE("a light arm that does not sag, noise only: the gravity candidate's co
     INFO(model::parameter_name(id), " = ", c);
     CHECK(c >= 0.0);
     at_bound += c == 0.0 ? 1 : 0;
+    // The bound holds a compliance at 0: no variance of its own, none in any predicted spread
+    // (correct counts a goal missed by a fraction of the spread as reached).
+    const auto i = static_cast<Eigen::Index>(k);
+    CHECK(r.at_bound[k] == (c == 0.0));
+    if (r.at_bound[k]) {
+      CHECK(r.stddev(i) == 0.0);
+      CHECK(r.covariance.row(i).isZero(0.0));
+      CHECK(r.model.calibration->parameters[k].stddev == 0.0);
+    } else {
+      CHECK(r.stddev(i) > 0.0);
+    }
   }
   CHECK(compliances == 4);  // shoulder, elbow and two wrist joints carry a gravity torque
   // The bound was active: the noise would have driven at least one negative.
   CHECK(at_bound >= 1);
+  CHECK(identify::format_report(r).find("at its bound") != std::string::npos);
   check_every_command_accepts(r.model, true);
 }
 
