@@ -106,6 +106,82 @@ std::vector<model::Vector3> measured_points(const model::Dataset& data, const st
   return points;
 }
 
+// The sampled rows [begin, end) of `poses` and `measured`.
+std::pair<ToolPoses, std::vector<model::Vector3>> part(const ToolPoses& poses,
+                                                       const std::vector<model::Vector3>& measured, std::size_t begin,
+                                                       std::size_t end) {
+  const auto b = static_cast<std::ptrdiff_t>(begin), e = static_cast<std::ptrdiff_t>(end);
+  return {ToolPoses{{poses.position_m.begin() + b, poses.position_m.begin() + e},
+                    {poses.rotation.begin() + b, poses.rotation.begin() + e}},
+          {measured.begin() + b, measured.begin() + e}};
+}
+
+// The logs joined out of step: the readings of each sampled row with the position `shift` rows
+// later in the file (earlier for a negative shift); the best shift within kMaxShiftRows and its RMS.
+std::pair<double, int> best_shift(const ToolPoses& poses, const model::Dataset& data,
+                                  const std::vector<std::size_t>& rows) {
+  std::pair<double, int> best{std::numeric_limits<double>::infinity(), 0};
+  for (int shift = -kMaxShiftRows; shift <= kMaxShiftRows; ++shift) {
+    if (shift == 0) continue;
+    ToolPoses paired;
+    std::vector<model::Vector3> measured;
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const auto at = static_cast<std::ptrdiff_t>(rows[i]) + shift;
+      if (at < 0 || at >= static_cast<std::ptrdiff_t>(data.rows.size())) continue;
+      paired.position_m.push_back(poses.position_m[i]);
+      paired.rotation.push_back(poses.rotation[i]);
+      measured.push_back(data.rows[static_cast<std::size_t>(at)].position);
+    }
+    if (measured.size() < 6) continue;
+    const double rms = fitted_rms(paired, measured, false);
+    if (rms < best.first) best = {rms, shift};
+  }
+  return best;
+}
+
+// Every joint moves over at least a quarter of its span in the file within the sampled rows
+// [begin, end): a part where a joint stays still (a sweep of the wrist alone) cannot tell that
+// joint's errors from a registration of its own.
+bool moves_every_joint(const model::Dataset& data, const std::vector<std::size_t>& rows, std::size_t begin,
+                       std::size_t end) {
+  const auto span = [&](std::size_t j, std::size_t from, std::size_t to) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (std::size_t i = from; i < to; ++i) {
+      lo = std::min(lo, data.rows[rows[i]].q[j]);
+      hi = std::max(hi, data.rows[rows[i]].q[j]);
+    }
+    return hi - lo;
+  };
+  for (std::size_t j = 0; j < static_cast<std::size_t>(data.joint_count); ++j)
+    if (!(span(j, begin, end) >= 0.25 * span(j, 0, rows.size()))) return false;
+  return true;
+}
+
+// The instrument moved during the session: a registration of its own (and a measured point's
+// offset) for the sampled rows before and from index k, at least kSplitRows each side and each
+// moving every joint. The tenths of the file first, then every index within a tenth of the best
+// one (a hundredth of the rows apart at most). The best k and the RMS over both parts.
+std::pair<double, std::size_t> best_split(const ToolPoses& poses, const std::vector<model::Vector3>& measured,
+                                          const model::Dataset& data, const std::vector<std::size_t>& rows) {
+  const std::size_t n = measured.size();
+  std::pair<double, std::size_t> best{std::numeric_limits<double>::infinity(), 0};
+  const auto try_split = [&](std::size_t k) {
+    if (k < kSplitRows || n - k < kSplitRows) return;
+    if (!moves_every_joint(data, rows, 0, k) || !moves_every_joint(data, rows, k, n)) return;
+    const auto [poses_a, measured_a] = part(poses, measured, 0, k);
+    const auto [poses_b, measured_b] = part(poses, measured, k, n);
+    const double a = fitted_rms(poses_a, measured_a, false), b = fitted_rms(poses_b, measured_b, false);
+    const double rms =
+        std::sqrt((static_cast<double>(k) * a * a + static_cast<double>(n - k) * b * b) / static_cast<double>(n));
+    if (rms < best.first) best = {rms, k};
+  };
+  for (std::size_t tenth = 1; tenth < 10; ++tenth) try_split(n * tenth / 10);
+  if (best.second == 0) return best;
+  const std::size_t centre = best.second, reach = n / 10, step = std::max<std::size_t>(1, n / 100);
+  for (std::size_t k = centre > reach ? centre - reach : 0; k <= std::min(n, centre + reach); k += step) try_split(k);
+  return best;
+}
+
 }  // namespace
 
 FrameCheck frame_check(const model::RobotModel& nominal, const model::Dataset& data) {
@@ -140,6 +216,29 @@ FrameCheck frame_check(const model::RobotModel& nominal, const model::Dataset& d
                            nominal.joints[static_cast<std::size_t>(k)].name + ") exchanged: " + number(swapped * 1e3) +
                            " mm RMS against " + number(rotated * 1e3) +
                            " mm as given: likely two joint columns swapped");
+  // The next two fit the points to the arm's own accuracy (below kMistakeFloor_m), not merely
+  // better: two registrations or a shift absorb some of a wrong model's error too.
+  const auto [shifted, shift] = best_shift(poses, data, rows);
+  if (shifted * 5.0 < rotated && shifted < kMistakeFloor_m) {
+    const std::string by = std::to_string(std::abs(shift)) + (std::abs(shift) == 1 ? " row " : " rows ");
+    out.mistakes.push_back("the positions fit far better " + by + (shift > 0 ? "later" : "earlier") +
+                           " in the file than their readings: " + number(shifted * 1e3) + " mm RMS against " +
+                           number(rotated * 1e3) +
+                           " mm as given: likely the robot's and the instrument's logs joined out of step by " + by +
+                           "(each row's position measured at another row's readings)");
+  }
+  const auto [split, from] = best_split(poses, measured, data, rows);
+  if (split * kMovedRatio < rotated && split < kMistakeFloor_m) {
+    const int first = data.rows.front().line, at = data.rows[rows[from]].line, before = data.rows[rows[from] - 1].line,
+              last = data.rows.back().line;
+    out.mistakes.push_back(
+        "the positions fit far better with a registration of their own from about line " + std::to_string(at) +
+        " on: " + number(split * 1e3) + " mm RMS against " + number(rotated * 1e3) +
+        " mm with one: likely the instrument (or the robot's base) moved during the session; calibrate with the "
+        "rows of one part (lines " +
+        std::to_string(first) + "-" + std::to_string(before) + " or " + std::to_string(at) + "-" +
+        std::to_string(last) + ")");
+  }
   return out;
 }
 
@@ -150,7 +249,8 @@ std::optional<std::string> unexplained_fit(double rms_m, double instrument_sigma
   if (instrument_sigma_m > 0.0) what += ", " + number(rms_m / instrument_sigma_m) + " times the instrument's noise";
   return what +
          ": no arm deviates so far from its geometry, so the data do not fit this model -- likely a mirrored "
-         "or swapped position column, swapped joint columns, joints or positions in other units, another robot's "
+         "or swapped position column, swapped joint columns, joints or positions in other units, the robot's and "
+         "the instrument's logs joined out of step, the instrument moved during the session, another robot's "
          "model, or the wrong --tip-link";
 }
 

@@ -9,6 +9,11 @@
 //                 measured point's offset from the tool estimated, as a reflector is rarely where
 //                 the nominal tool is): a reflection that fits far better is the finding.
 //   joint swap    two joint columns swapped: the readings permuted back fit far better.
+//   out of step   the robot's and the instrument's logs joined with one shifted by a row or a
+//                 few: each row's readings with the position a few rows away fit far better.
+//   moved         the instrument (or the robot's base) moved during the session: a second
+//                 registration from some row on fits far better (a tracker bumped, a camera
+//                 re-aimed halfway; the file's order is the session's).
 //
 // Both fits are point registrations (Kabsch/Umeyama without scale, alternated with the linear
 // least squares of the measured point's offset in the tool frame), O(rows) each; at most
@@ -16,7 +21,12 @@
 // registration to leave more than kMistakeFloor_m RMS -- far beyond what a real arm deviates from
 // its drawing (millimetres for a service arm) -- and the alternative to fit at least five times
 // better; data that cannot tell (a single sweep: points in a plane fit their mirror image
-// exactly) give no finding.
+// exactly) give no finding. The last two must also fit below kMistakeFloor_m: a wrong model's
+// error is partly absorbed by a second registration or a shift, never down to an arm's accuracy
+// (a move needs kMovedRatio, below, and each part to move every joint: a sweep of the wrist alone
+// is fitted exactly by a registration of its own whatever the earlier joints' errors).
+// Moves that leave the as-given registration within kMistakeFloor_m (a tracker nudged by a
+// millimetre) are not found here; they show as model error.
 //
 // After the solve:
 //   fit verdict   a calibrated model that still leaves more than kMistakeFloor_m RMS and more than
@@ -42,6 +52,12 @@ std::string finding_number(double v);
 inline constexpr int kMistakeRows = 2000;
 inline constexpr double kMistakeFloor_m = 0.01;
 inline constexpr double kMistakeNoiseRatio = 100.0;
+inline constexpr int kMaxShiftRows = 3;       // the logs' steps tried each way
+inline constexpr std::size_t kSplitRows = 8;  // rows each side of a registration's move, at least
+// A move needs its two registrations to fit kMovedRatio times better than one, not 5: a tracker
+// bumped 2 deg and 10 mm before the last 40 % of 40 UR10 rows leaves one registration 11 mm, the
+// arm's own millimetre errors two 3.2 mm.
+inline constexpr double kMovedRatio = 3.0;
 
 // What the fits above find, from one set of tool poses and one rotation registration:
 //   measured_point_offset  the measured point's offset from the nominal tool, in the tool frame,

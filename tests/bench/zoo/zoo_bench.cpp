@@ -19,7 +19,7 @@
 // otherwise: place_flange_as_nominal), so the TCP is judged against what its data allow. A
 // covering design, not the cross product: the 4 instruments x 4 sizes x 3 error classes each once
 // (48 clean cases; the third class alternates between a scaled and a coupled joint), the robots in
-// turn, and each of the 6 mistakes planted twice on a clean case's data (12 cases).
+// turn, and each of the 8 mistakes planted twice on a clean case's data (16 cases).
 //
 // Usage: zoo_bench [--cases N] [--filter TEXT] [--work DIR] [--kincal PATH] [--draw N] [--robot URDF]
 //                  [--tip-link LINK]
@@ -128,9 +128,10 @@ std::vector<CaseSpec> design(const std::vector<Robot>& robots, int draw) {
     c.seed = 41000u + 1000u * static_cast<unsigned>(draw) + static_cast<unsigned>(k);
     cases.push_back(c);
   }
-  const Mistake mistakes[] = {Mistake::mirrored,          Mistake::joints_swapped, Mistake::positions_swapped,
-                              Mistake::validate_is_train, Mistake::mm_as_m,        Mistake::deg_as_rad};
-  for (int m = 0; m < 6; ++m)
+  const Mistake mistakes[] = {Mistake::mirrored,          Mistake::joints_swapped,  Mistake::positions_swapped,
+                              Mistake::validate_is_train, Mistake::mm_as_m,         Mistake::deg_as_rad,
+                              Mistake::out_of_step,       Mistake::instrument_moved};
+  for (int m = 0; m < static_cast<int>(std::size(mistakes)); ++m)
     for (int j = 0; j < 2; ++j) {
       CaseSpec c = cases[static_cast<std::size_t>((7 * m + 25 * j + 3) % 48)];
       c.index = static_cast<int>(cases.size());
@@ -569,7 +570,7 @@ int main(int argc, char** argv) {
   for (const CaseSpec& c : all)
     if (c.index < max_cases && c.label().find(filter) != std::string::npos) cases.push_back(c);
   std::cout << "cases: " << cases.size() << " of " << all.size() << " (" << robots.size()
-            << " robots; 48 clean: 4 instruments x 4 sizes x 3 error classes; 12 mistakes) + " << kHeldOut
+            << " robots; 48 clean: 4 instruments x 4 sizes x 3 error classes; 16 mistakes) + " << kHeldOut
             << " held-out rows and " << kTargets << " TCP targets each\n";
 
   std::vector<std::pair<CaseSpec, CaseResult>> results;

@@ -216,7 +216,8 @@ const char* name(ErrorClass c) {
 
 const char* name(Mistake m) {
   static constexpr const char* names[] = {
-      "-", "mirrored-xy", "joints-swapped", "positions-swapped", "validate=train", "mm-as-m", "deg-as-rad"};
+      "-",          "mirrored-xy", "joints-swapped", "positions-swapped", "validate=train", "mm-as-m",
+      "deg-as-rad", "shifted",     "moved"};
   return names[static_cast<std::size_t>(m)];
 }
 
@@ -304,18 +305,24 @@ std::string dataset_csv(const Chain& chain, const Truth& truth, const std::vecto
   Eigen::Matrix3d mirror = Eigen::Matrix3d::Identity();
   if (mistake == Mistake::mirrored) mirror << 0, 1, 0, 1, 0, 0, 0, 0, 1;
   if (mistake == Mistake::positions_swapped) mirror << 1, 0, 0, 0, 0, 1, 0, 1, 0;
-  for (std::size_t r = 0; r < rows.size(); ++r) {
+  const bool shifted = mistake == Mistake::out_of_step;
+  Pose moved = Pose::Identity();  // the device after its move
+  moved.linear() = Eigen::AngleAxisd(kDeg, Eigen::Vector3d(1.0, 2.0, 3.0).normalized()).toRotationMatrix();
+  moved.translation() = Eigen::Vector3d(0.003, -0.004, 0.0);
+  for (std::size_t r = 0; r + (shifted ? 1 : 0) < rows.size(); ++r) {
     std::vector<double> q = rows[r].q;
     if (mistake == Mistake::joints_swapped) std::swap(q[1], q[2]);
     for (std::size_t j = 0; j < q.size(); ++j)
       out << number(mistake == Mistake::deg_as_rad && !chain.joints[j].prismatic ? q[j] / kDeg : q[j]) << ',';
-    Eigen::Vector3d p = mirror * rows[r].measured.translation();
+    Pose measured = rows[shifted ? r + 1 : r].measured;
+    if (mistake == Mistake::instrument_moved && 5 * r >= 3 * rows.size()) measured = moved * measured;
+    Eigen::Vector3d p = mirror * measured.translation();
     if (mistake == Mistake::mm_as_m) p *= 1000.0;
     out << number(p.x()) << ',' << number(p.y()) << ',' << number(p.z());
     if (pose) {
       // A mirrored frame turns the rotation as M R M; swapped position columns leave it alone.
       const Eigen::Matrix3d m = mistake == Mistake::mirrored ? mirror : Eigen::Matrix3d::Identity();
-      Eigen::Quaterniond o(Eigen::Matrix3d(m * rows[r].measured.linear() * m));
+      Eigen::Quaterniond o(Eigen::Matrix3d(m * measured.linear() * m));
       if (o.w() < 0) o.coeffs() *= -1.0;
       out << ',' << number(o.w()) << ',' << number(o.x()) << ',' << number(o.y()) << ',' << number(o.z());
     }

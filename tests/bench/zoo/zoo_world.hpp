@@ -14,7 +14,17 @@ namespace zoo {
 
 enum class Instrument { tracker_point, tracker_6dof, mocap, camera };
 enum class ErrorClass { precise, service, scaled, coupled };
-enum class Mistake { none, mirrored, joints_swapped, positions_swapped, validate_is_train, mm_as_m, deg_as_rad };
+enum class Mistake {
+  none,
+  mirrored,
+  joints_swapped,
+  positions_swapped,
+  validate_is_train,
+  mm_as_m,
+  deg_as_rad,
+  out_of_step,       // each row's position is the next row's (the logs joined a row apart)
+  instrument_moved,  // from 60 % of the rows on, measured from a device turned 1 deg and moved 5 mm
+};
 
 const char* name(Instrument i);
 const char* name(ErrorClass c);
@@ -58,7 +68,7 @@ std::vector<Row> measure(const Chain& chain, const Truth& truth, const std::vect
                          std::mt19937& rng);
 
 // The dataset CSV (q1..qN,x,y,z[,qw,qx,qy,qz][,cxx..czz],id), ids `<id_prefix><row>`, with the
-// mistake written into it (validate_is_train changes no file).
+// mistake written into it (validate_is_train changes no file; out_of_step drops the last row).
 std::string dataset_csv(const Chain& chain, const Truth& truth, const std::vector<Row>& rows,
                         const std::string& id_prefix, Mistake mistake);
 
