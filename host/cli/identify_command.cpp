@@ -67,7 +67,7 @@ std::string stats_line(const char* what, const identify::AccuracyStats& s) {
 // fits at more than twice the registered nominal's training RMS is one the data do not pin down
 // (the real UR10's first 30 rows, the arm's zero pose among them: 24.5 mm against 1.24 mm, and
 // 1.46 mm on the 500 held-out rows where the registered nominal gives 0.93).
-std::string summary(const IdentifyArgs& a, const identify::IdentifyResult& result,
+std::string summary(const IdentifyArgs& a, const model::Dataset& data, const identify::IdentifyResult& result,
                     const std::optional<identify::IdentifyResult>& registered, const model::Dataset* held_out,
                     const identify::AccuracyStats* calibrated_held_out, const identify::Selection* selection) {
   std::ostringstream out;
@@ -93,8 +93,13 @@ std::string summary(const IdentifyArgs& a, const identify::IdentifyResult& resul
     out << stats_line(kCalibrated, calibrated);
     after = calibrated.rms_m;
   }
-  const std::optional<std::string> unexplained =
+  std::optional<std::string> unexplained =
       identify::unexplained_fit(result.residuals.rms_m, result.median_instrument_sigma_m);
+  // The data's checks again against the calibrated model: its geometry no longer hides a move of
+  // the instrument or the logs out of step that the nominal's millimetres did (a service arm).
+  if (unexplained)
+    for (const std::string& m : identify::frame_check(result.model, data).mistakes)
+      *unexplained += "; against the calibrated model, " + m;
   if (unexplained) std::cerr << "kincal identify: warning: " << *unexplained << '\n';
   if (!registered) return out.str();
   out << "verdict: ";
@@ -448,7 +453,7 @@ int run_identify(const IdentifyArgs& a) {
     }
     std::optional<identify::AccuracyStats> calibrated_held_out;
     if (held_out) calibrated_held_out = identify::accuracy(result.model, *held_out);
-    std::cout << summary(a, result, registered, held_out ? &*held_out : nullptr,
+    std::cout << summary(a, data, result, registered, held_out ? &*held_out : nullptr,
                          calibrated_held_out ? &*calibrated_held_out : nullptr, selection ? &*selection : nullptr);
     if (calibrated_held_out) result.model.calibration->validation_rms_m = calibrated_held_out->rms_m;
     // Point data determine a point: the model file says so, and `correct` then aims positions only.

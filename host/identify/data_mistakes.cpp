@@ -216,10 +216,8 @@ FrameCheck frame_check(const model::RobotModel& nominal, const model::Dataset& d
                            nominal.joints[static_cast<std::size_t>(k)].name + ") exchanged: " + number(swapped * 1e3) +
                            " mm RMS against " + number(rotated * 1e3) +
                            " mm as given: likely two joint columns swapped");
-  // The next two fit the points to the arm's own accuracy (below kMistakeFloor_m), not merely
-  // better: two registrations or a shift absorb some of a wrong model's error too.
   const auto [shifted, shift] = best_shift(poses, data, rows);
-  if (shifted * 5.0 < rotated && shifted < kMistakeFloor_m) {
+  if (shifted * 5.0 < rotated) {
     const std::string by = std::to_string(std::abs(shift)) + (std::abs(shift) == 1 ? " row " : " rows ");
     out.mistakes.push_back("the positions fit far better " + by + (shift > 0 ? "later" : "earlier") +
                            " in the file than their readings: " + number(shifted * 1e3) + " mm RMS against " +
@@ -227,6 +225,8 @@ FrameCheck frame_check(const model::RobotModel& nominal, const model::Dataset& d
                            " mm as given: likely the robot's and the instrument's logs joined out of step by " + by +
                            "(each row's position measured at another row's readings)");
   }
+  // Two registrations absorb some of a wrong model's error too: the move's must fit the points to
+  // an arm's accuracy (below kMistakeFloor_m), not merely better.
   const auto [split, from] = best_split(poses, measured, data, rows);
   if (split * kMovedRatio < rotated && split < kMistakeFloor_m) {
     const int first = data.rows.front().line, at = data.rows[rows[from]].line, before = data.rows[rows[from] - 1].line,
