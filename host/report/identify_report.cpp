@@ -167,7 +167,7 @@ ParameterRow parameter_row(const identify::IdentifyResult& r, std::size_t k) {
   row.at_bound = k < r.at_bound.size() && r.at_bound[k];
   if (i < r.stddev.size() && !row.at_bound) row.stddev = r.stddev(i);
   if (priors && std::isfinite(r.prior_sigma(i))) row.prior_sigma = r.prior_sigma(i);
-  if (priors && i < r.prior_share.size()) row.data_share = 1.0 - r.prior_share(i);
+  if (priors && i < r.prior_share.size() && !row.at_bound) row.data_share = 1.0 - r.prior_share(i);
   return row;
 }
 
