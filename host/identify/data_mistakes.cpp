@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <limits>
-#include <set>
-#include <tuple>
+#include <numbers>
 #include <utility>
 
 #include <Eigen/SVD>
@@ -35,14 +35,71 @@ struct ToolPoses {
   std::vector<model::Matrix3> rotation;
 };
 
-// The nominal tool poses at the sampled rows, with joint columns j and k exchanged when j != k.
+// A way the file's joint readings may differ from the model's convention: the readings as the
+// model takes them, what was changed and what that likely means.
+struct Convention {
+  std::function<void(std::vector<double>&)> reading;
+  std::string change;  // "joint columns 2 (a) and 3 (b) exchanged"
+  std::string cause;   // "likely two joint columns swapped"
+};
+
+// The conventions tried: two joint columns of one type exchanged; a joint read with its sign
+// reversed, from a zero a quarter or half turn from the model's, or both; a revolute joint read
+// relative to the one before it (a parallelogram arm's controller reports J3 against the horizon,
+// the model against J2's link), either way round.
+std::vector<Convention> conventions(const model::RobotModel& nominal) {
+  std::vector<Convention> out;
+  const auto named = [&](std::size_t j) { return std::to_string(j + 1) + " (" + nominal.joints[j].name + ")"; };
+  const auto revolute = [&](std::size_t j) { return nominal.joints[j].type == core::JointType::revolute; };
+  const std::size_t n = nominal.joints.size();
+  for (std::size_t j = 0; j < n; ++j)
+    for (std::size_t k = j + 1; k < n; ++k)
+      if (nominal.joints[j].type == nominal.joints[k].type)
+        out.push_back({[j, k](std::vector<double>& q) { std::swap(q[j], q[k]); },
+                       "joint columns " + named(j) + " and " + named(k) + " exchanged",
+                       "likely two joint columns swapped"});
+  const std::pair<double, const char*> turns[] = {{0.0, ""},
+                                                  {std::numbers::pi / 2, "plus 90 deg"},
+                                                  {-std::numbers::pi / 2, "minus 90 deg"},
+                                                  {std::numbers::pi, "plus 180 deg"}};
+  for (std::size_t j = 0; j < n; ++j)
+    for (const double sign : {1.0, -1.0})
+      for (const auto& [turn, words] : turns) {
+        if (sign > 0 && turn == 0.0) continue;  // as given
+        if (turn != 0.0 && !revolute(j)) continue;
+        const std::string joint = "joint " + std::to_string(j + 1);
+        std::string change = "joint " + named(j) + " read " + (sign < 0 ? "with its sign reversed" : "");
+        if (turn != 0.0) change += std::string(sign < 0 ? " and " : "") + words;
+        std::string cause = "likely the controller counts " + joint;
+        if (sign < 0) cause += " the other way round from the model";
+        if (sign < 0 && turn != 0.0) cause += ", and";
+        if (turn != 0.0)
+          cause +=
+              std::string(" from a zero ") + (std::abs(turn) < 3 ? "a quarter" : "a half") + " turn from the model's";
+        out.push_back({[j, sign, turn](std::vector<double>& q) { q[j] = sign * q[j] + turn; }, change, cause});
+      }
+  for (std::size_t j = 1; j < n; ++j)
+    for (const double sign : {1.0, -1.0}) {
+      if (!revolute(j) || !revolute(j - 1)) continue;
+      out.push_back({[j, sign](std::vector<double>& q) { q[j] += sign * q[j - 1]; },
+                     "joint " + named(j) + " read " + (sign > 0 ? "plus" : "minus") + " joint " + std::to_string(j) +
+                         "'s reading",
+                     "likely the controller reports joint " + std::to_string(j + 1) + " relative to joint " +
+                         std::to_string(j) +
+                         " where the model does not (or the other way round: a parallelogram "
+                         "arm's coupled joints)"});
+    }
+  return out;
+}
+
+// The nominal tool poses at the sampled rows, the readings taken by `convention` when given.
 ToolPoses tool_poses(const model::RobotModel& nominal, const model::Dataset& data, const std::vector<std::size_t>& rows,
-                     int j = 0, int k = 0) {
+                     const Convention* convention = nullptr) {
   ToolPoses poses;
   std::vector<double> q;
   for (const std::size_t i : rows) {
     q = data.rows[i].q;
-    if (j != k) std::swap(q[static_cast<std::size_t>(j)], q[static_cast<std::size_t>(k)]);
+    if (convention) convention->reading(q);
     const model::Transform t = model::forward_kinematics(nominal, q);
     poses.position_m.push_back(t.translation);
     poses.rotation.push_back(t.rotation);
@@ -200,22 +257,24 @@ FrameCheck frame_check(const model::RobotModel& nominal, const model::Dataset& d
         "the measured points are a mirror image of the model's: registered by a rotation they leave " +
         number(rotated * 1e3) + " mm RMS, by a reflection " + number(mirrored * 1e3) +
         " mm: likely two position columns swapped or an axis flipped (a left-handed device frame)");
-  // Two joint columns exchanged: the pair whose exchange fits best, if it fits far better.
-  std::tuple<double, int, int> best{rotated, 0, 0};
-  for (int j = 0; j < nominal.joint_count(); ++j)
-    for (int k = j + 1; k < nominal.joint_count(); ++k) {
-      if (nominal.joints[static_cast<std::size_t>(j)].type != nominal.joints[static_cast<std::size_t>(k)].type)
-        continue;
-      const double swapped = fitted_rms(tool_poses(nominal, data, rows, j, k), measured, false);
-      if (swapped < std::get<0>(best)) best = {swapped, j, k};
-    }
-  const auto [swapped, j, k] = best;
-  if (swapped * 5.0 < rotated)
-    out.mistakes.push_back("the readings fit far better with joint columns " + std::to_string(j + 1) + " (" +
-                           nominal.joints[static_cast<std::size_t>(j)].name + ") and " + std::to_string(k + 1) + " (" +
-                           nominal.joints[static_cast<std::size_t>(k)].name + ") exchanged: " + number(swapped * 1e3) +
-                           " mm RMS against " + number(rotated * 1e3) +
-                           " mm as given: likely two joint columns swapped");
+  // The joint readings in another convention than the model's: the one that fits best, if it fits
+  // far better, and those that fit as well (a spherical wrist's fourth joint half a turn on is its
+  // fifth counted the other way round, the last joint's turn taken by the measured point).
+  const std::vector<Convention> tried = conventions(nominal);
+  std::vector<double> rms(tried.size());
+  for (std::size_t c = 0; c < tried.size(); ++c)
+    rms[c] = fitted_rms(tool_poses(nominal, data, rows, &tried[c]), measured, false);
+  const auto best = std::min_element(rms.begin(), rms.end());
+  if (best != rms.end() && *best * 5.0 < rotated) {
+    const Convention& found = tried[static_cast<std::size_t>(best - rms.begin())];
+    std::string as_well;
+    for (std::size_t c = 0; c < tried.size(); ++c)
+      if (&tried[c] != &found && rms[c] <= kSameFit * *best)
+        as_well += (as_well.empty() ? " (as well: " : "; ") + tried[c].change;
+    out.mistakes.push_back("the readings fit far better with " + found.change + (as_well.empty() ? "" : as_well + ")") +
+                           ": " + number(*best * 1e3) + " mm RMS against " + number(rotated * 1e3) +
+                           " mm as given: " + found.cause);
+  }
   const auto [shifted, shift] = best_shift(poses, data, rows);
   if (shifted * 5.0 < rotated) {
     const std::string by = std::to_string(std::abs(shift)) + (std::abs(shift) == 1 ? " row " : " rows ");
@@ -249,23 +308,38 @@ std::optional<std::string> unexplained_fit(double rms_m, double instrument_sigma
   if (instrument_sigma_m > 0.0) what += ", " + number(rms_m / instrument_sigma_m) + " times the instrument's noise";
   return what +
          ": no arm deviates so far from its geometry, so the data do not fit this model -- likely a mirrored "
-         "or swapped position column, swapped joint columns, joints or positions in other units, the robot's and "
+         "or swapped position column, swapped joint columns, a joint counted the other way round or from another zero, "
+         "joints or positions in other units, the robot's and "
          "the instrument's logs joined out of step, the instrument moved during the session, another robot's "
          "model, or the wrong --tip-link";
 }
 
 SharedRows training_rows_in(const model::Dataset& held_out, const model::Dataset& training) {
-  using Point = std::tuple<double, double, double>;
-  std::set<std::vector<double>> readings;
-  std::set<std::pair<std::vector<double>, Point>> rows;
-  for (const model::Measurement& r : training.rows) {
-    readings.insert(r.q);
-    rows.insert({r.q, {r.position.x(), r.position.y(), r.position.z()}});
-  }
+  // The training rows sorted by their first reading: each held-out row compares with those within
+  // the tolerance of it only.
+  std::vector<const model::Measurement*> sorted;
+  for (const model::Measurement& r : training.rows) sorted.push_back(&r);
+  const auto first = [](const model::Measurement* r) { return r->q.empty() ? 0.0 : r->q.front(); };
+  std::sort(sorted.begin(), sorted.end(), [&](const auto* a, const auto* b) { return first(a) < first(b); });
+  const auto same_readings = [](const model::Measurement& a, const model::Measurement& b) {
+    if (a.q.size() != b.q.size()) return false;
+    for (std::size_t j = 0; j < a.q.size(); ++j)
+      if (!(std::abs(a.q[j] - b.q[j]) <= kSameReading)) return false;
+    return true;
+  };
   SharedRows shared;
   for (const model::Measurement& r : held_out.rows) {
-    shared.configurations += static_cast<int>(readings.count(r.q));
-    shared.rows += static_cast<int>(rows.count({r.q, {r.position.x(), r.position.y(), r.position.z()}}));
+    const double q0 = r.q.empty() ? 0.0 : r.q.front();
+    auto it = std::lower_bound(sorted.begin(), sorted.end(), q0 - kSameReading,
+                               [&](const auto* a, double v) { return first(a) < v; });
+    bool configuration = false, row = false;
+    for (; it != sorted.end() && first(*it) <= q0 + kSameReading && !row; ++it) {
+      if (!same_readings(r, **it)) continue;
+      configuration = true;
+      row = ((*it)->position - r.position).cwiseAbs().maxCoeff() <= kSamePosition_m;
+    }
+    shared.configurations += configuration ? 1 : 0;
+    shared.rows += row ? 1 : 0;
   }
   return shared;
 }

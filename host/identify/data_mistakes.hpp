@@ -8,7 +8,11 @@
 //                 ones twice, once with a rotation and once with a reflection (each with the
 //                 measured point's offset from the tool estimated, as a reflector is rarely where
 //                 the nominal tool is): a reflection that fits far better is the finding.
-//   joint swap    two joint columns swapped: the readings permuted back fit far better.
+//   joint convention  the readings in another convention than the model's: two joint columns
+//                 swapped, a joint counted the other way round or from a zero a quarter or half
+//                 turn away, a joint read relative to the one before it (a parallelogram arm's
+//                 J2/J3): the readings taken the other way fit far better. A base joint's zero is
+//                 the registration's and the last joint's the measured point's: no finding, no harm.
 //   out of step   the robot's and the instrument's logs joined with one shifted by a row or a
 //                 few: each row's readings with the position a few rows away fit far better.
 //   moved         the instrument (or the robot's base) moved during the session: a second
@@ -36,8 +40,9 @@
 //                 kMistakeNoiseRatio times the instrument noise explains nothing: the verdict says so
 //                 and names the likely causes, never "close to nominal".
 //   held out      validation rows that are training rows (the same readings and the same measured
-//                 point, bit for bit) do not judge a calibration; rows at training readings
-//                 measured anew judge repeatability more than the calibration between them.
+//                 point, to the digits a file written again keeps) do not judge a calibration; rows
+//                 at training readings measured anew judge repeatability more than the calibration
+//                 between them.
 #pragma once
 
 #include <optional>
@@ -61,6 +66,10 @@ inline constexpr std::size_t kSplitRows = 8;  // rows each side of a registratio
 // bumped 2 deg and 10 mm before the last 40 % of 40 UR10 rows leaves one registration 11 mm, the
 // arm's own millimetre errors two 3.2 mm.
 inline constexpr double kMovedRatio = 3.0;
+// Joint conventions that fit within kSameFit times the best one's RMS are named beside it: points
+// cannot tell them apart (exactly for the nominal; the arm's own errors fit each a little
+// differently, 0.71 and 0.80 mm for the ARID's shoulder reversed and turned).
+inline constexpr double kSameFit = 2.0;
 
 // What the fits above find, from one set of tool poses and one rotation registration:
 //   measured_point_offset  the measured point's offset from the nominal tool, in the tool frame,
@@ -84,7 +93,11 @@ FrameCheck frame_check(const model::RobotModel& nominal, const model::Dataset& d
 std::optional<std::string> unexplained_fit(double rms_m, double instrument_sigma_m);
 
 // How many of `held_out`'s rows are rows of `training`: the same readings and measured position
-// (`rows`), or the same readings only (`configurations`, counting those rows too).
+// (`rows`), or the same readings only (`configurations`, counting those rows too). The same: within
+// what a file written again with fewer digits changes (a joint in degrees to 3 decimals, a
+// position in mm to 3) -- a re-measured point differs by the instrument's noise, more than that.
+inline constexpr double kSameReading = 2e-5;     // rad or m
+inline constexpr double kSamePosition_m = 1e-6;  // each coordinate
 struct SharedRows {
   int rows = 0;
   int configurations = 0;

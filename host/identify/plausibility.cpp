@@ -53,7 +53,10 @@ void check_joints(const model::RobotModel& m, const model::Dataset& data, std::v
                        std::to_string(data.rows.size()) + " readings outside " + (limited ? "its limits [" : "[") +
                        number(lower) + ", " + number(upper) + (revolute ? "] rad" : "] m") + " (largest magnitude " +
                        number(largest) + ")";
-    if (scaled_inside == static_cast<int>(data.rows.size()))
+    // Degrees or millimetres reach far beyond the range, not just past it (a zero a quarter turn
+    // off puts a few readings past a limit, and they too fit when divided by 57.3).
+    if (scaled_inside == static_cast<int>(data.rows.size()) &&
+        largest > 2.0 * std::max(std::abs(lower), std::abs(upper)))
       what += revolute ? ": likely degrees given as radians" : ": likely millimetres given as metres";
     found.push_back(what);
   }
@@ -127,8 +130,15 @@ void check_positions(const model::Dataset& data, const Predicted& p, std::vector
   std::string what = "the measured points move " + number(ratio) +
                      " times as far between rows as the model predicts (median over " + std::to_string(ratios.size()) +
                      " pairs of rows)";
+  // Lengths a device may export in, as metres per unit: a ratio near 1/unit names it.
+  const std::pair<double, const char*> units[] = {{0.01, "centimetres"}, {0.0254, "inches"}, {0.3048, "feet"}};
+  const char* unit = nullptr;
+  for (const auto& [metres, name] : units)
+    if (std::abs(std::log(ratio * metres)) < std::log(1.15)) unit = name;
   if (ratio > 500 && ratio < 2000)
     what += ": likely millimetres given as metres";
+  else if (unit)
+    what += std::string(": likely ") + unit + " given as metres";
   else if (ratio > 0.0005 && ratio < 0.002)
     what += ": likely metres where the model's millimetres were meant, or the model in mm";
   else

@@ -5,10 +5,12 @@
 //
 //   joints        readings against the model's limits (1 % of the range tolerance); revolute
 //                 readings beyond +-4 pi without limits. Likely cause named when the readings /
-//                 (180/pi) (degrees given as radians) or / 1000 (mm given as m) would fit.
+//                 (180/pi) (degrees given as radians) or / 1000 (mm given as m) would fit and the
+//                 largest is more than twice the range's largest magnitude.
 //   positions     the distance between consecutive rows, measured over predicted, median over
 //                 the pairs the model moves by more than 1 cm: outside [0.7, 1.4] is implausible
-//                 (1000: millimetres given as metres). A rigid registration keeps distances.
+//                 (1000: millimetres given as metres; 100, 39.4 and 3.28 within 15 %: centimetres,
+//                 inches, feet). A rigid registration keeps distances.
 //   orientations  the rotation between consecutive rows, measured M against predicted P, must be
 //                 M = B P B^T for one registration rotation B: B is fitted (Kabsch on the rotation
 //                 vectors of the pairs turning 5..150 degrees) and a median misfit above 10
@@ -20,7 +22,7 @@
 //   exact fit     the nominal model reproduces every point within 1e-9 m and the data carry no
 //                 noise (no sigma/covariance columns, no --sigma): no noise level or uncertainty
 //                 can be estimated from it (data made by `kincal predict`?).
-//   mirror, swapped joint columns   data_mistakes.hpp: fits, not scales.
+//   mirror, joint conventions, logs out of step, a moved instrument   data_mistakes.hpp: fits, not scales.
 //
 // Cost: one forward kinematics per row. Finds nothing on data too short to compare (< 3 pairs).
 #pragma once

@@ -216,8 +216,8 @@ const char* name(ErrorClass c) {
 
 const char* name(Mistake m) {
   static constexpr const char* names[] = {
-      "-",          "mirrored-xy", "joints-swapped", "positions-swapped", "validate=train", "mm-as-m",
-      "deg-as-rad", "shifted",     "moved"};
+      "-",          "mirrored-xy", "joints-swapped", "positions-swapped", "validate=train",    "mm-as-m",
+      "deg-as-rad", "shifted",     "moved",          "joint-reversed",    "joint-zero-turned", "inches"};
   return names[static_cast<std::size_t>(m)];
 }
 
@@ -309,15 +309,19 @@ std::string dataset_csv(const Chain& chain, const Truth& truth, const std::vecto
   Pose moved = Pose::Identity();  // the device after its move
   moved.linear() = Eigen::AngleAxisd(kDeg, Eigen::Vector3d(1.0, 2.0, 3.0).normalized()).toRotationMatrix();
   moved.translation() = Eigen::Vector3d(0.003, -0.004, 0.0);
+  const std::vector<int> revolute = revolute_joints(chain);
   for (std::size_t r = 0; r + (shifted ? 1 : 0) < rows.size(); ++r) {
     std::vector<double> q = rows[r].q;
     if (mistake == Mistake::joints_swapped) std::swap(q[1], q[2]);
+    if (mistake == Mistake::joint_reversed) q[static_cast<std::size_t>(revolute[1])] *= -1.0;
+    if (mistake == Mistake::joint_zero_turned) q[static_cast<std::size_t>(revolute[2])] += 90.0 * kDeg;
     for (std::size_t j = 0; j < q.size(); ++j)
       out << number(mistake == Mistake::deg_as_rad && !chain.joints[j].prismatic ? q[j] / kDeg : q[j]) << ',';
     Pose measured = rows[shifted ? r + 1 : r].measured;
     if (mistake == Mistake::instrument_moved && 5 * r >= 3 * rows.size()) measured = moved * measured;
     Eigen::Vector3d p = mirror * measured.translation();
     if (mistake == Mistake::mm_as_m) p *= 1000.0;
+    if (mistake == Mistake::inches) p /= 0.0254;
     out << number(p.x()) << ',' << number(p.y()) << ',' << number(p.z());
     if (pose) {
       // A mirrored frame turns the rotation as M R M; swapped position columns leave it alone.
@@ -327,7 +331,8 @@ std::string dataset_csv(const Chain& chain, const Truth& truth, const std::vecto
       out << ',' << number(o.w()) << ',' << number(o.x()) << ',' << number(o.y()) << ',' << number(o.z());
     }
     if (covariance) {
-      const Eigen::Vector3d v = truth.position_sigma_m.cwiseAbs2() * (mistake == Mistake::mm_as_m ? 1e6 : 1.0);
+      const double unit = mistake == Mistake::mm_as_m ? 1e3 : mistake == Mistake::inches ? 1 / 0.0254 : 1.0;
+      const Eigen::Vector3d v = truth.position_sigma_m.cwiseAbs2() * unit * unit;
       out << ',' << number(v.x()) << ",0,0," << number(v.y()) << ",0," << number(v.z());
     }
     out << ',' << id_prefix << r + 1 << '\n';

@@ -22,8 +22,11 @@ enum class Mistake {
   validate_is_train,
   mm_as_m,
   deg_as_rad,
-  out_of_step,       // each row's position is the next row's (the logs joined a row apart)
-  instrument_moved,  // from 60 % of the rows on, measured from a device turned 1 deg and moved 5 mm
+  out_of_step,        // each row's position is the next row's (the logs joined a row apart)
+  instrument_moved,   // from 60 % of the rows on, measured from a device turned 1 deg and moved 5 mm
+  joint_reversed,     // the second revolute joint counted the other way round by the controller
+  joint_zero_turned,  // the third revolute joint's zero a quarter turn from the URDF's
+  inches,             // positions exported in inches
 };
 
 const char* name(Instrument i);

@@ -1,10 +1,11 @@
 // Mistakes made of plausible numbers (data_mistakes.hpp, issue #41): a mirrored device frame,
-// swapped joint columns, logs joined out of step and an instrument moved halfway are found on
-// every robot here with the measured point off the nominal tool, held-out rows that are training
-// rows are counted, and a fit that explains nothing is named -- while the same data without the
-// mistake, with arms of millimetre errors, give no finding.
+// swapped joint columns, a joint in another convention, logs joined out of step and an instrument
+// moved halfway are found on every robot here with the measured point off the nominal tool,
+// held-out rows that are training rows are counted, and a fit that explains nothing is named --
+// while the same data without the mistake, with arms of millimetre errors, give no finding.
 #include <doctest.h>
 
+#include <cmath>
 #include <numbers>
 #include <random>
 #include <string>
@@ -185,7 +186,77 @@ TEST_CASE("swapped joint columns of a six-axis arm are named") {
   CHECK(mentions(found, "likely two joint columns swapped"));
 }
 
-TEST_CASE("held-out rows that are training rows are counted bit for bit") {
+TEST_CASE("a joint counted the other way round, from another zero or relative to the one before is named") {
+  std::mt19937_64 rng(47);
+  int invisible = 0;
+  for (const std::string name : {"ur10.yaml", "puma560.yaml", "stanford_rrp.yaml", "heavy6r.yaml", "arid_prrr.yaml"}) {
+    CAPTURE(name);
+    const model::RobotModel nominal = robot(name);
+    const model::Dataset data = tracker_rows(nominal, rng, 1e-3, 60);
+    const auto revolute = [&](std::size_t j) { return nominal.joints[j].type == core::JointType::revolute; };
+    // The joints between the base (whose zero is the registration's) and the last (whose zero is
+    // the measured point's): each way the file may differ, named with its joint -- as the best
+    // fit or as one that fits as well (a spherical wrist's joint 5 reversed is joint 4 half a turn on).
+    for (std::size_t j = 1; j + 1 < nominal.joints.size(); ++j) {
+      CAPTURE(j);
+      const std::string joint = "joint " + std::to_string(j + 1) + " (" + nominal.joints[j].name + ") read ";
+      model::Dataset negated = data;
+      for (model::Measurement& r : negated.rows) r.q[j] = -r.q[j];
+      const std::vector<std::string> found = identify::frame_check(nominal, negated).mistakes;
+      // Some conventions move the points by a rigid motion and an offset of the measured point
+      // (the Stanford arm's shoulder reversed; the ARID's shoulder turned, its axis along the rail
+      // before it): nothing to find, nothing harmed (the fit as given is the arm's accuracy).
+      if (found.empty())
+        ++invisible;
+      else
+        CHECK(mentions(found, joint + "with its sign reversed"));
+      if (!revolute(j)) continue;
+      model::Dataset turned = data;  // the controller's zero a quarter turn on: the model wants +90 deg
+      for (model::Measurement& r : turned.rows) r.q[j] -= std::numbers::pi / 2;
+      const std::vector<std::string> turn_found = identify::frame_check(nominal, turned).mistakes;
+      if (turn_found.empty())
+        ++invisible;
+      else
+        CHECK(mentions(turn_found, joint + "plus 90 deg"));
+      if (!revolute(j - 1)) continue;
+      model::Dataset relative = data;  // joint j against the horizon: the model's j plus j-1
+      for (model::Measurement& r : relative.rows) r.q[j] += r.q[j - 1];
+      CHECK(mentions(identify::frame_check(nominal, relative).mistakes,
+                     joint + "minus joint " + std::to_string(j) + "'s reading"));
+    }
+  }
+  CHECK(invisible <= 2);  // of 30
+}
+
+TEST_CASE("the causes a joint convention names") {
+  std::mt19937_64 rng(59);
+  const model::RobotModel nominal = robot("ur10.yaml");
+  model::Dataset data = tracker_rows(nominal, rng, 1e-3, 60);
+  for (model::Measurement& r : data.rows) r.q[2] = -r.q[2] + std::numbers::pi / 2;
+  const std::vector<std::string> found = identify::frame_check(nominal, data).mistakes;
+  CHECK(mentions(found, "joint 3 (" + nominal.joints[2].name + ") read with its sign reversed and plus 90 deg"));
+  CHECK(mentions(found,
+                 "likely the controller counts joint 3 the other way round from the model, and from a zero a "
+                 "quarter turn from the model's"));
+}
+
+TEST_CASE("positions exported in centimetres, inches, feet or millimetres are named by their unit") {
+  std::mt19937_64 rng(53);
+  for (const std::string name : {"ur10.yaml", "arid_prrr.yaml"}) {
+    CAPTURE(name);
+    const model::RobotModel nominal = robot(name);
+    const model::Dataset data = tracker_rows(nominal, rng, 3e-3, 40);
+    for (const auto& [metres, unit] : {std::pair{0.001, "millimetres"}, std::pair{0.01, "centimetres"},
+                                       std::pair{0.0254, "inches"}, std::pair{0.3048, "feet"}}) {
+      CAPTURE(unit);
+      model::Dataset scaled = data;
+      for (model::Measurement& r : scaled.rows) r.position /= metres;
+      CHECK(mentions(identify::implausibilities(nominal, scaled), std::string("likely ") + unit + " given as metres"));
+    }
+  }
+}
+
+TEST_CASE("held-out rows that are training rows are counted, written again with fewer digits too") {
   std::mt19937_64 rng(3);
   const model::RobotModel nominal = robot("puma560.yaml");
   const model::Dataset training = tracker_rows(nominal, rng, 1e-3, 30);
@@ -203,6 +274,13 @@ TEST_CASE("held-out rows that are training rows are counted bit for bit") {
   remeasured.position.x() += 1e-5;
   held_out.rows.push_back(remeasured);
   CHECK(shared() == std::pair(2, 3));
+  // The training file written again with fewer digits (degrees to 3 decimals, mm to 3): the same rows.
+  model::Dataset rewritten = training;
+  for (model::Measurement& r : rewritten.rows) {
+    for (double& q : r.q) q = std::round(q * 180 / std::numbers::pi * 1e3) / 1e3 * std::numbers::pi / 180;
+    for (int axis = 0; axis < 3; ++axis) r.position[axis] = std::round(r.position[axis] * 1e6) / 1e6;
+  }
+  CHECK(identify::training_rows_in(rewritten, training).rows == 30);
 }
 
 TEST_CASE("a fit that explains nothing is named; a service arm's millimetres are not") {
