@@ -43,51 +43,57 @@ struct Convention {
   std::string cause;   // "likely two joint columns swapped"
 };
 
-// The conventions tried: two joint columns of one type exchanged; a joint read with its sign
-// reversed, from a zero a quarter or half turn from the model's, or both; a revolute joint read
-// relative to the one before it (a parallelogram arm's controller reports J3 against the horizon,
-// the model against J2's link), either way round.
+// The conventions tried, the simplest first (the first of those that fit as well is named): a
+// joint read with its sign reversed; from a zero a quarter or half turn from the model's (not the
+// first joint's nor the last's: the registration and the measured point's offset take those); two
+// joint columns of one type exchanged; a sign and a zero; a revolute joint read relative to the one
+// before it (a parallelogram arm's controller reports J3 against the horizon, the model against
+// J2's link), either way round.
 std::vector<Convention> conventions(const model::RobotModel& nominal) {
   std::vector<Convention> out;
   const auto named = [&](std::size_t j) { return std::to_string(j + 1) + " (" + nominal.joints[j].name + ")"; };
-  const auto revolute = [&](std::size_t j) { return nominal.joints[j].type == core::JointType::revolute; };
   const std::size_t n = nominal.joints.size();
+  const auto turnable = [&](std::size_t j) {
+    return j > 0 && j + 1 < n && nominal.joints[j].type == core::JointType::revolute;
+  };
+  const auto one_joint = [&](std::size_t j, double sign, double turn, const char* words) {
+    const std::string joint = "joint " + std::to_string(j + 1);
+    std::string change = "joint " + named(j) + " read " + (sign < 0 ? "with its sign reversed" : "");
+    if (turn != 0.0) change += std::string(sign < 0 ? " and " : "") + words;
+    std::string cause = "likely the controller counts " + joint;
+    if (sign < 0) cause += " the other way round from the model";
+    if (sign < 0 && turn != 0.0) cause += ", and";
+    if (turn != 0.0)
+      cause += std::string(" from a zero ") + (std::abs(turn) < 3 ? "a quarter" : "a half") + " turn from the model's";
+    out.push_back({[j, sign, turn](std::vector<double>& q) { q[j] = sign * q[j] + turn; }, change, cause});
+  };
+  const std::pair<double, const char*> turns[] = {{std::numbers::pi / 2, "plus 90 deg"},
+                                                  {-std::numbers::pi / 2, "minus 90 deg"},
+                                                  {std::numbers::pi, "plus 180 deg"}};
+  for (std::size_t j = 0; j < n; ++j) one_joint(j, -1.0, 0.0, "");
+  for (std::size_t j = 0; j < n; ++j)
+    for (const auto& [turn, words] : turns)
+      if (turnable(j)) one_joint(j, 1.0, turn, words);
   for (std::size_t j = 0; j < n; ++j)
     for (std::size_t k = j + 1; k < n; ++k)
       if (nominal.joints[j].type == nominal.joints[k].type)
         out.push_back({[j, k](std::vector<double>& q) { std::swap(q[j], q[k]); },
                        "joint columns " + named(j) + " and " + named(k) + " exchanged",
                        "likely two joint columns swapped"});
-  const std::pair<double, const char*> turns[] = {{0.0, ""},
-                                                  {std::numbers::pi / 2, "plus 90 deg"},
-                                                  {-std::numbers::pi / 2, "minus 90 deg"},
-                                                  {std::numbers::pi, "plus 180 deg"}};
   for (std::size_t j = 0; j < n; ++j)
-    for (const double sign : {1.0, -1.0})
-      for (const auto& [turn, words] : turns) {
-        if (sign > 0 && turn == 0.0) continue;  // as given
-        if (turn != 0.0 && !revolute(j)) continue;
-        const std::string joint = "joint " + std::to_string(j + 1);
-        std::string change = "joint " + named(j) + " read " + (sign < 0 ? "with its sign reversed" : "");
-        if (turn != 0.0) change += std::string(sign < 0 ? " and " : "") + words;
-        std::string cause = "likely the controller counts " + joint;
-        if (sign < 0) cause += " the other way round from the model";
-        if (sign < 0 && turn != 0.0) cause += ", and";
-        if (turn != 0.0)
-          cause +=
-              std::string(" from a zero ") + (std::abs(turn) < 3 ? "a quarter" : "a half") + " turn from the model's";
-        out.push_back({[j, sign, turn](std::vector<double>& q) { q[j] = sign * q[j] + turn; }, change, cause});
-      }
+    for (const auto& [turn, words] : turns)
+      if (turnable(j)) one_joint(j, -1.0, turn, words);
   for (std::size_t j = 1; j < n; ++j)
     for (const double sign : {1.0, -1.0}) {
-      if (!revolute(j) || !revolute(j - 1)) continue;
+      if (nominal.joints[j].type != core::JointType::revolute ||
+          nominal.joints[j - 1].type != core::JointType::revolute)
+        continue;
       out.push_back({[j, sign](std::vector<double>& q) { q[j] += sign * q[j - 1]; },
                      "joint " + named(j) + " read " + (sign > 0 ? "plus" : "minus") + " joint " + std::to_string(j) +
                          "'s reading",
                      "likely the controller reports joint " + std::to_string(j + 1) + " relative to joint " +
                          std::to_string(j) +
-                         " where the model does not (or the other way round: a parallelogram "
-                         "arm's coupled joints)"});
+                         " where the model does not (or the other way round: a parallelogram arm's coupled joints)"});
     }
   return out;
 }
@@ -257,23 +263,28 @@ FrameCheck frame_check(const model::RobotModel& nominal, const model::Dataset& d
         "the measured points are a mirror image of the model's: registered by a rotation they leave " +
         number(rotated * 1e3) + " mm RMS, by a reflection " + number(mirrored * 1e3) +
         " mm: likely two position columns swapped or an axis flipped (a left-handed device frame)");
-  // The joint readings in another convention than the model's: the one that fits best, if it fits
-  // far better, and those that fit as well (a spherical wrist's fourth joint half a turn on is its
-  // fifth counted the other way round, the last joint's turn taken by the measured point).
+  // The joint readings in another convention than the model's: when the best fits far better, the
+  // simplest of those that fit as well is named, and up to three others beside it (a spherical
+  // wrist's fifth joint counted the other way round is its fourth half a turn on, the last joint's
+  // turn taken by the measured point).
   const std::vector<Convention> tried = conventions(nominal);
   std::vector<double> rms(tried.size());
   for (std::size_t c = 0; c < tried.size(); ++c)
     rms[c] = fitted_rms(tool_poses(nominal, data, rows, &tried[c]), measured, false);
   const auto best = std::min_element(rms.begin(), rms.end());
   if (best != rms.end() && *best * 5.0 < rotated) {
-    const Convention& found = tried[static_cast<std::size_t>(best - rms.begin())];
-    std::string as_well;
-    for (std::size_t c = 0; c < tried.size(); ++c)
-      if (&tried[c] != &found && rms[c] <= kSameFit * *best)
-        as_well += (as_well.empty() ? " (as well: " : "; ") + tried[c].change;
-    out.mistakes.push_back("the readings fit far better with " + found.change + (as_well.empty() ? "" : as_well + ")") +
-                           ": " + number(*best * 1e3) + " mm RMS against " + number(rotated * 1e3) +
-                           " mm as given: " + found.cause);
+    std::size_t found = tried.size(), as_well = 0;
+    std::string others;
+    for (std::size_t c = 0; c < tried.size(); ++c) {
+      if (!(rms[c] <= kSameFit * *best)) continue;
+      if (found == tried.size())
+        found = c;
+      else if (as_well++ < 3)
+        others += (others.empty() ? " (as well: " : "; ") + tried[c].change;
+    }
+    out.mistakes.push_back("the readings fit far better with " + tried[found].change +
+                           (others.empty() ? "" : others + ")") + ": " + number(rms[found] * 1e3) + " mm RMS against " +
+                           number(rotated * 1e3) + " mm as given: " + tried[found].cause);
   }
   const auto [shifted, shift] = best_shift(poses, data, rows);
   if (shifted * 5.0 < rotated) {
