@@ -117,66 +117,87 @@ ToolPoses tool_poses(const model::RobotModel& nominal, const model::Dataset& dat
 // given the offset, then the offset given the registration, until the RMS settles.
 struct PointFit {
   double rms_m = std::numeric_limits<double>::infinity();
-  model::Vector3 offset = model::Vector3::Zero();  // of the measured point, in the tool frame
+  model::Vector3 offset = model::Vector3::Zero();  // of the measured point, in the tool frame (the first part's)
 };
 
-PointFit fitted(const ToolPoses& poses, const std::vector<model::Vector3>& measured, bool reflected) {
+// The rows before and from `split` as two parts of the session, each with a registration of its
+// own (the instrument moved), an offset of its own (the measured point moved on the arm), or both;
+// split 0: one part.
+struct Parts {
+  std::size_t split = 0;
+  bool own_registration = false;
+  bool own_offset = false;
+};
+
+PointFit fitted(const ToolPoses& poses, const std::vector<model::Vector3>& measured, bool reflected,
+                const Parts& parts = {}) {
   const std::size_t n = measured.size();
-  model::Vector3 measured_mean = model::Vector3::Zero();
-  for (const model::Vector3& m : measured) measured_mean += m;
-  measured_mean /= static_cast<double>(n);
+  const auto second = [&](std::size_t i) { return parts.split > 0 && i >= parts.split ? 1 : 0; };
+  const auto registration_of = [&](std::size_t i) { return parts.own_registration ? second(i) : 0; };
+  const auto offset_of = [&](std::size_t i) { return parts.own_offset ? second(i) : 0; };
   PointFit fit;
-  model::Vector3 offset = fit.offset;
+  model::Vector3 offset[2] = {model::Vector3::Zero(), model::Vector3::Zero()};
+  Eigen::Matrix3d r[2] = {Eigen::Matrix3d::Identity(), Eigen::Matrix3d::Identity()};  // measured = r point + b
+  model::Vector3 b[2] = {model::Vector3::Zero(), model::Vector3::Zero()};
   std::vector<model::Vector3> points(n);
   for (int pass = 0; pass < 100; ++pass) {
-    model::Vector3 mean = model::Vector3::Zero();
-    for (std::size_t i = 0; i < n; ++i) mean += points[i] = poses.position_m[i] + poses.rotation[i] * offset;
-    mean /= static_cast<double>(n);
-    Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
-    for (std::size_t i = 0; i < n; ++i) h += (points[i] - mean) * (measured[i] - measured_mean).transpose();
-    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
-    const bool improper = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0;
-    d(2, 2) = improper != reflected ? -1.0 : 1.0;
-    const Eigen::Matrix3d r = svd.matrixV() * d * svd.matrixU().transpose();  // measured = r point + b
-    const model::Vector3 b = measured_mean - r * mean;
-    // The offset: r (p_i + R_i t) + b = m_i in least squares; r and R_i orthogonal, so the normal
-    // matrix is n I.
-    model::Vector3 sum = model::Vector3::Zero();
-    for (std::size_t i = 0; i < n; ++i)
-      sum += poses.rotation[i].transpose() * (r.transpose() * (measured[i] - b) - poses.position_m[i]);
-    offset = sum / static_cast<double>(n);
+    for (std::size_t i = 0; i < n; ++i) points[i] = poses.position_m[i] + poses.rotation[i] * offset[offset_of(i)];
+    for (int g = 0; g < 2; ++g) {
+      model::Vector3 mean = model::Vector3::Zero(), measured_mean = model::Vector3::Zero();
+      double count = 0.0;
+      for (std::size_t i = 0; i < n; ++i)
+        if (registration_of(i) == g) mean += points[i], measured_mean += measured[i], count += 1.0;
+      if (count == 0.0) continue;
+      mean /= count;
+      measured_mean /= count;
+      Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+      for (std::size_t i = 0; i < n; ++i)
+        if (registration_of(i) == g) h += (points[i] - mean) * (measured[i] - measured_mean).transpose();
+      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+      const bool improper = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0;
+      d(2, 2) = improper != reflected ? -1.0 : 1.0;
+      r[g] = svd.matrixV() * d * svd.matrixU().transpose();
+      b[g] = measured_mean - r[g] * mean;
+    }
+    // Each offset: r (p_i + R_i t) + b = m_i in least squares over its rows; r and R_i orthogonal,
+    // so the normal matrix is a multiple of I.
+    for (int g = 0; g < 2; ++g) {
+      model::Vector3 sum = model::Vector3::Zero();
+      double count = 0.0;
+      for (std::size_t i = 0; i < n; ++i) {
+        if (offset_of(i) != g) continue;
+        const int k = registration_of(i);
+        sum += poses.rotation[i].transpose() * (r[k].transpose() * (measured[i] - b[k]) - poses.position_m[i]);
+        count += 1.0;
+      }
+      if (count > 0.0) offset[g] = sum / count;
+    }
     double squares = 0.0;
-    for (std::size_t i = 0; i < n; ++i)
-      squares += (r * (poses.position_m[i] + poses.rotation[i] * offset) + b - measured[i]).squaredNorm();
+    for (std::size_t i = 0; i < n; ++i) {
+      const int k = registration_of(i);
+      squares +=
+          (r[k] * (poses.position_m[i] + poses.rotation[i] * offset[offset_of(i)]) + b[k] - measured[i]).squaredNorm();
+    }
     const double next = std::sqrt(squares / static_cast<double>(n));
     if (!(next < fit.rms_m * (1.0 - 1e-9))) {
-      if (next < fit.rms_m) fit = {next, offset};
+      if (next < fit.rms_m) fit = {next, offset[0]};
       return fit;
     }
-    fit = {next, offset};
+    fit = {next, offset[0]};
   }
   return fit;
 }
 
-double fitted_rms(const ToolPoses& poses, const std::vector<model::Vector3>& measured, bool reflected) {
-  return fitted(poses, measured, reflected).rms_m;
+double fitted_rms(const ToolPoses& poses, const std::vector<model::Vector3>& measured, bool reflected,
+                  const Parts& parts = {}) {
+  return fitted(poses, measured, reflected, parts).rms_m;
 }
 
 std::vector<model::Vector3> measured_points(const model::Dataset& data, const std::vector<std::size_t>& rows) {
   std::vector<model::Vector3> points;
   for (const std::size_t i : rows) points.push_back(data.rows[i].position);
   return points;
-}
-
-// The sampled rows [begin, end) of `poses` and `measured`.
-std::pair<ToolPoses, std::vector<model::Vector3>> part(const ToolPoses& poses,
-                                                       const std::vector<model::Vector3>& measured, std::size_t begin,
-                                                       std::size_t end) {
-  const auto b = static_cast<std::ptrdiff_t>(begin), e = static_cast<std::ptrdiff_t>(end);
-  return {ToolPoses{{poses.position_m.begin() + b, poses.position_m.begin() + e},
-                    {poses.rotation.begin() + b, poses.rotation.begin() + e}},
-          {measured.begin() + b, measured.begin() + e}};
 }
 
 // The logs joined out of step: the readings of each sampled row with the position `shift` rows
@@ -231,11 +252,7 @@ std::pair<double, std::size_t> best_split(const ToolPoses& poses, const std::vec
   const auto try_split = [&](std::size_t k) {
     if (k < kSplitRows || n - k < kSplitRows) return;
     if (!moves_every_joint(data, rows, 0, k) || !moves_every_joint(data, rows, k, n)) return;
-    const auto [poses_a, measured_a] = part(poses, measured, 0, k);
-    const auto [poses_b, measured_b] = part(poses, measured, k, n);
-    const double a = fitted_rms(poses_a, measured_a, false), b = fitted_rms(poses_b, measured_b, false);
-    const double rms =
-        std::sqrt((static_cast<double>(k) * a * a + static_cast<double>(n - k) * b * b) / static_cast<double>(n));
+    const double rms = fitted_rms(poses, measured, false, {k, true, true});
     if (rms < best.first) best = {rms, k};
   };
   for (std::size_t tenth = 1; tenth < 10; ++tenth) try_split(n * tenth / 10);
@@ -301,13 +318,27 @@ FrameCheck frame_check(const model::RobotModel& nominal, const model::Dataset& d
   if (split * kMovedRatio < rotated && split < kMistakeFloor_m) {
     const int first = data.rows.front().line, at = data.rows[rows[from]].line, before = data.rows[rows[from] - 1].line,
               last = data.rows.back().line;
-    out.mistakes.push_back(
-        "the positions fit far better with a registration of their own from about line " + std::to_string(at) +
-        " on: " + number(split * 1e3) + " mm RMS against " + number(rotated * 1e3) +
-        " mm with one: likely the instrument (or the robot's base) moved during the session; calibrate with the "
-        "rows of one part (lines " +
-        std::to_string(first) + "-" + std::to_string(before) + " or " + std::to_string(at) + "-" +
-        std::to_string(last) + ")");
+    // Which moved: the instrument (a registration of its own, the same measured point) or the
+    // measured point on the arm (its own offset, the same registration); each fits as well as both
+    // together where it is the cause. Neither alone: both moved, or a wrong model's error.
+    const double instrument = fitted_rms(poses, measured, false, {from, true, false});
+    const double point = fitted_rms(poses, measured, false, {from, false, true});
+    const bool point_moved = point < instrument && point <= kSameFit * split;
+    const bool instrument_moved = instrument <= point && instrument <= kSameFit * split;
+    const std::string what = point_moved        ? "an offset of their own from the tool"
+                             : instrument_moved ? "a registration of their own"
+                                                : "a registration and an offset from the tool of their own";
+    const std::string cause =
+        point_moved ? "the measured point moved on the arm during the session (a reflector re-seated in another "
+                      "nest, a marker knocked)"
+        : instrument_moved
+            ? "the instrument (or the robot's base) moved during the session"
+            : "the instrument and the measured point moved during the session (or a model far off the arm)";
+    out.mistakes.push_back("the positions fit far better with " + what + " from about line " + std::to_string(at) +
+                           " on: " + number(split * 1e3) + " mm RMS against " + number(rotated * 1e3) +
+                           " mm with one: likely " + cause + "; calibrate with the rows of one part (lines " +
+                           std::to_string(first) + "-" + std::to_string(before) + " or " + std::to_string(at) + "-" +
+                           std::to_string(last) + ")");
   }
   return out;
 }
@@ -321,8 +352,8 @@ std::optional<std::string> unexplained_fit(double rms_m, double instrument_sigma
          ": no arm deviates so far from its geometry, so the data do not fit this model -- likely a mirrored "
          "or swapped position column, swapped joint columns, a joint counted the other way round or from another zero, "
          "joints or positions in other units, the robot's and "
-         "the instrument's logs joined out of step, the instrument moved during the session, another robot's "
-         "model, or the wrong --tip-link";
+         "the instrument's logs joined out of step, the instrument or the measured point moved during the "
+         "session, another robot's model, or the wrong --tip-link";
 }
 
 SharedRows training_rows_in(const model::Dataset& held_out, const model::Dataset& training) {

@@ -17,7 +17,10 @@
 //                 few: each row's readings with the position a few rows away fit far better.
 //   moved         the instrument (or the robot's base) moved during the session: a second
 //                 registration from some row on fits far better (a tracker bumped, a camera
-//                 re-aimed halfway; the file's order is the session's).
+//                 re-aimed halfway; the file's order is the session's). Or the measured point moved
+//                 on the arm (a reflector re-seated in another nest, a marker knocked): a second
+//                 offset from the tool, with the one registration, fits as well as both together;
+//                 named apart from the instrument's move.
 //
 // Both fits are point registrations (Kabsch/Umeyama without scale, alternated with the linear
 // least squares of the measured point's offset in the tool frame), O(rows) each; at most
@@ -66,9 +69,10 @@ inline constexpr std::size_t kSplitRows = 8;  // rows each side of a registratio
 // bumped 2 deg and 10 mm before the last 40 % of 40 UR10 rows leaves one registration 11 mm, the
 // arm's own millimetre errors two 3.2 mm.
 inline constexpr double kMovedRatio = 3.0;
-// Joint conventions that fit within kSameFit times the best one's RMS are named beside it: points
-// cannot tell them apart (exactly for the nominal; the arm's own errors fit each a little
-// differently, 0.71 and 0.80 mm for the ARID's shoulder reversed and turned).
+// Explanations that fit within kSameFit times the best one's RMS fit as well: joint conventions
+// named beside the best (points cannot tell them apart: exactly for the nominal; the arm's own
+// errors fit each a little differently, 0.71 and 0.80 mm for the ARID's shoulder reversed and
+// turned), and a move of the instrument or of the measured point alone against both.
 inline constexpr double kSameFit = 2.0;
 
 // What the fits above find, from one set of tool poses and one rotation registration:

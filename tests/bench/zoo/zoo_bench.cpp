@@ -20,7 +20,7 @@
 // otherwise: place_flange_as_nominal), so the TCP is judged against what its data allow. A
 // covering design, not the cross product: the 4 instruments x 4 sizes x 3 error classes each once
 // (48 clean cases; the third class alternates between a scaled and a coupled joint), the robots in
-// turn, and each of the 11 mistakes planted twice on a clean case's data (22 cases).
+// turn, and each of the 12 mistakes planted twice on a clean case's data (24 cases).
 //
 // Usage: zoo_bench [--cases N] [--filter TEXT] [--work DIR] [--kincal PATH] [--draw N] [--robot URDF]
 //                  [--tip-link LINK]
@@ -129,17 +129,10 @@ std::vector<CaseSpec> design(const std::vector<Robot>& robots, int draw) {
     c.seed = 41000u + 1000u * static_cast<unsigned>(draw) + static_cast<unsigned>(k);
     cases.push_back(c);
   }
-  const Mistake mistakes[] = {Mistake::mirrored,
-                              Mistake::joints_swapped,
-                              Mistake::positions_swapped,
-                              Mistake::validate_is_train,
-                              Mistake::mm_as_m,
-                              Mistake::deg_as_rad,
-                              Mistake::out_of_step,
-                              Mistake::instrument_moved,
-                              Mistake::joint_reversed,
-                              Mistake::joint_zero_turned,
-                              Mistake::inches};
+  const Mistake mistakes[] = {Mistake::mirrored,          Mistake::joints_swapped,   Mistake::positions_swapped,
+                              Mistake::validate_is_train, Mistake::mm_as_m,          Mistake::deg_as_rad,
+                              Mistake::out_of_step,       Mistake::instrument_moved, Mistake::joint_reversed,
+                              Mistake::joint_zero_turned, Mistake::inches,           Mistake::marker_moved};
   for (int m = 0; m < static_cast<int>(std::size(mistakes)); ++m)
     for (int j = 0; j < 2; ++j) {
       CaseSpec c = cases[static_cast<std::size_t>((7 * m + 25 * j + 3) % 48)];
@@ -516,7 +509,9 @@ const char* named_cause(Mistake m) {
     case Mistake::out_of_step:
       return "logs joined out of step by";
     case Mistake::instrument_moved:
-      return "moved during the session; calibrate with";
+      return "the instrument (or the robot's base) moved during the session; calibrate with";
+    case Mistake::marker_moved:
+      return "the measured point moved on the arm during the session";
     case Mistake::joint_reversed:  // named as the best fit or one that fits as well
       return "with its sign reversed";
     case Mistake::joint_zero_turned:

@@ -216,8 +216,8 @@ const char* name(ErrorClass c) {
 
 const char* name(Mistake m) {
   static constexpr const char* names[] = {
-      "-",          "mirrored-xy", "joints-swapped", "positions-swapped", "validate=train",    "mm-as-m",
-      "deg-as-rad", "shifted",     "moved",          "joint-reversed",    "joint-zero-turned", "inches"};
+      "-",       "mirrored-xy", "joints-swapped", "positions-swapped", "validate=train", "mm-as-m",     "deg-as-rad",
+      "shifted", "moved",       "joint-reversed", "joint-zero-turned", "inches",         "marker-moved"};
   return names[static_cast<std::size_t>(m)];
 }
 
@@ -319,6 +319,8 @@ std::string dataset_csv(const Chain& chain, const Truth& truth, const std::vecto
       out << number(mistake == Mistake::deg_as_rad && !chain.joints[j].prismatic ? q[j] / kDeg : q[j]) << ',';
     Pose measured = rows[shifted ? r + 1 : r].measured;
     if (mistake == Mistake::instrument_moved && 5 * r >= 3 * rows.size()) measured = moved * measured;
+    if (mistake == Mistake::marker_moved && 5 * r >= 3 * rows.size())  // re-seated in another nest
+      measured.translation() += measured.linear() * Eigen::Vector3d(0.032, -0.019, 0.014);
     Eigen::Vector3d p = mirror * measured.translation();
     if (mistake == Mistake::mm_as_m) p *= 1000.0;
     if (mistake == Mistake::inches) p /= 0.0254;

@@ -27,6 +27,7 @@ enum class Mistake {
   joint_reversed,     // the second revolute joint counted the other way round by the controller
   joint_zero_turned,  // the third revolute joint's zero a quarter turn from the URDF's
   inches,             // positions exported in inches
+  marker_moved,       // from 60 % of the rows on, the reflector, marker or board 40 mm from where it was
 };
 
 const char* name(Instrument i);
