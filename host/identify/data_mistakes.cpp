@@ -117,7 +117,8 @@ ToolPoses tool_poses(const model::RobotModel& nominal, const model::Dataset& dat
 // given the offset, then the offset given the registration, until the RMS settles.
 struct PointFit {
   double rms_m = std::numeric_limits<double>::infinity();
-  model::Vector3 offset = model::Vector3::Zero();  // of the measured point, in the tool frame (the first part's)
+  model::Vector3 offset = model::Vector3::Zero();        // of the measured point, in the tool frame (the first part's)
+  model::Matrix3 rotation = model::Matrix3::Identity();  // measured = rotation point + b (the first part's)
 };
 
 // The rows before and from `split` as two parts of the session, each with a registration of its
@@ -181,10 +182,10 @@ PointFit fitted(const ToolPoses& poses, const std::vector<model::Vector3>& measu
     }
     const double next = std::sqrt(squares / static_cast<double>(n));
     if (!(next < fit.rms_m * (1.0 - 1e-9))) {
-      if (next < fit.rms_m) fit = {next, offset[0]};
+      if (next < fit.rms_m) fit = {next, offset[0], r[0]};
       return fit;
     }
-    fit = {next, offset[0]};
+    fit = {next, offset[0], r[0]};
   }
   return fit;
 }
@@ -273,7 +274,10 @@ FrameCheck frame_check(const model::RobotModel& nominal, const model::Dataset& d
   const PointFit fit = fitted(poses, measured, false);
   if (fit.offset.norm() <= kMaxMeasuredPointOffset_m) out.measured_point_offset = fit.offset;
   const double rotated = fit.rms_m;
-  if (!(rotated > kMistakeFloor_m)) return out;
+  if (!(rotated > kMistakeFloor_m)) {
+    out.registration_rotation = fit.rotation;
+    return out;
+  }
   const double mirrored = fitted_rms(poses, measured, true);
   if (mirrored * 5.0 < rotated)
     out.mistakes.push_back(

@@ -83,11 +83,15 @@ inline constexpr double kSameFit = 2.0;
 //                          6 rows, or beyond kMaxMeasuredPointOffset_m (no reflector or marker is
 //                          mounted so far: the data are more wrong than an offset, and the scale
 //                          check must see it).
+//   registration_rotation  the device's rotation from the model's base that the positions fit (measured
+//                          = R point + b), when they fit within kMistakeFloor_m: what the measured
+//                          orientations must turn by too (plausibility.hpp).
 //   mistakes               the findings above, one sentence each with the numbers (empty: none).
 // Part of implausibilities() (plausibility.hpp).
 inline constexpr double kMaxMeasuredPointOffset_m = 0.5;
 struct FrameCheck {
   model::Vector3 measured_point_offset = model::Vector3::Zero();
+  std::optional<model::Matrix3> registration_rotation;
   std::vector<std::string> mistakes;
 };
 FrameCheck frame_check(const model::RobotModel& nominal, const model::Dataset& data);

@@ -6,6 +6,7 @@
 #include <optional>
 #include <utility>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
 
@@ -148,12 +149,22 @@ void check_positions(const model::Dataset& data, const Predicted& p, std::vector
 
 // The rotation between consecutive rows, measured M_k = R_i R_(i-1)^T and predicted P_k, must be
 // M_k = B P_k B^T for the one unknown registration rotation B. B is fitted to the pairs' rotation
-// vectors (Kabsch), and the median angle of M_k^T B P_k B^T is returned (rad), or nothing when too
-// few pairs turn by 5..150 degrees to compare. (The angles alone cannot tell the quaternion order:
-// a permutation of the four components keeps every angle between quaternions.)
-std::optional<double> orientation_mismatch(const std::vector<Eigen::Quaterniond>& measured, const Predicted& p) {
+// vectors (Kabsch); the median angle of M_k^T B P_k B^T (rad) and B, or nothing when too few pairs
+// turn by 5..150 degrees to compare. (The turns alone cannot tell every quaternion convention: a
+// signed permutation of the four components that is a rotation of 4-space, as JPL's x,y,z,w order
+// with the inverse rotation, is a fixed rotation on each side, q -> a q b, which turns M_k by a
+// alone; B is then the positions' registration turned by a.)
+inline constexpr double kTurnSpread = 0.05;
+struct OrientationFit {
+  double median_rad = 0.0;
+  model::Matrix3 registration = model::Matrix3::Identity();
+  double turn_spread = 0.0;  // the predicted turns' axes: smallest over largest eigenvalue of their scatter
+};
+
+std::optional<OrientationFit> orientation_mismatch(const std::vector<Eigen::Quaterniond>& measured,
+                                                   const Predicted& p) {
   std::vector<model::Matrix3> seen, predicted;
-  Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d h = Eigen::Matrix3d::Zero(), scatter = Eigen::Matrix3d::Zero();
   for (std::size_t i = 1; i < measured.size(); ++i) {
     const model::Matrix3 pk = p.rotation[i] * p.rotation[i - 1].transpose();
     const Eigen::AngleAxisd turn(pk);
@@ -161,6 +172,7 @@ std::optional<double> orientation_mismatch(const std::vector<Eigen::Quaterniond>
     const model::Matrix3 mk = (measured[i] * measured[i - 1].conjugate()).toRotationMatrix();
     const Eigen::AngleAxisd seen_turn(mk);
     h += (turn.angle() * turn.axis()) * (seen_turn.angle() * seen_turn.axis()).transpose();
+    scatter += turn.axis() * turn.axis().transpose();
     seen.push_back(mk);
     predicted.push_back(pk);
   }
@@ -172,31 +184,66 @@ std::optional<double> orientation_mismatch(const std::vector<Eigen::Quaterniond>
   std::vector<double> residuals;
   for (std::size_t k = 0; k < seen.size(); ++k)
     residuals.push_back(Eigen::AngleAxisd(seen[k].transpose() * b * predicted[k] * b.transpose()).angle());
-  return median(residuals);
+  const Eigen::Vector3d spread = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter).eigenvalues();
+  return OrientationFit{median(residuals), b, spread(0) / spread(2)};
 }
 
-void check_orientations(const model::Dataset& data, const Predicted& p, std::vector<std::string>& found) {
+// How far the orientations miss (rad): the turns' misfit, or, where the positions fitted a
+// registration of their own (data_mistakes.hpp) and the tool turned about every axis (a sweep of
+// one joint trades the registration's turn about it for the measured point's offset), the larger
+// of that and the angle between the two registrations.
+std::optional<double> orientation_misfit(const std::vector<Eigen::Quaterniond>& measured, const Predicted& p,
+                                         const std::optional<model::Matrix3>& position_registration) {
+  const std::optional<OrientationFit> fit = orientation_mismatch(measured, p);
+  if (!fit) return std::nullopt;
+  if (!position_registration || fit->turn_spread < kTurnSpread) return fit->median_rad;
+  const double between = Eigen::AngleAxisd(fit->registration.transpose() * *position_registration).angle();
+  return std::max(fit->median_rad, between);
+}
+
+void check_orientations(const model::Dataset& data, const Predicted& p,
+                        const std::optional<model::Matrix3>& position_registration, std::vector<std::string>& found) {
   if (!data.has_orientation) return;
-  std::vector<Eigen::Quaterniond> as_given, as_xyzw;
+  // The quaternions as given and as other conventions would have written them: x,y,z,w order, the
+  // inverse rotation (a JPL quaternion: the conjugate of the Hamilton one kincal reads), or both.
+  std::vector<Eigen::Quaterniond> as_given, as_xyzw, as_inverse, as_inverse_xyzw;
   for (const model::Measurement& r : data.rows) {
     if (!r.orientation) return;
-    const Eigen::Quaterniond& q = *r.orientation;  // read as w,x,y,z
+    const Eigen::Quaterniond& q = *r.orientation;               // read as w,x,y,z
+    const Eigen::Quaterniond xyzw(q.z(), q.w(), q.x(), q.y());  // the columns were x,y,z,w
     as_given.push_back(q);
-    as_xyzw.emplace_back(q.z(), q.w(), q.x(), q.y());  // the columns were x,y,z,w
+    as_xyzw.push_back(xyzw);
+    as_inverse.push_back(q.conjugate());
+    as_inverse_xyzw.push_back(xyzw.conjugate());
   }
-  const std::optional<double> given = orientation_mismatch(as_given, p);
-  if (!given || *given <= 10.0 / kDegreesPerRadian) return;
-  std::string what = "the measured orientations turn between rows differently from the model's, by " +
-                     number(*given * kDegreesPerRadian) + " degrees (median after the best registration)";
-  const std::optional<double> swapped = orientation_mismatch(as_xyzw, p);
-  if (swapped && *swapped < 0.25 * *given)
-    what +=
-        ": likely quaternions in x,y,z,w order (the columns qw,qx,qy,qz are w first; read as x,y,z,w they "
-        "differ by " +
-        number(*swapped * kDegreesPerRadian) + " degrees)";
-  else
-    what += ": wrong orientation columns or not this robot";
-  found.push_back(what);
+  const std::optional<OrientationFit> turns = orientation_mismatch(as_given, p);
+  const std::optional<double> given = orientation_misfit(as_given, p, position_registration);
+  if (!turns || !given || *given <= 10.0 / kDegreesPerRadian) return;
+  std::string what =
+      turns->median_rad > 10.0 / kDegreesPerRadian
+          ? "the measured orientations turn between rows differently from the model's, by " +
+                number(turns->median_rad * kDegreesPerRadian) + " degrees (median after the best registration)"
+          : "the measured orientations turn between rows as the model's, but in a frame " +
+                number(*given * kDegreesPerRadian) + " degrees from the one the positions are measured in";
+  const std::pair<const std::vector<Eigen::Quaterniond>*, const char*> others[] = {
+      {&as_xyzw, "quaternions in x,y,z,w order (the columns qw,qx,qy,qz are w first"},
+      {&as_inverse,
+       "each quaternion the inverse rotation (the JPL convention: the conjugate of the Hamilton one "
+       "kincal reads"},
+      {&as_inverse_xyzw,
+       "JPL quaternions (x,y,z,w order and the inverse rotation; the columns qw,qx,qy,qz are "
+       "Hamilton's, w first"}};
+  double best = 0.25 * *given;
+  std::string cause = ": wrong orientation columns or not this robot";
+  for (const auto& [quaternions, words] : others) {
+    const std::optional<double> other = orientation_misfit(*quaternions, p, position_registration);
+    if (other && *other < best) {
+      best = *other;
+      cause = std::string(": likely ") + words + "; read so they differ by " + number(*other * kDegreesPerRadian) +
+              " degrees)";
+    }
+  }
+  found.push_back(what + cause);
 }
 
 void check_exact_fit(const model::Dataset& data, const Predicted& p, const PlausibilityOptions& options,
@@ -222,7 +269,7 @@ std::vector<std::string> implausibilities(const model::RobotModel& nominal, cons
   const Predicted p = predict(nominal, data, frame.measured_point_offset);
   check_far_points(data, p, found);
   check_positions(data, p, found);
-  check_orientations(data, p, found);
+  check_orientations(data, p, frame.registration_rotation, found);
   check_exact_fit(data, p, options, found);
   for (std::string& f : frame.mistakes) found.push_back(std::move(f));
   return found;

@@ -285,6 +285,46 @@ TEST_CASE("positions exported in centimetres, inches, feet or millimetres are na
   }
 }
 
+TEST_CASE("orientations in another quaternion convention are named; correct poses and single-joint sweeps never") {
+  std::mt19937_64 rng(67);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const auto with = [](model::Dataset data, const auto& convention) {
+    for (model::Measurement& r : data.rows) r.orientation = convention(*r.orientation);
+    return data;
+  };
+  // Each written in its convention into the columns qw,qx,qy,qz (Eigen's constructor takes w first).
+  const auto as_xyzw = [](const Eigen::Quaterniond& q) { return Eigen::Quaterniond(q.x(), q.y(), q.z(), q.w()); };
+  const auto inverse = [](const Eigen::Quaterniond& q) { return q.conjugate(); };
+  const auto jpl = [](const Eigen::Quaterniond& q) { return Eigen::Quaterniond(-q.x(), -q.y(), -q.z(), q.w()); };
+  for (const std::string name : {"ur10.yaml", "puma560.yaml", "heavy6r.yaml"}) {
+    CAPTURE(name);
+    const model::RobotModel nominal = robot(name);
+    model::RobotModel truth = tracker_truth(nominal, rng, 1e-3);  // a 6-DoF target mounted at any angle
+    truth.flange_T_tool.rotation =
+        Eigen::AngleAxisd(3.0 * unit(rng), Eigen::Vector3d(unit(rng), unit(rng), unit(rng)).normalized())
+            .toRotationMatrix() *
+        truth.flange_T_tool.rotation;
+    const model::Dataset data =
+        simulation::measure(truth, sim::random_configurations(nominal, 40, rng), rng, 2e-5, true, 1e-4, false);
+    CHECK(identify::implausibilities(nominal, data).empty());
+    std::vector<double> home(nominal.joints.size(), 0.0), sweep;  // within every joint's limits
+    for (int k = -3; k <= 3; ++k) sweep.push_back(0.15 * k);
+    const model::Dataset sweeps = simulation::measure(
+        truth, simulation::single_joint_sweeps(home, std::vector<std::vector<double>>(nominal.joints.size(), sweep)),
+        rng, 2e-5, true, 1e-4, false);
+    CHECK(identify::implausibilities(nominal, sweeps).empty());
+
+    CHECK(mentions(identify::implausibilities(nominal, with(data, as_xyzw)), "likely quaternions in x,y,z,w order"));
+    CHECK(mentions(identify::implausibilities(nominal, with(data, inverse)),
+                   "likely each quaternion the inverse rotation"));
+    // JPL's order and inverse together turn every row's rotation by fixed rotations on each side:
+    // the turns between rows fit, the frame they turn in is not the positions'.
+    const std::vector<std::string> found = identify::implausibilities(nominal, with(data, jpl));
+    CHECK(mentions(found, "in a frame"));
+    CHECK(mentions(found, "likely JPL quaternions"));
+  }
+}
+
 TEST_CASE("held-out rows that are training rows are counted, written again with fewer digits too") {
   std::mt19937_64 rng(3);
   const model::RobotModel nominal = robot("puma560.yaml");
