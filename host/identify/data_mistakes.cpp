@@ -46,9 +46,9 @@ struct Convention {
 // The conventions tried, the simplest first (the first of those that fit as well is named): a
 // joint read with its sign reversed; from a zero a quarter or half turn from the model's (not the
 // first joint's nor the last's: the registration and the measured point's offset take those); two
-// joint columns of one type exchanged; a sign and a zero; a revolute joint read relative to the one
-// before it (a parallelogram arm's controller reports J3 against the horizon, the model against
-// J2's link), either way round.
+// joint columns of one type exchanged; every column in reverse order; a sign and a zero; a
+// revolute joint read relative to the one before it (a parallelogram arm's controller reports J3
+// against the horizon, the model against J2's link), either way round.
 std::vector<Convention> conventions(const model::RobotModel& nominal) {
   std::vector<Convention> out;
   const auto named = [&](std::size_t j) { return std::to_string(j + 1) + " (" + nominal.joints[j].name + ")"; };
@@ -80,6 +80,12 @@ std::vector<Convention> conventions(const model::RobotModel& nominal) {
         out.push_back({[j, k](std::vector<double>& q) { std::swap(q[j], q[k]); },
                        "joint columns " + named(j) + " and " + named(k) + " exchanged",
                        "likely two joint columns swapped"});
+  bool reversible = n > 2;  // the columns in reverse order (a log that lists the joints from the tool)
+  for (std::size_t j = 0; j < n; ++j)
+    reversible = reversible && nominal.joints[j].type == nominal.joints[n - 1 - j].type;
+  if (reversible)
+    out.push_back({[](std::vector<double>& q) { std::reverse(q.begin(), q.end()); },
+                   "the joint columns in reverse order", "likely the joints listed from the tool to the base"});
   for (std::size_t j = 0; j < n; ++j)
     for (const auto& [turn, words] : turns)
       if (turnable(j)) one_joint(j, -1.0, turn, words);

@@ -9,10 +9,11 @@
 //                 measured point's offset from the tool estimated, as a reflector is rarely where
 //                 the nominal tool is): a reflection that fits far better is the finding.
 //   joint convention  the readings in another convention than the model's: two joint columns
-//                 swapped, a joint counted the other way round or from a zero a quarter or half
-//                 turn away, a joint read relative to the one before it (a parallelogram arm's
-//                 J2/J3): the readings taken the other way fit far better. A base joint's zero is
-//                 the registration's and the last joint's the measured point's: no finding, no harm.
+//                 swapped or all in reverse order, a joint counted the other way round or from a
+//                 zero a quarter or half turn away, a joint read relative to the one before it (a
+//                 parallelogram arm's J2/J3): the readings taken the other way fit far better. A
+//                 base joint's zero is the registration's and the last joint's the measured
+//                 point's: no finding, no harm.
 //   out of step   the robot's and the instrument's logs joined with one shifted by a row or a
 //                 few: each row's readings with the position a few rows away fit far better.
 //   moved         the instrument (or the robot's base) moved during the session: a second

@@ -5,6 +5,7 @@
 // while the same data without the mistake, with arms of millimetre errors, give no finding.
 #include <doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -202,6 +203,17 @@ TEST_CASE("single-joint sweeps of an arm far off its drawing: no move, no shift 
     const std::vector<std::string> found = identify::frame_check(nominal, sweeps).mistakes;
     CHECK_FALSE(mentions(found, "moved during the session"));
     CHECK_FALSE(mentions(found, "out of step"));
+  }
+}
+
+TEST_CASE("joint columns in reverse order are named") {
+  std::mt19937_64 rng(71);
+  for (const std::string name : {"ur10.yaml", "puma560.yaml", "heavy6r.yaml"}) {
+    CAPTURE(name);
+    const model::RobotModel nominal = robot(name);
+    model::Dataset data = tracker_rows(nominal, rng, 1e-3, 60);
+    for (model::Measurement& r : data.rows) std::reverse(r.q.begin(), r.q.end());
+    CHECK(mentions(identify::frame_check(nominal, data).mistakes, "the joint columns in reverse order"));
   }
 }
 
