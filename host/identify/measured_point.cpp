@@ -43,13 +43,20 @@ RobotModel with_estimated_measured_point(const RobotModel& start, const model::D
   fit.rejection_gate = false;
   fit.prior.strength = 0.0;
   fit.prior.sigma.clear();
-  fit.requested = {"tool_x", "tool_y", "tool_z"};
-  if (orientation_used && start.tool == model::ToolKind::frame)
-    fit.requested.insert(fit.requested.end(), {"tool_rx", "tool_ry", "tool_rz"});
+  // Every other parameter held at the start, so that a coordinate of the point the data cannot
+  // tell from the registration is held too instead of failing the fit (a SCARA's reflector height
+  // along its parallel axes).
   const bool base_fixed = std::any_of(options.fixed.begin(), options.fixed.end(),
                                       [](const std::string& f) { return f.starts_with("base"); });
-  if (!base_fixed) fit.requested.insert(fit.requested.begin(), {"base"});
+  const bool frame = orientation_used && start.tool == model::ToolKind::frame;
+  fit.requested.clear();
   fit.fixed.clear();
+  for (const core::ParameterId& id : candidate_parameters(start)) {
+    const bool base = id.kind >= core::ParameterKind::base_x && id.kind <= core::ParameterKind::base_rz;
+    const bool tool_turn = id.kind >= core::ParameterKind::tool_rx && id.kind <= core::ParameterKind::tool_rz;
+    if ((base && !base_fixed) || is_tool_position(id) || (tool_turn && frame)) continue;
+    fit.fixed.push_back(model::parameter_name(id));
+  }
   RobotModel out = start;
   std::ostringstream note;
   note.setf(std::ios::fixed);

@@ -102,3 +102,35 @@ TEST_CASE("reflector off the flange: identified where it was measured, the URDF'
   CHECK_THROWS_WITH_AS(model::write_calibrated_urdf(text, "arm7.urdf", {"", "flange"}, r.model, "hand"),
                        doctest::Contains("a link named 'hand' already"), model::InputError);
 }
+
+TEST_CASE("a SCARA's reflector: estimated first where its height along the parallel axes cannot be told") {
+  // R R P R, every axis vertical: the reflector's height is the registration's and the quill's.
+  const std::string urdf = R"(<robot name="scara">
+  <link name="base_link"/><link name="l1"/><link name="l2"/><link name="quill"/><link name="flange"/>
+  <joint name="j1" type="revolute"><parent link="base_link"/><child link="l1"/><origin xyz="0 0 0.4"/>
+    <axis xyz="0 0 1"/><limit lower="-2.9" upper="2.9" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0.325 0 0"/>
+    <axis xyz="0 0 1"/><limit lower="-2.6" upper="2.6" effort="1" velocity="1"/></joint>
+  <joint name="j3" type="prismatic"><parent link="l2"/><child link="quill"/><origin xyz="0.275 0 0"/>
+    <axis xyz="0 0 -1"/><limit lower="0" upper="0.2" effort="1" velocity="1"/></joint>
+  <joint name="j4" type="revolute"><parent link="quill"/><child link="flange"/><origin xyz="0 0 -0.05"/>
+    <axis xyz="0 0 -1"/><limit lower="-6.28" upper="6.28" effort="1" velocity="1"/></joint>
+</robot>)";
+  const model::RobotModel nominal = model::model_from_urdf(model::parse_urdf_chain(urdf, "scara.urdf", {"", "flange"}));
+  model::RobotModel truth = nominal;
+  model::Transform reflector;
+  reflector.translation = model::Vector3(0.06, 0.02, -0.03);
+  truth.flange_T_tool = nominal.frame_n_T_flange * reflector;
+  truth.tool = model::ToolKind::point;
+  truth.base_T_frame0.translation = model::Vector3(1.5, -0.7, 0.2);
+  truth.base_T_frame0.rotation = model::rotation_from_rpy(model::Vector3(0.1, -0.2, 1.9));
+  const model::Dataset train = test::reflector_rows(truth, 60, 21, "train.csv");
+  const identify::IdentifyResult r = identify::identify(nominal, train, identify::IdentifyOptions{});
+  const bool estimated = std::any_of(r.notes.begin(), r.notes.end(), [](const std::string& n) {
+    return n.find("the measured point first, at the nominal geometry: 63.") != std::string::npos;
+  });
+  CHECK(estimated);  // 63.2 mm from the flange in the plane the data see; its height held
+  CHECK(holds(r.identifiability.identified, {core::ParameterKind::tool_x, 0}));
+  CHECK_FALSE(holds(r.identifiability.identified, {core::ParameterKind::tool_z, 0}));
+  CHECK(r.residuals.rms_m < 5e-5);
+}
