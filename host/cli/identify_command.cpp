@@ -101,6 +101,9 @@ std::string summary(const IdentifyArgs& a, const model::Dataset& data, const ide
     for (const std::string& m : identify::frame_check(result.model, data).mistakes)
       *unexplained += "; against the calibrated model, " + m;
   if (unexplained) std::cerr << "kincal identify: warning: " << *unexplained << '\n';
+  if (result.residuals.has_orientation)
+    if (const auto turned = identify::unexplained_orientations(result.residuals.rms_rad, result.orientation_sigma_rad))
+      std::cerr << "kincal identify: warning: " << *turned << '\n';
   if (!registered) return out.str();
   out << "verdict: ";
   if (unexplained) {

@@ -366,6 +366,16 @@ std::optional<std::string> unexplained_fit(double rms_m, double instrument_sigma
          "session, another robot's model, or the wrong --tip-link";
 }
 
+std::optional<std::string> unexplained_orientations(double rms_rad, double instrument_sigma_rad) {
+  if (!(rms_rad > kOrientationFloor_rad)) return std::nullopt;
+  if (instrument_sigma_rad > 0.0 && rms_rad <= kMistakeNoiseRatio * instrument_sigma_rad) return std::nullopt;
+  return "the calibrated model leaves " + number(rms_rad * 180.0 / std::numbers::pi) +
+         " deg RMS in orientation: no arm turns so far from its model, so the orientations do not fit it -- likely "
+         "another Euler convention than the export's (intrinsic for extrinsic, another order of the axes), "
+         "quaternions in another order or inverted, or the orientation of another frame than the positions'; the "
+         "solve weighed them by their misfit, so the positions' fit stands on its own";
+}
+
 SharedRows training_rows_in(const model::Dataset& held_out, const model::Dataset& training) {
   // The training rows sorted by their first reading: each held-out row compares with those within
   // the tolerance of it only.

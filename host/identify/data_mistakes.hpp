@@ -101,6 +101,15 @@ FrameCheck frame_check(const model::RobotModel& nominal, const model::Dataset& d
 // above), naming the likely causes; nothing otherwise. `instrument_sigma_m` 0: unknown.
 std::optional<std::string> unexplained_fit(double rms_m, double instrument_sigma_m);
 
+// The same for the orientations (rad): more than kOrientationFloor_rad RMS (and kMistakeNoiseRatio
+// times the instrument's orientation noise when given) is no arm's error but the orientation
+// columns' -- another Euler convention than the export's (the real UR10 rows imported extrinsic
+// where they are intrinsic: 15.6 deg RMS, the positions' fit unchanged), a quaternion order or
+// inverse the checks before the solve did not catch. The solve weighs such orientations by their
+// own misfit, so the positions' fit stands; the warning says so.
+inline constexpr double kOrientationFloor_rad = 5.0 * 3.14159265358979323846 / 180.0;
+std::optional<std::string> unexplained_orientations(double rms_rad, double instrument_sigma_rad);
+
 // How many of `held_out`'s rows are rows of `training`: the same readings and measured position
 // (`rows`), or the same readings only (`configurations`, counting those rows too). The same: within
 // what a file written again with fewer digits changes (a joint in degrees to 3 decimals, a

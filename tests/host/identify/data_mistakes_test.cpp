@@ -364,6 +364,17 @@ TEST_CASE("held-out rows that are training rows are counted, written again with 
   CHECK(identify::training_rows_in(rewritten, training).rows == 30);
 }
 
+TEST_CASE("orientations a calibration leaves degrees off are named; an arm's hundredths of a degree are not") {
+  const double deg = std::numbers::pi / 180.0;
+  CHECK_FALSE(identify::unexplained_orientations(0.05 * deg, 0.0));       // the real UR10's probe
+  CHECK_FALSE(identify::unexplained_orientations(2.0 * deg, 0.0));        // a webcam's board far away
+  CHECK_FALSE(identify::unexplained_orientations(6.0 * deg, 0.1 * deg));  // 60 times the noise given
+  const auto euler = identify::unexplained_orientations(15.6 * deg, 0.0);
+  REQUIRE(euler);
+  CHECK(euler->find("15.6 deg RMS in orientation") != std::string::npos);
+  CHECK(euler->find("another Euler convention") != std::string::npos);
+}
+
 TEST_CASE("a fit that explains nothing is named; a service arm's millimetres are not") {
   CHECK_FALSE(identify::unexplained_fit(0.004, 2e-4));   // a service arm under a mocap
   CHECK_FALSE(identify::unexplained_fit(0.0005, 1e-5));  // a UR10 under a tracker
