@@ -49,6 +49,7 @@
 //                 between them.
 #pragma once
 
+#include <numbers>
 #include <optional>
 #include <string>
 #include <vector>
@@ -107,7 +108,7 @@ std::optional<std::string> unexplained_fit(double rms_m, double instrument_sigma
 // where they are intrinsic: 15.6 deg RMS, the positions' fit unchanged), a quaternion order or
 // inverse the checks before the solve did not catch. The solve weighs such orientations by their
 // own misfit, so the positions' fit stands; the warning says so.
-inline constexpr double kOrientationFloor_rad = 5.0 * 3.14159265358979323846 / 180.0;
+inline constexpr double kOrientationFloor_rad = 5.0 * std::numbers::pi / 180.0;
 std::optional<std::string> unexplained_orientations(double rms_rad, double instrument_sigma_rad);
 
 // How many of `held_out`'s rows are rows of `training`: the same readings and measured position
