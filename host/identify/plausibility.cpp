@@ -192,13 +192,10 @@ std::optional<OrientationFit> orientation_mismatch(const std::vector<Eigen::Quat
 // registration of their own (data_mistakes.hpp) and the tool turned about every axis (a sweep of
 // one joint trades the registration's turn about it for the measured point's offset), the larger
 // of that and the angle between the two registrations.
-std::optional<double> orientation_misfit(const std::vector<Eigen::Quaterniond>& measured, const Predicted& p,
-                                         const std::optional<model::Matrix3>& position_registration) {
-  const std::optional<OrientationFit> fit = orientation_mismatch(measured, p);
-  if (!fit) return std::nullopt;
-  if (!position_registration || fit->turn_spread < kTurnSpread) return fit->median_rad;
-  const double between = Eigen::AngleAxisd(fit->registration.transpose() * *position_registration).angle();
-  return std::max(fit->median_rad, between);
+double orientation_misfit(const OrientationFit& fit, const std::optional<model::Matrix3>& position_registration) {
+  if (!position_registration || fit.turn_spread < kTurnSpread) return fit.median_rad;
+  const double between = Eigen::AngleAxisd(fit.registration.transpose() * *position_registration).angle();
+  return std::max(fit.median_rad, between);
 }
 
 void check_orientations(const model::Dataset& data, const Predicted& p,
@@ -217,14 +214,15 @@ void check_orientations(const model::Dataset& data, const Predicted& p,
     as_inverse_xyzw.push_back(xyzw.conjugate());
   }
   const std::optional<OrientationFit> turns = orientation_mismatch(as_given, p);
-  const std::optional<double> given = orientation_misfit(as_given, p, position_registration);
-  if (!turns || !given || *given <= 10.0 / kDegreesPerRadian) return;
+  if (!turns) return;
+  const double given = orientation_misfit(*turns, position_registration);
+  if (given <= 10.0 / kDegreesPerRadian) return;
   std::string what =
       turns->median_rad > 10.0 / kDegreesPerRadian
           ? "the measured orientations turn between rows differently from the model's, by " +
                 number(turns->median_rad * kDegreesPerRadian) + " degrees (median after the best registration)"
           : "the measured orientations turn between rows as the model's, but in a frame " +
-                number(*given * kDegreesPerRadian) + " degrees from the one the positions are measured in";
+                number(given * kDegreesPerRadian) + " degrees from the one the positions are measured in";
   const std::pair<const std::vector<Eigen::Quaterniond>*, const char*> others[] = {
       {&as_xyzw, "quaternions in x,y,z,w order (the columns qw,qx,qy,qz are w first"},
       {&as_inverse,
@@ -233,13 +231,15 @@ void check_orientations(const model::Dataset& data, const Predicted& p,
       {&as_inverse_xyzw,
        "JPL quaternions (x,y,z,w order and the inverse rotation; the columns qw,qx,qy,qz are "
        "Hamilton's, w first"}};
-  double best = 0.25 * *given;
+  double best = 0.25 * given;
   std::string cause = ": wrong orientation columns or not this robot";
   for (const auto& [quaternions, words] : others) {
-    const std::optional<double> other = orientation_misfit(*quaternions, p, position_registration);
-    if (other && *other < best) {
-      best = *other;
-      cause = std::string(": likely ") + words + "; read so they differ by " + number(*other * kDegreesPerRadian) +
+    const std::optional<OrientationFit> fit = orientation_mismatch(*quaternions, p);
+    if (!fit) continue;
+    const double other = orientation_misfit(*fit, position_registration);
+    if (other < best) {
+      best = other;
+      cause = std::string(": likely ") + words + "; read so they differ by " + number(other * kDegreesPerRadian) +
               " degrees)";
     }
   }
