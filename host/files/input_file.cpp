@@ -53,39 +53,6 @@ std::size_t utf8_length(std::string_view text, std::size_t i) {
   return n;
 }
 
-// Removes a UTF-8 byte-order mark (unless the kind keeps it); throws for UTF-16/32 and for bytes
-// that are not UTF-8.
-void decode(std::string& text, const std::string& path, const InputKind& kind) {
-  if (kind.decoding == Decoding::none) return;
-  if (kind.decoding == Decoding::utf8 && text.starts_with("\xEF\xBB\xBF")) text.erase(0, 3);
-  if (text.starts_with("\xFF\xFE") || text.starts_with("\xFE\xFF"))
-    refuse(path, std::string("UTF-16 text (byte-order mark ") + (text[0] == '\xFF' ? "FF FE" : "FE FF") + "): a " +
-                     kind.what + " must be UTF-8 (save it as UTF-8)");
-  if (const std::size_t i = text.find('\0'); i != std::string::npos)
-    refuse(path + ":" + line_column(text, i), "a NUL byte (byte " + std::to_string(i) +
-                                                  "): UTF-16 text or a binary file, not a " + kind.what + " in UTF-8");
-  for (std::size_t i = text.find('\r'); i != std::string::npos; i = text.find('\r', i + 1))
-    if (i + 1 == text.size() || text[i + 1] != '\n')
-      refuse(path + ":" + line_column(text, i), "a CR line end without LF (byte " + std::to_string(i) + "): a " +
-                                                    kind.what + " takes LF or CRLF line ends");
-  if (kind.max_line_bytes > 0)
-    for (std::size_t start = 0; start < text.size();) {
-      const std::size_t end = std::min(text.find('\n', start), text.size());
-      if (end - start > kind.max_line_bytes)
-        refuse(path + ":" + line_column(text, start), "a line of " + size_text(end - start) + ", more than the " +
-                                                          size_text(kind.max_line_bytes) + " a " + kind.what +
-                                                          " line may have");
-      start = end + 1;
-    }
-  if (const std::size_t i = first_invalid_utf8(text); i != std::string::npos) {
-    char hex[8];
-    std::snprintf(hex, sizeof hex, "0x%02X", static_cast<unsigned>(static_cast<unsigned char>(text[i])));
-    refuse(path + ":" + line_column(text, i), std::string("byte ") + hex + " (byte " + std::to_string(i) +
-                                                  ") is not UTF-8: Latin-1 or another 8-bit encoding? a " + kind.what +
-                                                  " must be UTF-8 (save it as UTF-8)");
-  }
-}
-
 // Reads `fd` to its end, failing once more than the kind's limit arrives.
 std::string read_bounded(int fd, const std::string& path, const InputKind& kind, std::uintmax_t expected) {
   std::string text;
@@ -125,13 +92,44 @@ class Descriptor {
 
 }  // namespace
 
+void decode_text(std::string& text, const std::string& path, const InputKind& kind) {
+  if (kind.decoding == Decoding::none) return;
+  if (kind.decoding == Decoding::utf8 && text.starts_with("\xEF\xBB\xBF")) text.erase(0, 3);
+  if (text.starts_with("\xFF\xFE") || text.starts_with("\xFE\xFF"))
+    refuse(path, std::string("UTF-16 text (byte-order mark ") + (text[0] == '\xFF' ? "FF FE" : "FE FF") + "): a " +
+                     kind.what + " must be UTF-8 (save it as UTF-8)");
+  if (const std::size_t i = text.find('\0'); i != std::string::npos)
+    refuse(path + ":" + line_column(text, i), "a NUL byte (byte " + std::to_string(i) +
+                                                  "): UTF-16 text or a binary file, not a " + kind.what + " in UTF-8");
+  for (std::size_t i = text.find('\r'); i != std::string::npos; i = text.find('\r', i + 1))
+    if (i + 1 == text.size() || text[i + 1] != '\n')
+      refuse(path + ":" + line_column(text, i), "a CR line end without LF (byte " + std::to_string(i) + "): a " +
+                                                    kind.what + " takes LF or CRLF line ends");
+  if (kind.max_line_bytes > 0)
+    for (std::size_t start = 0; start < text.size();) {
+      const std::size_t end = std::min(text.find('\n', start), text.size());
+      if (end - start > kind.max_line_bytes)
+        refuse(path + ":" + line_column(text, start), "a line of " + size_text(end - start) + ", more than the " +
+                                                          size_text(kind.max_line_bytes) + " a " + kind.what +
+                                                          " line may have");
+      start = end + 1;
+    }
+  if (const std::size_t i = first_invalid_utf8(text); i != std::string::npos) {
+    char hex[8];
+    std::snprintf(hex, sizeof hex, "0x%02X", static_cast<unsigned>(static_cast<unsigned char>(text[i])));
+    refuse(path + ":" + line_column(text, i), std::string("byte ") + hex + " (byte " + std::to_string(i) +
+                                                  ") is not UTF-8: Latin-1 or another 8-bit encoding? a " + kind.what +
+                                                  " must be UTF-8 (save it as UTF-8)");
+  }
+}
+
 std::string read_text_from(int fd, const std::string& path, const InputKind& kind) {
   struct stat st {};
   if (::fstat(fd, &st) != 0) refuse(path, std::string("cannot read: ") + std::strerror(errno));
   if (const std::string why = not_a_regular_file(st.st_mode); !why.empty()) refuse(path, why);
   check_size(path, kind, static_cast<std::uintmax_t>(st.st_size));
   std::string text = read_bounded(fd, path, kind, static_cast<std::uintmax_t>(st.st_size));
-  decode(text, path, kind);
+  decode_text(text, path, kind);
   return text;
 }
 
@@ -141,7 +139,7 @@ std::string read_text(const std::string& path, const InputKind& kind, StandardIn
       refuse(path, std::string("standard input is not read here: name the ") + kind.what +
                        " file (./- for a file named '-')");
     std::string text = read_bounded(STDIN_FILENO, "standard input", kind, 0);
-    decode(text, "standard input", kind);
+    decode_text(text, "standard input", kind);
     return text;
   }
   const Descriptor file(path, kind);

@@ -75,6 +75,10 @@ std::string read_text(const std::string& path, const InputKind& kind,
 // regular file, reads it from the current offset to its end within the limit, decodes.
 std::string read_text_from(int fd, const std::string& path, const InputKind& kind);
 
+// The checks after reading alone, on a text that came another way (a fuzzer's input): removes
+// a UTF-8 byte-order mark unless the kind keeps it; throws InputFileError as read_text() does.
+void decode_text(std::string& text, const std::string& path, const InputKind& kind);
+
 // The checks before reading alone, for inputs a library decodes (images): a regular file within
 // the limit.
 void check_input_file(const std::string& path, const InputKind& kind);

@@ -6,7 +6,10 @@
 //   byte 1     the mutation (kMutations below, modulo their count)
 //   bytes 2-3  which value or column (modulo their count)
 //   the rest   the file's text: inputs whose text the reader refuses as it is are skipped, so what
-//              is mutated is always a file the reader accepts.
+//              is mutated is always a file the reader accepts; the text checks of reading a file
+//              (files::decode_text: UTF-8, no CR line end without LF) come first, as in kincal, where
+//              no text reaches a reader without them (yaml-cpp counts a lone CR as a line end: a
+//              refusal's line was its line, not this fuzzer's).
 // A value is a number in the text (a YAML scalar after "key:" or in a flow list; a CSV cell of a
 // data row). It becomes 0, its negative, +-1e300, NaN (two spellings), 2^64, a subnormal, or
 // itself in a plausible wrong unit (x1000, /1000, x57.2958). Structure: a joint's name set to
@@ -33,6 +36,7 @@
 #include <string>
 #include <vector>
 
+#include "host/files/input_file.hpp"
 #include "host/model/csv_fields.hpp"
 #include "host/model/measurement_import.hpp"
 #include "host/model/model_file.hpp"
@@ -368,8 +372,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (size < 4) return 0;
   const auto m = static_cast<Mutation>(data[1] % kMutations);
   const std::size_t which = data[2] | (std::size_t{data[3]} << 8);
-  const std::string text(reinterpret_cast<const char*>(data) + 4, size - 4);
-  if (data[0] % 2 == 0)
+  std::string text(reinterpret_cast<const char*>(data) + 4, size - 4);
+  const bool model = data[0] % 2 == 0;
+  try {
+    files::decode_text(text, "fuzz", model ? files::kModelFile : files::kExportFile);
+  } catch (const files::InputFileError&) {
+    return 0;  // no file kincal reads
+  }
+  if (model)
     fuzz_model(text, m, which);
   else
     fuzz_export(text, m, which);
