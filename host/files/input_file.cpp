@@ -157,6 +157,18 @@ std::size_t first_invalid_utf8(std::string_view text) {
   return std::string_view::npos;
 }
 
+std::size_t first_control_character(std::string_view text) {
+  for (std::size_t i = 0; i < text.size(); ++i)
+    if (const auto c = static_cast<unsigned char>(text[i]); c < 0x20 || c == 0x7F) return i;
+  return std::string_view::npos;
+}
+
+std::string control_character_text(std::string_view text, std::size_t offset) {
+  char hex[8];
+  std::snprintf(hex, sizeof hex, "0x%02X", static_cast<unsigned>(static_cast<unsigned char>(text[offset])));
+  return std::string("a control character (") + hex + ", byte " + std::to_string(offset + 1) + ")";
+}
+
 std::string excerpt(std::string_view field) {
   constexpr std::size_t kShown = 80;
   if (field.size() <= kShown) return std::string(field);

@@ -98,6 +98,12 @@ std::string read_text_or_throw(const std::string& path, const InputKind& kind,
 // forms, no surrogates, at most U+10FFFF), or std::string_view::npos.
 std::size_t first_invalid_utf8(std::string_view text);
 
+// The offset of the first control character of `text` (below 0x20, or DEL), or npos; and how a
+// message names it: "a control character (0x01, byte 3)". A name that goes into XML (a robot's,
+// a joint's, a link's) may hold none: XML 1.0 takes none, not even as a character reference.
+std::size_t first_control_character(std::string_view text);
+std::string control_character_text(std::string_view text, std::size_t offset);
+
 // A field for a message: itself when at most 80 bytes, else its first 80 bytes (cut at a UTF-8
 // character boundary) and "... (N bytes)", so that an 8 MB cell is never echoed whole.
 std::string excerpt(std::string_view field);

@@ -121,6 +121,16 @@ class Reader {
     return node.Scalar();
   }
 
+  // A name of the robot, a joint or a link: it names a URDF's elements (`kincal urdf` wrote
+  // "wa\x01ist" into a file lxml refuses; tinyxml2 and urdfdom took it).
+  std::string name(const YAML::Node& node, const std::string& what) const {
+    const std::string t = text(node, what);
+    if (const std::size_t i = files::first_control_character(t); i != std::string::npos)
+      fail(node,
+           what + ": " + files::control_character_text(t, i) + ": a name is printable text (it names URDF elements)");
+    return t;
+  }
+
   // translation + rpy or quaternion (both optional: identity).
   Transform transform(const YAML::Node& node, const std::string& what, AngleUnit unit, double limit) const {
     Transform t;
@@ -278,7 +288,7 @@ RobotModel read_model(const YAML::Node& root, const Reader& r) {
       root, "the model",
       {"name", "angles", "base", "joints", "tool", "flange", "tcp", "gravity", "payload", "calibration", "priors"});
   RobotModel model;
-  model.name = root["name"] ? r.text(root["name"], "name") : "robot";
+  model.name = root["name"] ? r.name(root["name"], "name") : "robot";
   if (root["angles"]) {
     const std::string unit = r.text(root["angles"], "angles");
     if (unit == "deg" || unit == "degrees") {
@@ -306,7 +316,7 @@ RobotModel read_model(const YAML::Node& root, const Reader& r) {
                 {"name", "type", "convention", "d", "theta", "a", "alpha", "beta", "offset", "limits", "coupling",
                  "scale", "compliance", "mass", "centre_of_mass"});
     Joint j;
-    j.name = jn["name"] ? r.text(jn["name"], what + " name") : "j" + std::to_string(index);
+    j.name = jn["name"] ? r.name(jn["name"], what + " name") : "j" + std::to_string(index);
     if (!jn["type"]) r.fail(jn, what + ": missing 'type' (revolute or prismatic)");
     const std::string type = r.text(jn["type"], what + " type");
     if (type == "revolute") {
@@ -396,7 +406,7 @@ RobotModel read_model(const YAML::Node& root, const Reader& r) {
   }
   if (root["flange"]) {  // robot_model.hpp: the flange in frame n, and the TCP from it
     r.only_keys(root["flange"], "flange", {"link", "translation", "rpy", "quaternion"});
-    if (root["flange"]["link"]) model.flange_link = r.text(root["flange"]["link"], "flange link");
+    if (root["flange"]["link"]) model.flange_link = r.name(root["flange"]["link"], "flange link");
     model.frame_n_T_flange = r.transform(root["flange"], "flange", unit, kMaxLength_m);
   }
   if (root["tcp"]) {

@@ -54,7 +54,8 @@
 // leave a joint no motion), a coupling list of the wrong length or coupling rows that are
 // linearly dependent, a scale that is not positive, a negative mass or compliance, two joints
 // of one name (a given name may not be another joint's default j<i> either; both named), two
-// priors for one parameter, text that is not UTF-8: InputError with "FILE:LINE:COLUMN: what"
+// priors for one parameter, text that is not UTF-8, a control character in a name (the robot's, a
+// joint's, the flange link's: XML takes none): InputError with "FILE:LINE:COLUMN: what"
 // (quoted values cut to 80 bytes). Every number is held to its physical range (the constants
 // below), where it is read:
 //   d, a, a prismatic joint's offset and limits, centres of mass, the tool   |x| <= kMaxLength_m

@@ -8,6 +8,7 @@
 #include <string_view>
 #include <utility>
 
+#include "host/files/input_file.hpp"
 #include "host/model/axes.hpp"
 #include "host/model/number_text.hpp"
 #include "host/model/urdf_text.hpp"
@@ -199,6 +200,9 @@ std::string line_end(const std::string& text) {
 // order) with the file's own line end. Refused when the URDF has a link or joint of either name.
 Edit measured_point_edit(const std::string& text, const XmlTextMap& map, const std::string& source,
                          const std::string& tip_link, const std::string& name, const Transform& tip_T_measured) {
+  if (const std::size_t i = files::first_control_character(name); i != std::string::npos)
+    throw InputError("the measured point's link name: " + files::control_character_text(name, i) +
+                     ": a link name is printable text (XML takes none)");
   const std::string joint = name + "_joint";
   for (const XmlElementSpan& e : map.elements) {
     const XmlAttributeSpan* a = e.attribute("name");

@@ -10,6 +10,7 @@
 #include <set>
 #include <unordered_map>
 
+#include "host/files/input_file.hpp"
 #include "host/model/axes.hpp"
 #include "host/model/number_text.hpp"
 #include "host/model/urdf_text.hpp"
@@ -59,6 +60,18 @@ std::string required_attribute(const tinyxml2::XMLElement& e, const char* name, 
   return value;
 }
 
+// A name (of the robot, a link, a joint; a link a joint names), as required_attribute, holding
+// no control character: tinyxml2 reads one raw or as "&#1;", where XML 1.0 takes neither, and
+// kincal writes these names into the URDFs it makes.
+std::string required_name(const tinyxml2::XMLElement& e, const char* attribute, const std::string& source) {
+  const std::string value = required_attribute(e, attribute, source);
+  if (const std::size_t i = files::first_control_character(value); i != std::string::npos)
+    fail_at(source, e.GetLineNum(),
+            std::string("<") + e.Name() + "> " + attribute + ": " + files::control_character_text(value, i) +
+                ": not XML 1.0 text");
+  return value;
+}
+
 Transform parse_origin(const tinyxml2::XMLElement* origin, const std::string& source) {
   Transform t;
   if (origin == nullptr) return t;
@@ -102,7 +115,7 @@ UrdfJoint parse_joint(const tinyxml2::XMLElement& e, const ElementIndex& index, 
   UrdfJoint j;
   j.line = e.GetLineNum();
   j.element = index.at(&e);
-  j.name = required_attribute(e, "name", source);
+  j.name = required_name(e, "name", source);
   const std::string type = required_attribute(e, "type", source);
   const std::string where = "joint '" + j.name + "'";
   if (type == "revolute") {
@@ -124,8 +137,8 @@ UrdfJoint parse_joint(const tinyxml2::XMLElement& e, const ElementIndex& index, 
   const tinyxml2::XMLElement* parent = e.FirstChildElement("parent");
   const tinyxml2::XMLElement* child = e.FirstChildElement("child");
   if (parent == nullptr || child == nullptr) fail_at(source, j.line, where + " needs <parent> and <child>");
-  j.parent_link = required_attribute(*parent, "link", source);
-  j.child_link = required_attribute(*child, "link", source);
+  j.parent_link = required_name(*parent, "link", source);
+  j.child_link = required_name(*child, "link", source);
   const tinyxml2::XMLElement* origin = e.FirstChildElement("origin");
   j.parent_T_joint = parse_origin(origin, source);
   if (origin != nullptr) {
@@ -249,8 +262,11 @@ Tree parse_tree(const std::string& text, const std::string& source) {
   if (robot->Attribute("name") == nullptr)
     fail_at(source, robot->GetLineNum(), "<robot> without a 'name' attribute, which URDF requires");
   tree.robot_name = robot->Attribute("name");
+  if (const std::size_t i = files::first_control_character(tree.robot_name); i != std::string::npos)
+    fail_at(source, robot->GetLineNum(),
+            "<robot> name: " + files::control_character_text(tree.robot_name, i) + ": not XML 1.0 text");
   for (const tinyxml2::XMLElement* l = robot->FirstChildElement("link"); l; l = l->NextSiblingElement("link")) {
-    const std::string name = required_attribute(*l, "name", source);
+    const std::string name = required_name(*l, "name", source);
     if (const auto [first, added] = tree.link_lines.emplace(name, l->GetLineNum()); !added)
       fail_at(source, l->GetLineNum(),
               "link '" + name + "' defined twice (first on line " + std::to_string(first->second) + ")");

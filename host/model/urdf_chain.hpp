@@ -41,7 +41,8 @@
 // <mimic> joints (their values are not readings of their own), no movable joint at all, more
 // than core::kMaxJoints of them.
 // Names are taken as the bytes they are: the text is expected to be UTF-8, which the input layer
-// (host/files) checks for every file read by path.
+// (host/files) checks for every file read by path; a robot, link or joint name holding a control
+// character (raw or as "&#1;", which tinyxml2 takes and XML 1.0 does not) is refused.
 //
 // URDF's kinematics (what urdf_link_poses computes, as robot_state_publisher does): the child
 // link of joint k sits at parent * origin_k * M_k(q_k), M_k a rotation by q_k about axis_k

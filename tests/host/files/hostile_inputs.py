@@ -956,7 +956,10 @@ for label, path, pattern in [
         ("a name that is another joint's default", model_with("dup2.yaml", [R.format(0), "name: j1, " + R.format(1.5), P44]),
          r"dup2\.yaml:5:12: joint 2's name 'j1' is joint 1's name too"),
         ("one parameter's prior twice", model_with("dup3.yaml", [R.format(0), R.format(1.5), P44], "priors: {d2: 0.001, d02: 0.002}\n"),
-         r"dup3\.yaml:9:[0-9]+: priors: 'd02' names the parameter that 'd2' \(line 9\) names")]:
+         r"dup3\.yaml:9:[0-9]+: priors: 'd02' names the parameter that 'd2' \(line 9\) names"),
+        # a name goes into the URDFs kincal writes, and XML 1.0 takes no control character
+        ("a control character in a joint's name", model_with("ctl1.yaml", [R.format(0), 'name: "wa\\x01ist", ' + R.format(1.5), P44]),
+         r"ctl1\.yaml:5:12: joint 2 name: a control character \(0x01, byte 3\): a name is printable text")]:
     case(f"predict:model with {label}", predict_model(path), pattern, protect=[path])
 # degrees without 'angles: deg': a theta, an offset, a base rpy, limits of a wrist
 for label, joints, extra, pattern in [
@@ -1106,6 +1109,15 @@ for label, extra, ends, pattern in [
     path = "s44_" + re.sub(r"\W", "_", label) + ".urdf"
     urdf44(extra, path)
     case(f"urdf:URDF with {label}", ["urdf", "--model", path] + ends, re.escape(path) + pattern, protect=[path])
+# names kincal writes into URDFs, holding a control character that tinyxml2 takes and XML 1.0 does not
+for label, text, pattern in [
+        ("a joint's name holding &#1;", urdf44("").replace('name="j2"', 'name="j&#1;2"'),
+         r":4: <joint> name: a control character \(0x01, byte 2\): not XML 1.0 text"),
+        ("a link's name holding a raw ESC", urdf44("").replace('"a"', '"a\x1b"'),
+         r":2: <link> name: a control character \(0x1B, byte 2\): not XML 1.0 text")]:
+    path = "ctl44_" + re.sub(r"\W", "_", label) + ".urdf"
+    write_bytes(path, text.encode())
+    case(f"urdf:URDF with {label}", ["urdf", "--model", path], re.escape(path) + pattern, protect=[path])
 # CAD exporters' limits 0 and 0: no limits given, a warning at each <limit>; the chain is planned and predicted
 with open("q44_2.csv", "w") as f:
     f.write("q1,q2\n0.1,0.2\n-0.5,1.5\n")
