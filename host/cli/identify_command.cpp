@@ -104,6 +104,11 @@ std::string summary(const IdentifyArgs& a, const model::Dataset& data, const ide
   if (result.residuals.has_orientation)
     if (const auto turned = identify::unexplained_orientations(result.residuals.rms_rad, result.orientation_sigma_rad))
       std::cerr << "kincal identify: warning: " << *turned << '\n';
+  for (const int j : identify::still_joints(data))
+    std::cerr << "kincal identify: warning: joint " << j + 1 << " ("
+              << result.model.joints[static_cast<std::size_t>(j)].name << ") never moved in " << a.data << " (q"
+              << j + 1 << " = " << data.rows[0].q[static_cast<std::size_t>(j)]
+              << " in every row): the calibrated model holds at that reading alone\n";
   if (!registered) return out.str();
   out << "verdict: ";
   if (unexplained) {

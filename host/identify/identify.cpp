@@ -286,22 +286,17 @@ bool contains(const ParameterIds& ids, core::ParameterId id) {
   return std::any_of(ids.begin(), ids.end(), [&](core::ParameterId x) { return same_id(x, id); });
 }
 
-void check_data(const RobotModel& m, const model::Dataset& data) {
+// Refuses data that cannot calibrate the model; notes each joint that never moved.
+void check_data(const RobotModel& m, const model::Dataset& data, std::vector<std::string>& notes) {
   model::check_joint_count(m, data.joint_count, data.source);
   if (data.rows.empty()) throw InputError(data.source + ": no measurements");
-  for (int j = 0; j < data.joint_count; ++j) {
-    double lo = data.rows[0].q[static_cast<std::size_t>(j)], hi = lo;
-    for (const auto& row : data.rows) {
-      lo = std::min(lo, row.q[static_cast<std::size_t>(j)]);
-      hi = std::max(hi, row.q[static_cast<std::size_t>(j)]);
-    }
-    if (hi == lo) {
-      std::ostringstream msg;
-      msg << data.source << ": joint " << j + 1 << " (" << m.joints[static_cast<std::size_t>(j)].name
-          << ") never moved: every row has q" << j + 1 << " = " << lo
-          << "; its axis cannot be identified (move it, or calibrate a model without it)";
-      throw InputError(msg.str());
-    }
+  for (const int j : still_joints(data)) {
+    std::ostringstream msg;
+    msg << data.source << ": joint " << j + 1 << " (" << m.joints[static_cast<std::size_t>(j)].name
+        << ") never moved: every row has q" << j + 1 << " = " << data.rows[0].q[static_cast<std::size_t>(j)]
+        << "; what only its motion shows is held at the nominal, and the model is calibrated for that reading of "
+           "it alone (move it in the data to calibrate its axis)";
+    notes.push_back(msg.str());
   }
 }
 
@@ -456,7 +451,7 @@ ParameterIds candidate_parameters(const RobotModel& m) {
   const ParameterIds all = model::all_parameters(m);
   ParameterIds out;
   for (const auto& id : all)
-    if (id.kind >= core::ParameterKind::base_x && id.kind <= core::ParameterKind::base_rz) out.push_back(id);
+    if (model::is_base_parameter(id.kind)) out.push_back(id);
   for (const auto& id : all)
     if (id.kind >= core::ParameterKind::tool_x && !model::is_joint_map_parameter(id.kind)) out.push_back(id);
   for (const auto& id : all)
@@ -516,8 +511,8 @@ namespace {
 // false gives (the same solves, so the gate need not solve it again).
 IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options,
                                 IdentifyResult* unrejected = nullptr) {
-  check_data(nominal, data);
   IdentifyResult result;
+  check_data(nominal, data, result.notes);
   const int n = nominal.joint_count();
 
   // Noise: the instrument's (from the data, or given) plus the model error (estimated).
@@ -899,6 +894,17 @@ IdentifyResult gated(const RobotModel& nominal, const model::Dataset& data, cons
 
 IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options) {
   return gated(nominal, data, options, nullptr);
+}
+
+std::vector<int> still_joints(const model::Dataset& data) {
+  std::vector<int> out;
+  for (int j = 0; j < data.joint_count; ++j) {
+    const auto k = static_cast<std::size_t>(j);
+    if (std::all_of(data.rows.begin(), data.rows.end(),
+                    [&](const model::Measurement& r) { return r.q[k] == data.rows.front().q[k]; }))
+      out.push_back(j);
+  }
+  return out;
 }
 
 IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options,

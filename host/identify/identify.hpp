@@ -104,7 +104,7 @@
 // common normal of a nearly parallel pair runs away (d of metres for a tilt of milliradians).
 //
 // Errors (InputError, message says what and where): joint count of data and model differ; no
-// measurements; a joint never moved in the data; fewer equations than identifiable parameters;
+// measurements; fewer equations than identifiable parameters;
 // a requested parameter the data cannot identify (with the parameters it is not separable
 // from); an unknown parameter name; cpa without single-joint sweeps.
 #pragma once
@@ -228,6 +228,11 @@ struct IdentifyResult {
 
 // Throws model::InputError for bad input (see above).
 IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options);
+
+// The joints (0-based) that never moved in the data: one reading in every row (a wrist kept facing
+// the tracker, a rail or a seventh axis left still). identify() holds what only their motion shows
+// and notes each; the calibrated model holds at that reading alone.
+std::vector<int> still_joints(const model::Dataset& data);
 
 struct CrossValidation;  // model_selection.hpp
 

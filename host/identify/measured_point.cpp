@@ -52,7 +52,7 @@ RobotModel with_estimated_measured_point(const RobotModel& start, const model::D
   fit.requested.clear();
   fit.fixed.clear();
   for (const core::ParameterId& id : candidate_parameters(start)) {
-    const bool base = id.kind >= core::ParameterKind::base_x && id.kind <= core::ParameterKind::base_rz;
+    const bool base = model::is_base_parameter(id.kind);
     const bool tool_turn = id.kind >= core::ParameterKind::tool_rx && id.kind <= core::ParameterKind::tool_rz;
     if ((base && !base_fixed) || is_tool_position(id) || (tool_turn && frame)) continue;
     fit.fixed.push_back(model::parameter_name(id));

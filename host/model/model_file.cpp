@@ -256,11 +256,7 @@ std::vector<std::pair<std::string, double>> read_priors(const Reader& r, const Y
                                 files::excerpt(key.Scalar()) + "' (line " + std::to_string(key.Mark().line + 1) +
                                 ") names: give one prior per parameter");
     seen.emplace_back(id, entry.first);
-    const bool angle = id.kind == core::ParameterKind::link_theta || id.kind == core::ParameterKind::link_alpha ||
-                       id.kind == core::ParameterKind::link_beta ||
-                       (id.kind >= core::ParameterKind::base_rx && id.kind <= core::ParameterKind::base_rz) ||
-                       (id.kind >= core::ParameterKind::tool_rx && id.kind <= core::ParameterKind::tool_rz) ||
-                       is_gravity_direction_parameter(id.kind);
+    const bool angle = is_angle_parameter(id.kind);
     const double sigma =
         angle ? r.angle(entry.second, "priors: " + name, unit) : r.number(entry.second, "priors: " + name);
     // A sigma beyond the parameter's own range says nothing the range does not.

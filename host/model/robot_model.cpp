@@ -336,6 +336,17 @@ bool is_motion_parameter(core::ParameterKind kind) {
   return !is_joint_map_parameter(kind) && kind >= core::ParameterKind::base_x;
 }
 
+bool is_base_parameter(core::ParameterKind kind) {
+  return kind >= core::ParameterKind::base_x && kind <= core::ParameterKind::base_rz;
+}
+
+bool is_angle_parameter(core::ParameterKind kind) {
+  using K = core::ParameterKind;
+  return kind == K::link_theta || kind == K::link_alpha || kind == K::link_beta ||
+         (kind >= K::base_rx && kind <= K::base_rz) || (kind >= K::tool_rx && kind <= K::tool_rz) ||
+         is_gravity_direction_parameter(kind);
+}
+
 DisplayUnit display_unit(const RobotModel& model, core::ParameterId id) {
   using K = core::ParameterKind;
   if (id.kind == kJointScale || id.kind == kJointCoupling) return {1e6, "ppm"};

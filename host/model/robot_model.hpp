@@ -229,6 +229,10 @@ bool is_mass_parameter(core::ParameterKind kind);
 bool is_joint_map_parameter(core::ParameterKind kind);
 // base_* or tool_*: a small motion of frame 0 or of the tool, not a link's or the joint map's.
 bool is_motion_parameter(core::ParameterKind kind);
+// base_*: the registration (frame 0 in the measuring device's frame).
+bool is_base_parameter(core::ParameterKind kind);
+// An angle (rad, written in the file's angle unit): theta, alpha, beta, base_r*, tool_r*, gravity_r*.
+bool is_angle_parameter(core::ParameterKind kind);
 
 // How reports print a parameter: value_in_unit = SI value * per_si. Angles in deg, lengths in
 // mm, scales and couplings in ppm, compliances in urad/(N m) (um/N for a prismatic joint), masses

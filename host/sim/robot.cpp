@@ -11,14 +11,6 @@
 
 namespace kincal::sim {
 
-bool is_angle(core::ParameterKind k) {
-  return !model::is_joint_map_parameter(k) &&
-         (k == core::ParameterKind::link_theta || k == core::ParameterKind::link_alpha ||
-          k == core::ParameterKind::link_beta ||
-          (k >= core::ParameterKind::base_rx && k <= core::ParameterKind::base_rz) ||
-          k >= core::ParameterKind::tool_rx);
-}
-
 Imperfections typical_imperfections(double reach_m) {
   Imperfections i;
   i.link_mass_kg_per_m = 60.0 * reach_m;  // a 2 m arm: 120 kg/m, a 0.5 m arm: 30 kg/m
@@ -65,9 +57,9 @@ model::RobotModel perturbed(const model::RobotModel& nominal, std::mt19937_64& r
   Eigen::VectorXd e(static_cast<Eigen::Index>(ids.size()));
   std::normal_distribution<double> unit(0.0, 1.0);
   for (std::size_t i = 0; i < ids.size(); ++i) {
-    const bool base = ids[i].kind >= core::ParameterKind::base_x && ids[i].kind <= core::ParameterKind::base_rz;
-    double sigma =
-        is_angle(ids[i].kind) ? (base ? s.base_angle_rad : s.angle_rad) : (base ? s.base_length_m : s.length_m);
+    const bool base = model::is_base_parameter(ids[i].kind);
+    double sigma = model::is_angle_parameter(ids[i].kind) ? (base ? s.base_angle_rad : s.angle_rad)
+                                                          : (base ? s.base_length_m : s.length_m);
     if (ids[i].kind == model::kJointScale || ids[i].kind == model::kJointCoupling) sigma = s.scale_sigma;
     if (ids[i].kind == model::kJointCompliance || model::is_gravity_direction_parameter(ids[i].kind)) sigma = 0.0;
     e(static_cast<Eigen::Index>(i)) = sigma * unit(rng);

@@ -58,9 +58,6 @@ Imperfections typical_imperfections(double reach_m);
 // An arm's reach for that: the sum of its links' |a| and |d| and of the tool's offset (m).
 double reach_m(const model::RobotModel& model);
 
-// Whether a parameter is an angle (rad) rather than a length (m).
-bool is_angle(core::ParameterKind kind);
-
 // A true robot drawn around `nominal` (see the header comment). Scales get a Gaussian error of
 // scale_sigma; compliances keep the nominal's value.
 model::RobotModel perturbed(const model::RobotModel& nominal, std::mt19937_64& rng, const ErrorScale& scale = {});
