@@ -104,6 +104,10 @@ std::string summary(const IdentifyArgs& a, const model::Dataset& data, const ide
   if (result.residuals.has_orientation)
     if (const auto turned = identify::unexplained_orientations(result.residuals.rms_rad, result.orientation_sigma_rad))
       std::cerr << "kincal identify: warning: " << *turned << '\n';
+  if (const auto overstated = identify::overstated_noise(result.residuals.rms_m, result.median_instrument_sigma_m,
+                                                         3 * result.residuals.count,
+                                                         static_cast<int>(result.identifiability.identified.size())))
+    std::cerr << "kincal identify: warning: " << *overstated << '\n';
   for (const int j : identify::still_joints(data))
     std::cerr << "kincal identify: warning: joint " << j + 1 << " ("
               << result.model.joints[static_cast<std::size_t>(j)].name << ") never moved in " << a.data << " (q"

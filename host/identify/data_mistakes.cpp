@@ -366,6 +366,20 @@ std::optional<std::string> unexplained_fit(double rms_m, double instrument_sigma
          "session, another robot's model, or the wrong --tip-link";
 }
 
+std::optional<std::string> overstated_noise(double rms_m, double instrument_sigma_m, int equations, int parameters) {
+  if (!(instrument_sigma_m > 0.0) || equations - parameters < kMinNoiseDegrees) return std::nullopt;
+  // The residuals' expected RMS per axis with that noise: sigma sqrt(dof / equations).
+  const double expected_m =
+      instrument_sigma_m * std::sqrt(static_cast<double>(equations - parameters) / static_cast<double>(equations));
+  const double per_axis_m = rms_m / std::sqrt(3.0);
+  if (!(per_axis_m * kOverstatedNoiseRatio < expected_m)) return std::nullopt;
+  return "the residuals, " + number(per_axis_m * 1e3) + " mm RMS per axis, are " + number(expected_m / per_axis_m) +
+         " times smaller than the instrument noise given (" + number(instrument_sigma_m * 1e3) +
+         " mm per axis) allows: no data scatter so far below their noise -- likely --sigma, or the data's sigma or "
+         "covariance columns, in mm (mm^2) where kincal takes m (m^2); the standard deviations, the priors' weight "
+         "against the data, the outlier test and correct's spreads took the noise as given: give it in m";
+}
+
 std::optional<std::string> unexplained_orientations(double rms_rad, double instrument_sigma_rad) {
   if (!(rms_rad > kOrientationFloor_rad)) return std::nullopt;
   if (instrument_sigma_rad > 0.0 && rms_rad <= kMistakeNoiseRatio * instrument_sigma_rad) return std::nullopt;

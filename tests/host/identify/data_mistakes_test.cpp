@@ -15,6 +15,7 @@
 #include <Eigen/Geometry>
 
 #include "host/identify/data_mistakes.hpp"
+#include "host/identify/identify.hpp"
 #include "host/identify/plausibility.hpp"
 #include "host/model/model_file.hpp"
 #include "host/sim/robot.hpp"
@@ -373,6 +374,30 @@ TEST_CASE("orientations a calibration leaves degrees off are named; an arm's hun
   REQUIRE(euler);
   CHECK(euler->find("15.6 deg RMS in orientation") != std::string::npos);
   CHECK(euler->find("another Euler convention") != std::string::npos);
+}
+
+// --sigma 0.02 meant as 0.02 mm is 20 mm: the residuals a thousand times below it are named; the
+// noise given right, or given too small (the model error is estimated on top), is not. Least
+// squares, as the unregularized candidate model selection chooses there: with priors, 20 mm of
+// noise gives them the fit.
+TEST_CASE("an instrument noise given in mm where kincal takes m is named") {
+  std::mt19937_64 rng(12);
+  const model::RobotModel nominal = robot("puma560.yaml");
+  const model::RobotModel truth = sim::perturbed(nominal, rng);
+  const model::Dataset d =
+      simulation::measure(truth, sim::random_configurations(nominal, 40, rng), rng, 2e-5, false, 0.0, false);
+  for (const double given : {2e-2, 2e-5, 2e-6}) {
+    CAPTURE(given);
+    identify::IdentifyOptions o;
+    o.sigma_m = given;
+    o.prior.strength = 0.0;
+    const identify::IdentifyResult r = identify::identify(nominal, d, o);
+    const auto said = identify::overstated_noise(r.residuals.rms_m, r.median_instrument_sigma_m, 3 * r.residuals.count,
+                                                 static_cast<int>(r.identifiability.identified.size()));
+    CHECK(said.has_value() == (given == 2e-2));
+    if (said) CHECK(said->find("in mm (mm^2) where kincal takes m") != std::string::npos);
+  }
+  CHECK_FALSE(identify::overstated_noise(1e-6, 1.0, 12, 6));  // too few degrees of freedom to tell
 }
 
 TEST_CASE("a fit that explains nothing is named; a service arm's millimetres are not") {
