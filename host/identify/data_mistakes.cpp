@@ -391,28 +391,22 @@ std::optional<std::string> unexplained_orientations(double rms_rad, double instr
 }
 
 SharedRows training_rows_in(const model::Dataset& held_out, const model::Dataset& training) {
-  // The training rows sorted by their first reading: each held-out row compares with those within
-  // the tolerance of it only.
-  std::vector<const model::Measurement*> sorted;
-  for (const model::Measurement& r : training.rows) sorted.push_back(&r);
-  const auto first = [](const model::Measurement* r) { return r->q.empty() ? 0.0 : r->q.front(); };
-  std::sort(sorted.begin(), sorted.end(), [&](const auto* a, const auto* b) { return first(a) < first(b); });
-  const auto same_readings = [](const model::Measurement& a, const model::Measurement& b) {
-    if (a.q.size() != b.q.size()) return false;
-    for (std::size_t j = 0; j < a.q.size(); ++j)
-      if (!(std::abs(a.q[j] - b.q[j]) <= kSameReading)) return false;
-    return true;
-  };
+  // The training rows sorted by their readings' key: each held-out row compares with those within
+  // the key's window of it only.
+  std::vector<std::pair<double, const model::Measurement*>> sorted;
+  for (const model::Measurement& r : training.rows) sorted.emplace_back(model::reading_key(r.q), &r);
+  std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  const double window = model::reading_key_window(static_cast<std::size_t>(training.joint_count));
   SharedRows shared;
   for (const model::Measurement& r : held_out.rows) {
-    const double q0 = r.q.empty() ? 0.0 : r.q.front();
-    auto it = std::lower_bound(sorted.begin(), sorted.end(), q0 - kSameReading,
-                               [&](const auto* a, double v) { return first(a) < v; });
+    const double key = model::reading_key(r.q);
+    auto it = std::lower_bound(sorted.begin(), sorted.end(), key - window,
+                               [](const auto& a, double v) { return a.first < v; });
     bool configuration = false, row = false;
-    for (; it != sorted.end() && first(*it) <= q0 + kSameReading && !row; ++it) {
-      if (!same_readings(r, **it)) continue;
+    for (; it != sorted.end() && it->first <= key + window && !row; ++it) {
+      if (!model::same_readings(r, *it->second)) continue;
       configuration = true;
-      row = ((*it)->position - r.position).cwiseAbs().maxCoeff() <= kSamePosition_m;
+      row = (it->second->position - r.position).cwiseAbs().maxCoeff() <= kSamePosition_m;
     }
     shared.configurations += configuration ? 1 : 0;
     shared.rows += row ? 1 : 0;

@@ -102,7 +102,16 @@ FrameCheck frame_check(const model::RobotModel& nominal, const model::Dataset& d
 // above), naming the likely causes; nothing otherwise. `instrument_sigma_m` 0: unknown.
 std::optional<std::string> unexplained_fit(double rms_m, double instrument_sigma_m);
 
-// The opposite: residuals kOverstatedNoiseRatio times smaller per axis than the instrument noise
+// The same for the orientations (rad): more than kOrientationFloor_rad RMS (and kMistakeNoiseRatio
+// times the instrument's orientation noise when given) is no arm's error but the orientation
+// columns' -- another Euler convention than the export's (the real UR10 rows imported extrinsic
+// where they are intrinsic: 15.6 deg RMS, the positions' fit unchanged), a quaternion order or
+// inverse the checks before the solve did not catch. The solve weighs such orientations by their
+// own misfit, so the positions' fit stands; the warning says so.
+inline constexpr double kOrientationFloor_rad = 5.0 * std::numbers::pi / 180.0;
+std::optional<std::string> unexplained_orientations(double rms_rad, double instrument_sigma_rad);
+
+// The opposite of unexplained_fit: residuals kOverstatedNoiseRatio times smaller per axis than the instrument noise
 // given (`--sigma` or the data's sigma or covariance columns; its median per axis, m) allows with
 // `equations` and `parameters`, where those leave at least kMinNoiseDegrees degrees of freedom.
 // No data scatter so far below their noise: the noise was given in mm (or mm^2) where kincal takes
@@ -114,20 +123,11 @@ inline constexpr double kOverstatedNoiseRatio = 10.0;
 inline constexpr int kMinNoiseDegrees = 10;
 std::optional<std::string> overstated_noise(double rms_m, double instrument_sigma_m, int equations, int parameters);
 
-// The same for the orientations (rad): more than kOrientationFloor_rad RMS (and kMistakeNoiseRatio
-// times the instrument's orientation noise when given) is no arm's error but the orientation
-// columns' -- another Euler convention than the export's (the real UR10 rows imported extrinsic
-// where they are intrinsic: 15.6 deg RMS, the positions' fit unchanged), a quaternion order or
-// inverse the checks before the solve did not catch. The solve weighs such orientations by their
-// own misfit, so the positions' fit stands; the warning says so.
-inline constexpr double kOrientationFloor_rad = 5.0 * std::numbers::pi / 180.0;
-std::optional<std::string> unexplained_orientations(double rms_rad, double instrument_sigma_rad);
-
 // How many of `held_out`'s rows are rows of `training`: the same readings and measured position
 // (`rows`), or the same readings only (`configurations`, counting those rows too). The same: within
 // what a file written again with fewer digits changes (a joint in degrees to 3 decimals, a
-// position in mm to 3) -- a re-measured point differs by the instrument's noise, more than that.
-inline constexpr double kSameReading = 2e-5;     // rad or m
+// position in mm to 3: model::same_readings) -- a re-measured point differs by the instrument's
+// noise, more than that.
 inline constexpr double kSamePosition_m = 1e-6;  // each coordinate
 struct SharedRows {
   int rows = 0;

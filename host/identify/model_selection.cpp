@@ -221,21 +221,29 @@ unsigned parallel_solves() { return std::max(1U, std::thread::hardware_concurren
 
 std::vector<CrossValidation> cross_validate(const std::vector<Candidate>& models, const model::Dataset& data,
                                             const SelectionOptions& selection) {
-  // The folds: K of the shuffled rows, then the out-of-range fold when it has rows on both sides.
-  const int n = static_cast<int>(data.rows.size());
-  std::vector<int> order(static_cast<std::size_t>(n));
-  for (int i = 0; i < n; ++i) order[static_cast<std::size_t>(i)] = i;
+  // The folds: K of the shuffled configurations, each left out whole (a pose measured twice, one
+  // copy in training, would predict the other by what that pose alone does), then the
+  // out-of-range fold when it has rows on both sides.
+  std::vector<std::vector<int>> rows_of;  // each configuration's rows
+  const std::vector<int> configuration = model::configuration_of_rows(data);
+  for (std::size_t r = 0; r < configuration.size(); ++r) {
+    const auto c = static_cast<std::size_t>(configuration[r]);
+    if (c == rows_of.size()) rows_of.emplace_back();
+    rows_of[c].push_back(static_cast<int>(r));
+  }
+  std::vector<std::size_t> order(rows_of.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::mt19937_64 rng(23);
   std::shuffle(order.begin(), order.end(), rng);
   struct Fold {
     std::vector<int> train, test;
   };
-  std::vector<Fold> folds(static_cast<std::size_t>(selection.folds));
-  for (int k = 0; k < selection.folds; ++k) {
-    Fold& f = folds[static_cast<std::size_t>(k)];
-    for (int i = 0; i < n; ++i)
-      (i % selection.folds == k ? f.test : f.train).push_back(order[static_cast<std::size_t>(i)]);
-  }
+  const std::size_t kfolds =
+      std::min(static_cast<std::size_t>(selection.folds), std::max<std::size_t>(1, order.size()));
+  std::vector<Fold> folds(kfolds);
+  for (std::size_t k = 0; k < kfolds; ++k)
+    for (std::size_t i = 0; i < order.size(); ++i)
+      for (const int r : rows_of[order[i]]) (i % kfolds == k ? folds[k].test : folds[k].train).push_back(r);
   const RowSplit range = out_of_range_fold(data, selection);
   const bool range_fold = !range.inside.empty() && !range.outside.empty();
   if (range_fold) folds.push_back({range.inside, range.outside});
@@ -262,7 +270,7 @@ std::vector<CrossValidation> cross_validate(const std::vector<Candidate>& models
     CrossValidation& cv = out[m];
     const Fit* fit = &fits[m * folds.size()];
     if (fit[0].ok) cv.parameters = fit[0].parameters;
-    const auto k = static_cast<std::size_t>(selection.folds);
+    const std::size_t k = kfolds;
     const auto failed = std::find_if(fit, fit + k, [](const Fit& f) { return !f.ok; });
     if (failed != fit + k) {
       cv.why = failed->why;
@@ -374,7 +382,9 @@ int choose_candidate(std::vector<CandidateScore>& scores, const std::vector<Cros
 
 Selection select_model(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& base,
                        const SelectionOptions& options) {
-  const int rows = static_cast<int>(data.rows.size());
+  // K from the configurations (cross_validate leaves each out whole): the rows where none repeats.
+  const std::vector<int> configuration = model::configuration_of_rows(data);
+  const int rows = configuration.empty() ? 0 : *std::max_element(configuration.begin(), configuration.end()) + 1;
   SelectionOptions scoring = options;
   scoring.folds = selection_folds(rows, options);
   const RowSplit range = out_of_range_fold(data, options);

@@ -62,6 +62,9 @@
 // them, 0.4658 mm held out against 0.4807; its extrapolation split has 463 rows in range).
 // A candidate that cannot be identified on some K-fold training rows (too few of them, a
 // joint that never moved there) is out.
+// The folds leave out configurations, not rows: a pose measured twice (model::configuration_of_rows)
+// is in one fold whole -- a copy in training predicts the other by what that pose alone does, and
+// favoured the larger candidates. "Rows" below counts configurations.
 // K: 5 from kMinRowsForFiveFolds (100) rows; below, min(rows, few_rows_folds = 10) -- every row
 // predicted from 90 % of the others or more, so that the large candidates can be identified on a
 // fold's training rows (leave-one-out, K = rows, costs twice as much at 20 rows and more above).

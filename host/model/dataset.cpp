@@ -1,5 +1,6 @@
 #include "host/model/dataset.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <istream>
@@ -271,6 +272,61 @@ Measurement pose_row(std::vector<double> q, const Eigen::Isometry3d& device_T_to
   m.pose_covariance = covariance;
   m.line = line;
   return m;
+}
+
+bool same_readings(const Measurement& a, const Measurement& b) {
+  if (a.q.size() != b.q.size()) return false;
+  for (std::size_t j = 0; j < a.q.size(); ++j)
+    if (!(std::abs(a.q[j] - b.q[j]) <= kSameReading)) return false;
+  return true;
+}
+
+namespace {
+// Weights of incommensurate ratios: distinct configurations meet in a window only by chance.
+double reading_key_weight(std::size_t joint) { return 1.0 + 0.6180339887 * static_cast<double>(joint); }
+}  // namespace
+
+double reading_key(const std::vector<double>& q) {
+  double key = 0.0;
+  for (std::size_t j = 0; j < q.size(); ++j) key += reading_key_weight(j) * q[j];
+  return key;
+}
+
+double reading_key_window(std::size_t joints) {
+  double sum = 0.0;
+  for (std::size_t j = 0; j < joints; ++j) sum += reading_key_weight(j);
+  return kSameReading * sum;
+}
+
+std::vector<int> configuration_of_rows(const Dataset& data) {
+  // The rows sorted by reading_key(): each compares with those within its window only, and rows of
+  // one configuration join (union-find, the file's first row of each the root).
+  const std::size_t n = data.rows.size();
+  std::vector<double> key(n);
+  for (std::size_t i = 0; i < n; ++i) key[i] = reading_key(data.rows[i].q);
+  std::vector<std::size_t> sorted(n);
+  for (std::size_t i = 0; i < n; ++i) sorted[i] = i;
+  std::sort(sorted.begin(), sorted.end(), [&](std::size_t a, std::size_t b) { return key[a] < key[b]; });
+  std::vector<std::size_t> root(n);
+  for (std::size_t i = 0; i < n; ++i) root[i] = i;
+  const auto find = [&](std::size_t i) {
+    while (root[i] != i) i = root[i] = root[root[i]];
+    return i;
+  };
+  const double window = reading_key_window(static_cast<std::size_t>(data.joint_count));
+  for (std::size_t s = 0; s < n; ++s)
+    for (std::size_t t = s; t-- > 0 && key[sorted[s]] - key[sorted[t]] <= window;)
+      if (same_readings(data.rows[sorted[s]], data.rows[sorted[t]])) {
+        const std::size_t a = find(sorted[s]), b = find(sorted[t]);
+        root[std::max(a, b)] = std::min(a, b);
+      }
+  std::vector<int> out(n, -1);
+  int next = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t r = find(i);
+    out[i] = r == i ? next++ : out[r];
+  }
+  return out;
 }
 
 std::string id_suffix(const Measurement& row) {

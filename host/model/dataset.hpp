@@ -92,6 +92,20 @@ void check_joint_count(const RobotModel& model, int data_joints, const std::stri
 Measurement pose_row(std::vector<double> q, const Eigen::Isometry3d& device_T_tool, const Matrix6& covariance,
                      int line);
 
+// Two rows at one configuration: the same readings within kSameReading (rad or m) -- what a file
+// written again with fewer digits changes (a joint in degrees to 3 decimals); a pose measured
+// twice, or a file's rows given again.
+inline constexpr double kSameReading = 2e-5;
+bool same_readings(const Measurement& a, const Measurement& b);
+// A key of the readings that rows of one configuration share within reading_key_window(joints):
+// a fixed weighted sum of the readings, so that readings sorted by it are compared only within
+// that window (by the first reading alone, a joint that never moved put every row in one window).
+double reading_key(const std::vector<double>& q);
+double reading_key_window(std::size_t joints);
+// Each row's configuration (0, 1, ... in the order of their first rows): rows of one configuration
+// share it. Cross-validation leaves a configuration out whole.
+std::vector<int> configuration_of_rows(const Dataset& data);
+
 // " (id TEXT)" for a row with an id, else "": what a message naming the row appends.
 std::string id_suffix(const Measurement& row);
 

@@ -306,6 +306,36 @@ TEST_CASE("model selection: the out-of-range split, the candidates, and the choi
   CHECK(has(table, "<- chosen"));
 }
 
+// A pose measured twice (the copy's readings a thousandth of a degree off, as a file written with
+// fewer digits has them) is one configuration, and cross-validation leaves it out whole: with a
+// copy in training, the other was predicted by what that pose alone does.
+TEST_CASE("cross-validation leaves a configuration measured twice out whole") {
+  std::mt19937_64 rng(31);
+  const RobotModel nominal = robot("puma560.yaml");
+  const RobotModel truth = sim::perturbed(nominal, rng);
+  model::Dataset d =
+      simulation::measure(truth, sim::random_configurations(nominal, 30, rng), rng, 5e-5, false, 0.0, false);
+  const std::size_t n = d.rows.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    model::Measurement copy = d.rows[i];
+    for (double& q : copy.q) q += 1e-5;
+    copy.line = static_cast<int>(n + i) + 2;
+    d.rows.push_back(copy);
+  }
+  std::vector<int> expected(n);
+  for (std::size_t i = 0; i < n; ++i) expected[i] = static_cast<int>(i);
+  expected.insert(expected.end(), expected.begin(), expected.end());
+  CHECK(model::configuration_of_rows(d) == expected);
+  const identify::CrossValidation cv = identify::cross_validate(nominal, d, {});
+  REQUIRE(cv.kfold_rows.size() == 2 * n);
+  // Rows fold by fold, a configuration's rows one after the other: a copy next to its row.
+  for (std::size_t p = 0; p < cv.kfold_rows.size(); p += 2)
+    CHECK(cv.kfold_rows[p + 1] == cv.kfold_rows[p] + static_cast<int>(n));
+  // A joint that never moved leaves the others to tell configurations apart.
+  for (model::Measurement& r : d.rows) r.q[0] = 0.25;
+  CHECK(model::configuration_of_rows(d) == expected);
+}
+
 TEST_CASE("prior widths from the data: the evidence per class, the guards, and the user's priors kept") {
   // A linear model where the data see each parameter perfectly or not at all: the evidence's
   // fixed point is then the RMS of the class's deviations over its default sigmas.
