@@ -299,8 +299,9 @@ double reading_key_window(std::size_t joints) {
 }
 
 std::vector<int> configuration_of_rows(const Dataset& data) {
-  // The rows sorted by reading_key(): each compares with those within its window only, and rows of
-  // one configuration join (union-find, the file's first row of each the root).
+  // The rows sorted by reading_key(): each compares with those within its window only, and joins
+  // the first of them at its readings (union-find, the file's first row of each configuration the
+  // root) -- one match, so that a pose measured 100,000 times costs as many comparisons.
   const std::size_t n = data.rows.size();
   std::vector<double> key(n);
   for (std::size_t i = 0; i < n; ++i) key[i] = reading_key(data.rows[i].q);
@@ -319,6 +320,7 @@ std::vector<int> configuration_of_rows(const Dataset& data) {
       if (same_readings(data.rows[sorted[s]], data.rows[sorted[t]])) {
         const std::size_t a = find(sorted[s]), b = find(sorted[t]);
         root[std::max(a, b)] = std::min(a, b);
+        break;
       }
   std::vector<int> out(n, -1);
   int next = 0;

@@ -334,6 +334,15 @@ TEST_CASE("cross-validation leaves a configuration measured twice out whole") {
   // A joint that never moved leaves the others to tell configurations apart.
   for (model::Measurement& r : d.rows) r.q[0] = 0.25;
   CHECK(model::configuration_of_rows(d) == expected);
+  // A repeatability test: 20,000 rows at 4 poses, in turn (each row compares with one other: a
+  // quadratic grouping would take minutes here).
+  model::Dataset repeated = d;
+  repeated.rows.clear();
+  for (int i = 0; i < 20000; ++i) repeated.rows.push_back(d.rows[static_cast<std::size_t>(i % 4)]);
+  const std::vector<int> poses = model::configuration_of_rows(repeated);
+  int wrong = 0;
+  for (int i = 0; i < 20000; ++i) wrong += poses[static_cast<std::size_t>(i)] == i % 4 ? 0 : 1;
+  CHECK(wrong == 0);
 }
 
 TEST_CASE("prior widths from the data: the evidence per class, the guards, and the user's priors kept") {
