@@ -108,11 +108,19 @@ std::string summary(const IdentifyArgs& a, const model::Dataset& data, const ide
                                                          3 * result.residuals.count,
                                                          static_cast<int>(result.identifiability.identified.size())))
     std::cerr << "kincal identify: warning: " << *overstated << '\n';
-  for (const int j : identify::still_joints(data))
-    std::cerr << "kincal identify: warning: joint " << j + 1 << " ("
-              << result.model.joints[static_cast<std::size_t>(j)].name << ") never moved in " << a.data << " (q"
-              << j + 1 << " = " << data.rows[0].q[static_cast<std::size_t>(j)]
-              << " in every row): the calibrated model holds at that reading alone\n";
+  for (const int j : identify::still_joints(data)) {
+    const auto k = static_cast<std::size_t>(j);
+    const bool validation_moves =
+        held_out != nullptr && std::any_of(held_out->rows.begin(), held_out->rows.end(),
+                                           [&](const model::Measurement& r) { return r.q[k] != data.rows[0].q[k]; });
+    std::cerr << "kincal identify: warning: joint " << j + 1 << " (" << result.model.joints[k].name
+              << ") never moved in " << a.data << " (q" << j + 1 << " = " << data.rows[0].q[k]
+              << " in every row): the calibrated model holds at that reading alone"
+              << (validation_moves ? std::string("; the --validate rows move it, and their errors include its axis, "
+                                                 "which these data could not calibrate")
+                                   : std::string())
+              << '\n';
+  }
   if (!registered) return out.str();
   out << "verdict: ";
   if (unexplained) {
