@@ -4,6 +4,7 @@
 //   meas.csv       40 random configurations with the sigma column
 //   validate.csv   30 held-out configurations
 //   sweeps.csv     10 readings per joint, one joint at a time (for cpa)
+//   still.csv      40 random configurations with the waist held at 0.4 rad
 //   mirrored.csv   meas.csv with x and y exchanged (a left-handed device frame)
 //   bad_row.csv    meas.csv with a short row on line 4
 //   bad_model.yaml the nominal model with an unknown convention
@@ -53,6 +54,9 @@ int main(int argc, char** argv) {
       sweeps.push_back(q);
     }
   ok = ok && write("sweeps.csv", simulation::measure(truth, sweeps, rng, 1e-4, false, 0.0, true));
+  std::vector<std::vector<double>> still = sim::random_configurations(nominal, 40, rng);
+  for (std::vector<double>& q : still) q[0] = 0.4;
+  ok = ok && write("still.csv", simulation::measure(truth, still, rng, 1e-4, false, 0.0, true));
   std::ifstream meas(out + "/meas.csv");
   std::ofstream bad(out + "/bad_row.csv");
   std::string line;
