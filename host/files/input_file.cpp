@@ -90,6 +90,13 @@ class Descriptor {
   int fd_ = -1;
 };
 
+// A byte as a message names it: "0xE9".
+std::string hex_byte(char c) {
+  char hex[8];
+  std::snprintf(hex, sizeof hex, "0x%02X", static_cast<unsigned>(static_cast<unsigned char>(c)));
+  return hex;
+}
+
 }  // namespace
 
 void decode_text(std::string& text, const std::string& path, const InputKind& kind) {
@@ -115,9 +122,7 @@ void decode_text(std::string& text, const std::string& path, const InputKind& ki
       start = end + 1;
     }
   if (const std::size_t i = first_invalid_utf8(text); i != std::string::npos) {
-    char hex[8];
-    std::snprintf(hex, sizeof hex, "0x%02X", static_cast<unsigned>(static_cast<unsigned char>(text[i])));
-    refuse(path + ":" + line_column(text, i), std::string("byte ") + hex + " (byte " + std::to_string(i) +
+    refuse(path + ":" + line_column(text, i), "byte " + hex_byte(text[i]) + " (byte " + std::to_string(i) +
                                                   ") is not UTF-8: Latin-1 or another 8-bit encoding? a " + kind.what +
                                                   " must be UTF-8 (save it as UTF-8)");
   }
@@ -164,9 +169,7 @@ std::size_t first_control_character(std::string_view text) {
 }
 
 std::string control_character_text(std::string_view text, std::size_t offset) {
-  char hex[8];
-  std::snprintf(hex, sizeof hex, "0x%02X", static_cast<unsigned>(static_cast<unsigned char>(text[offset])));
-  return std::string("a control character (") + hex + ", byte " + std::to_string(offset + 1) + ")";
+  return "a control character (" + hex_byte(text[offset]) + ", byte " + std::to_string(offset + 1) + ")";
 }
 
 std::string excerpt(std::string_view field) {
