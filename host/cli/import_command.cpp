@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "host/cli/model_option.hpp"
+#include "host/files/input_file.hpp"
 #include "host/files/output_file.hpp"
 #include "host/identify/plausibility.hpp"
 #include "host/model/dataset.hpp"
@@ -80,6 +81,17 @@ int run_import(const ImportArgs& a) {
                    "orientation noise)";
     if (o.id) std::cout << "; " << r.distinct_ids << " distinct ids in column '" << a.id << "' (kept as id)";
     std::cout << "\nwrote " << a.out << '\n';
+    if (!r.skipped.empty()) {
+      constexpr std::size_t kNamed = 10;  // an export of 10,000 lost readings is not listed whole
+      std::cerr << "kincal import: warning: " << r.skipped.size() << " of " << r.skipped.size() + r.data.rows.size()
+                << " rows hold no measurement (every measured column empty or NaN: a lost beam, an occluded "
+                   "marker) and are left out: line";
+      for (std::size_t i = 0; i < r.skipped.size() && i < kNamed; ++i)
+        std::cerr << (i == 0 ? (r.skipped.size() > 1 ? "s " : " ") : ", ") << r.skipped[i].line
+                  << (r.skipped[i].id.empty() ? "" : " (id " + files::excerpt(r.skipped[i].id) + ")");
+      if (r.skipped.size() > kNamed) std::cerr << " and " << r.skipped.size() - kNamed << " more";
+      std::cerr << '\n';
+    }
     if (o.id && r.distinct_ids < r.data.rows.size())
       std::cerr << "kincal import: warning: the " << r.data.rows.size() << " rows have only " << r.distinct_ids
                 << " distinct values of '" << a.id

@@ -1,6 +1,7 @@
 #include "host/model/measurement_import.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <istream>
@@ -49,6 +50,14 @@ std::vector<std::string> export_fields(const std::string& line, char separator, 
          "separator, not a line break)");
   for (std::string& f : *fields) f = trim_field(f);
   return *fields;
+}
+
+// A field that holds no value: empty, or NaN as tracker and motion-capture software write a
+// measurement they did not take.
+bool holds_no_value(const std::string& field) {
+  std::string lower = field;
+  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
+  return lower.empty() || lower == "nan" || lower == "-nan" || lower == "+nan";
 }
 
 struct Table {
@@ -264,6 +273,11 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   use_three(angles, "--orientation");
   use_three(angle_std, "--orientation-std");
   if (o.id) use(id_column, "the row id (--id)");
+  // The columns of what the instrument measured: a row in which every one holds no value is a
+  // measurement not taken (a lost beam, an occluded marker), left out and counted.
+  std::vector<std::size_t> measured(position.begin(), position.end());
+  for (const auto* c : {&position_std, &angles, &angle_std})
+    if (*c) measured.insert(measured.end(), (*c)->begin(), (*c)->end());
 
   std::vector<double> position_stds, angle_stds;
   std::set<std::string> ids;
@@ -286,9 +300,13 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
       m.id = fields[id_column];
       if (m.id.empty())
         fail(source, number, id_column, "column '" + files::excerpt(t.names[id_column]) + "' (--id) is empty");
-      ids.insert(m.id);
       t.row_id = m.id;
     }
+    if (std::all_of(measured.begin(), measured.end(), [&](std::size_t c) { return holds_no_value(fields[c]); })) {
+      result.skipped.push_back({number, m.id});
+      continue;
+    }
+    if (o.id) ids.insert(m.id);
     for (std::size_t j = 0; j < joint_columns.size(); ++j)
       m.q.push_back(t.number(fields, joint_columns[j], number) * joint_scale[j]);
     for (int k = 0; k < 3; ++k)
@@ -318,6 +336,9 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
     }
     result.data.rows.push_back(std::move(m));
   }
+  if (result.data.rows.empty() && !result.skipped.empty())
+    throw InputError(source + ": none of the " + std::to_string(result.skipped.size()) +
+                     " data rows holds a measurement (every measured column empty or NaN)");
   if (result.data.rows.empty()) throw InputError(source + ": no data rows after the header");
   result.decimal_comma = t.first_comma_line != 0;
   result.median_position_std_m = median_of(position_stds);

@@ -27,6 +27,12 @@
 // (ImportResult counts the distinct ones: an export whose time stamps a spreadsheet rounded to one
 // value tells no row apart, and the dataset's line still does).
 //
+// Measurements not taken: a row in which every measured column (the position, and the
+// orientation and standard deviations when named) is empty or NaN -- a tracker that lost its beam,
+// a marker the cameras did not see -- is left out and listed (ImportResult::skipped), its joint
+// readings unread. A row with some measured columns empty and others not is refused (a partial
+// measurement), and so is a file in which no row holds one.
+//
 // Joint units: one for every joint, or one per joint (a mixed arm: deg,deg,m,deg,...); rad or deg
 // for a revolute joint, m or mm for a prismatic one (check_joint_units() holds them against a
 // model).
@@ -97,6 +103,11 @@ struct ImportResult {
   double median_position_std_m = 0.0;  // over rows and components; 0 without std columns
   double median_angle_std_rad = 0.0;   // read, not written (see above)
   std::size_t distinct_ids = 0;        // 0 without an id column
+  struct Skipped {
+    int line = 0;
+    std::string id;  // empty without an id column
+  };
+  std::vector<Skipped> skipped;  // rows that hold no measurement, left out
 };
 
 ImportResult import_measurements(std::istream& in, const std::string& source, const ImportOptions& options);

@@ -265,3 +265,28 @@ TEST_CASE("quoted decimal commas in a ',' separated export read; ambiguous marks
         "without one");
   CHECK(error_of("J 1,J 2,X,Y,Z\n\"1,234.5\",2,3,4,5\n", o).find("has both '.' and ','") != std::string::npos);
 }
+
+TEST_CASE("a row that holds no measurement (a lost beam, an occluded marker) is left out and listed") {
+  model::ImportOptions o = two_joint_options();
+  o.id = "T";
+  // Empty and NaN measured fields, as tracker and motion-capture exports write them.
+  std::istringstream in("T;J 1;J 2;X;Y;Z\n1;1;2;3;4;5\n2;1;2;;;\n3;oops;2;NaN;nan;-NaN\n4;1;2;6;7;8\n");
+  const model::ImportResult r = model::import_measurements(in, "x.csv", o);
+  REQUIRE(r.data.rows.size() == 2);
+  CHECK(r.data.rows[1].position.x() == doctest::Approx(0.006));
+  CHECK(r.distinct_ids == 2);
+  REQUIRE(r.skipped.size() == 2);
+  CHECK(r.skipped[0].line == 3);
+  CHECK(r.skipped[0].id == "2");
+  CHECK(r.skipped[1].line == 4);  // its joint readings are not read
+  // A partial measurement is refused; so is a file with none.
+  CHECK(error_of("T;J 1;J 2;X;Y;Z\n1;1;2;3;;5\n", o) == "x.csv:2:5: column 'Y' is empty (id 1)");
+  CHECK(error_of("T;J 1;J 2;X;Y;Z\n1;1;2;3;4;NaN\n", o) == "x.csv:2:6: column 'Z' is not finite (id 1)");
+  CHECK(error_of("T;J 1;J 2;X;Y;Z\n1;1;2;;;\n2;1;2;nan;nan;nan\n", o) ==
+        "x.csv: none of the 2 data rows holds a measurement (every measured column empty or NaN)");
+  // With orientation columns named, they are measured columns too: a position alone is partial.
+  o.angles = std::array<std::string, 3>{"A", "B", "C"};
+  CHECK(error_of("T;J 1;J 2;X;Y;Z;A;B;C\n1;1;2;3;4;5;;;\n", o) == "x.csv:2:7: column 'A' is empty (id 1)");
+  std::istringstream posed("T;J 1;J 2;X;Y;Z;A;B;C\n1;1;2;3;4;5;0;0;0\n2;1;2;;;;;;\n");
+  CHECK(model::import_measurements(posed, "x.csv", o).skipped.size() == 1);
+}
