@@ -18,6 +18,7 @@ namespace kincal::model {
 namespace {
 
 constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+constexpr int kHeaderSearch = 100;  // lines searched for the header
 
 // The one of ';', tab and ',' that splits the header into the most fields as RFC 4180 quotes them
 // (split_quoted_fields: a quoted name may hold any of them).
@@ -58,6 +59,27 @@ bool holds_no_value(const std::string& field) {
   std::string lower = field;
   std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
   return lower.empty() || lower == "nan" || lower == "-nan" || lower == "+nan";
+}
+
+// Every header name the options give.
+std::vector<std::string> named_columns(const ImportOptions& o) {
+  std::vector<std::string> names = o.joints;
+  names.insert(names.end(), o.position.begin(), o.position.end());
+  for (const auto* three : {&o.position_std, &o.angles, &o.angle_std})
+    if (*three) names.insert(names.end(), (*three)->begin(), (*three)->end());
+  if (o.id) names.push_back(*o.id);
+  return names;
+}
+
+// Whether a line, split by the given separator or the one detected on it, holds every name.
+bool holds_every(const std::string& line, char separator, const std::vector<std::string>& names) {
+  std::optional<std::vector<std::string>> fields =
+      split_quoted_fields(line, separator != 0 ? separator : detect_separator(line));
+  if (!fields) return false;
+  for (std::string& f : *fields) f = trim_field(f);
+  return std::all_of(names.begin(), names.end(), [&](const std::string& name) {
+    return std::find(fields->begin(), fields->end(), name) != fields->end();
+  });
 }
 
 struct Table {
@@ -231,14 +253,34 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   const double angle = o.angle_unit == AngleUnit::deg ? kRadPerDeg : 1.0;
 
   Table t{source, {}, {}, 0, ',', 0, 0, {}};
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
+  // The header: the first line that holds every named column, among the first kHeaderSearch (an
+  // export may open with its title, its settings or a spreadsheet's "sep=;"); when none does, the
+  // first line that is not blank, and the message names the column it lacks.
+  std::string line, first_line;
+  int number = 0, first_number = 0;
+  std::istream::pos_type after_first{-1};
+  bool found = false;
+  while (!found && number < kHeaderSearch && std::getline(in, line)) {
     ++number;
-    if (!trim_field(line, true).empty()) break;
+    if (trim_field(line, true).empty()) continue;
+    if (first_number == 0) {
+      first_number = number;
+      first_line = line;
+      after_first = in.tellg();
+    }
+    found = holds_every(line, o.separator, named_columns(o));
   }
-  if (trim_field(line, true).empty()) throw InputError(source + ": empty file (expected a header row)");
-  t.header_line = number;
+  if (first_number == 0) throw InputError(source + ": empty file (expected a header row)");
+  if (!found) {
+    line = first_line;
+    number = first_number;
+    in.clear();
+    if (after_first != std::istream::pos_type{-1})
+      in.seekg(after_first);
+    else
+      in.setstate(std::ios::eofbit);
+  }
+  t.header_line = result.header_line = number;
   result.separator = o.separator != 0 ? o.separator : detect_separator(line);
   t.separator = result.separator;
   t.names = export_fields(line, result.separator, source, number);

@@ -4,6 +4,10 @@
 // The user names everything that cannot be guessed safely: which header names hold the joint
 // readings, the position and (optionally) the orientation; the unit of each (mm or m; deg or rad);
 // the Euler convention of the orientation; optionally the per-component standard deviations.
+// The header is the first line holding every named column, among the first 100 lines: lines
+// before it (a title, the instrument's settings, a spreadsheet's "sep=;") are skipped. When no
+// line holds them all, the first line that is not blank is taken, and the message names the
+// column it lacks.
 // Guessed only where no ambiguity exists: the separator (the header line's most frequent of ';',
 // tab and ',' outside double quotes; or given), and the decimal mark, from the numbers together:
 // a comma in a number is a decimal comma (in a ',' separated file it can only be there in a
@@ -103,6 +107,7 @@ struct ImportResult {
   double median_position_std_m = 0.0;  // over rows and components; 0 without std columns
   double median_angle_std_rad = 0.0;   // read, not written (see above)
   std::size_t distinct_ids = 0;        // 0 without an id column
+  int header_line = 0;                 // 1-based: the lines before it skipped
   struct Skipped {
     int line = 0;
     std::string id;  // empty without an id column

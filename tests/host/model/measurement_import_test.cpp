@@ -290,3 +290,19 @@ TEST_CASE("a row that holds no measurement (a lost beam, an occluded marker) is 
   std::istringstream posed("T;J 1;J 2;X;Y;Z;A;B;C\n1;1;2;3;4;5;0;0;0\n2;1;2;;;;;;\n");
   CHECK(model::import_measurements(posed, "x.csv", o).skipped.size() == 1);
 }
+
+TEST_CASE("lines before the header (a title, settings, a spreadsheet's sep=;) are skipped") {
+  const model::ImportOptions o = two_joint_options();
+  std::istringstream in("sep=;\n# Tracker export, 2026-12-03\nunits;mm;deg\n\nJ 1;J 2;X;Y;Z\n1;2;3;4;5\n6;7;8;9;10\n");
+  const model::ImportResult r = model::import_measurements(in, "x.csv", o);
+  CHECK(r.header_line == 5);
+  CHECK(r.separator == ';');
+  REQUIRE(r.data.rows.size() == 2);
+  CHECK(r.data.rows[1].line == 7);
+  CHECK(r.data.rows[1].position.x() == doctest::Approx(0.008));
+  // No line holds every named column: the first line is the header the message names.
+  CHECK(error_of("# title\nJ 1;J 2;X;Y\n1;2;3;4\n", o).starts_with("x.csv:1:2: no column named 'J 1' in the header"));
+  CHECK(error_of("J 1;J 2;X;Y\n", o).starts_with("x.csv:1:5: no column named 'Z' in the header"));
+  // A title line and the header alone: no data rows.
+  CHECK(error_of("title\nJ 1,J 2,X,Y,Z\n", o) == "x.csv: no data rows after the header");
+}
