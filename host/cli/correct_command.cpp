@@ -14,6 +14,7 @@
 #include "host/files/output_file.hpp"
 #include "host/model/model_file.hpp"
 #include "host/model/number_text.hpp"
+#include "host/model/reading_coverage.hpp"
 
 namespace kincal::cli {
 
@@ -168,6 +169,10 @@ int run_correct(const CorrectArgs& a) {
       }
       std::cerr << " (residual " << s.residual_m * 1e3 << " mm, " << s.residual_rad * 1e3 << " mrad)\n";
     }
+    std::vector<std::vector<double>> readings;
+    for (const correct::TargetResult& r : results) readings.push_back(r.solution.q);
+    for (const model::CoverageFinding& f : model::readings_outside_calibration(calibrated, readings, "targets"))
+      std::cerr << "kincal correct: " << (f.still ? "warning: " : "note: ") << f.text << '\n';
     if (!a.urscript.empty()) {
       if (not_reached > 0)
         throw model::InputError(std::to_string(not_reached) + " target(s) not reached: no program written");

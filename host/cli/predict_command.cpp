@@ -11,6 +11,7 @@
 #include "host/files/output_file.hpp"
 #include "host/model/dataset.hpp"
 #include "host/model/model_file.hpp"
+#include "host/model/reading_coverage.hpp"
 
 namespace kincal::cli {
 
@@ -54,6 +55,8 @@ int run_predict(const ModelOption& model_option, const std::string& joints_path,
       out << '\n';
     }
     files::write_output(out_path, out.str());
+    for (const model::CoverageFinding& f : model::readings_outside_calibration(m, rows, "rows"))
+      std::cerr << "kincal predict: " << (f.still ? "warning: " : "note: ") << f.text << '\n';
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "kincal predict: " << e.what() << '\n';

@@ -19,6 +19,7 @@
 #include "host/identify/sag.hpp"
 #include "host/identify/statistics.hpp"
 #include "host/model/axes.hpp"
+#include "host/model/reading_coverage.hpp"
 
 namespace kincal::identify {
 
@@ -552,6 +553,7 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
       record.data = data.source;
       record.measurements = static_cast<int>(data.rows.size());
       record.rms_residual_m = result.residuals.rms_m;
+      record.reading_ranges = model::reading_ranges(data);
       result.model.calibration = record;
       return result;
     }
@@ -821,6 +823,7 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
     record.data = data.source;
     record.measurements = static_cast<int>(used.size());
     record.rms_residual_m = out.residuals.rms_m;
+    record.reading_ranges = model::reading_ranges(data);
     const Eigen::Matrix<double, 6, 1> tool_change = small_motion(tool_before_estimate, out.model.flange_T_tool);
     for (int k = 0; k < p; ++k) {
       const core::ParameterId id = ids[static_cast<std::size_t>(k)];

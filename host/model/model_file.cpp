@@ -199,9 +199,10 @@ void check_loaded_compliances(const Reader& r, const YAML::Node& joints, const R
   }
 }
 
-CalibrationRecord read_calibration(const Reader& r, const YAML::Node& node) {
+CalibrationRecord read_calibration(const Reader& r, const YAML::Node& node, int joint_count) {
   r.only_keys(node, "calibration",
-              {"method", "data", "measurements", "rms_residual_m", "validation_rms_m", "held_fixed", "parameters"});
+              {"method", "data", "measurements", "rms_residual_m", "validation_rms_m", "held_fixed", "parameters",
+               "reading_ranges"});
   CalibrationRecord c;
   if (node["method"]) c.method = r.text(node["method"], "calibration method");
   if (node["data"]) c.data = r.text(node["data"], "calibration data");
@@ -220,6 +221,17 @@ CalibrationRecord read_calibration(const Reader& r, const YAML::Node& node) {
   if (node["held_fixed"]) {
     if (!node["held_fixed"].IsSequence()) r.fail(node["held_fixed"], "held_fixed must be a list");
     for (const auto& n : node["held_fixed"]) c.held_fixed.push_back(r.text(n, "held_fixed entry"));
+  }
+  if (const YAML::Node& ranges = node["reading_ranges"]) {
+    if (!ranges.IsSequence() || static_cast<int>(ranges.size()) != joint_count)
+      r.fail(ranges,
+             "reading_ranges must be a list of one [lowest, highest] per joint (" + std::to_string(joint_count) + ")");
+    for (const auto& n : ranges) {
+      if (!n.IsSequence() || n.size() != 2) r.fail(n, "a reading range must be [lowest, highest]");
+      const std::array<double, 2> range{r.number(n[0], "lowest reading"), r.number(n[1], "highest reading")};
+      if (range[0] > range[1]) r.fail(n, "a reading range's lowest is above its highest");
+      c.reading_ranges.push_back(range);
+    }
   }
   if (node["parameters"]) {
     if (!node["parameters"].IsSequence()) r.fail(node["parameters"], "calibration parameters must be a list");
@@ -423,7 +435,7 @@ RobotModel read_model(const YAML::Node& root, const Reader& r) {
     if (p["centre_of_mass"]) model.payload.centre_of_mass_m = r.vector3(p["centre_of_mass"], "payload centre_of_mass");
   }
   check_loaded_compliances(r, joints, model);
-  if (root["calibration"]) model.calibration = read_calibration(r, root["calibration"]);
+  if (root["calibration"]) model.calibration = read_calibration(r, root["calibration"], model.joint_count());
   if (root["priors"])
     (void)read_priors(r, root["priors"], model.joint_count(), unit);  // checked here, used by identify
   return model;
@@ -573,6 +585,12 @@ std::string write_model(const RobotModel& model) {
     out << YAML::Key << "held_fixed" << YAML::Value << YAML::Flow << YAML::BeginSeq;
     for (const std::string& name : c.held_fixed) out << name;
     out << YAML::EndSeq;
+    if (!c.reading_ranges.empty()) {
+      out << YAML::Key << "reading_ranges" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+      for (const auto& [low, high] : c.reading_ranges)
+        out << YAML::BeginSeq << shortest_number_text(low) << shortest_number_text(high) << YAML::EndSeq;
+      out << YAML::EndSeq;
+    }
     out << YAML::Key << "parameters" << YAML::Value << YAML::BeginSeq;
     for (const ParameterReport& p : c.parameters) {
       out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << p.name;

@@ -41,7 +41,9 @@
 //
 // robot_model.hpp says how scale, coupling and compliance act. A model without them reads and
 // writes exactly as before (gravity is written only with a compliance or when not the default).
-//   calibration: ...             # written by `kincal identify`; read back as a record, not used
+//   calibration: ...             # written by `kincal identify`; read back as a record: its
+//                                # reading_ranges (per joint [lowest, highest] in the data, SI)
+//                                # let correct and predict name readings it was not calibrated at
 //   priors:                      # optional: identify's prior sigma of a parameter's deviation from
 //     a5: 0.0005                 # this model (identify/prior.hpp): lengths m, angles in the file's
 //     theta5: 0.2                # unit, scale<i> a ratio; names as identify prints them. Not
@@ -69,7 +71,8 @@
 //        only where the joint carries a mass (its link, a later link or a payload has one: else
 //        gravity loads it with nothing and the compliance cannot act)
 //   gravity                                            |g| <= kMaxGravity_mps2
-//   calibration (a record, not used): measurements a whole count; rms, validation rms, stddev >= 0
+//   calibration (a record): measurements a whole count; rms, validation rms, stddev >= 0;
+//        reading_ranges one [lowest, highest] per joint, lowest <= highest
 // A file without 'angles:' is in radians: an angle beyond its range there is refused with the
 // advice to say 'angles: deg' (alpha: 90 is a degree file missing its key). Everything
 // `kincal identify` and `discover` write is inside these ranges. The file

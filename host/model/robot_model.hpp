@@ -138,6 +138,9 @@ struct CalibrationRecord {
   std::vector<ParameterReport> parameters;
   std::vector<std::string> held_fixed;
   std::optional<double> validation_rms_m;
+  // Per joint, the lowest and highest reading in the data (SI); empty: not recorded. Equal: the
+  // joint never moved, and the model holds at that reading (reading_coverage.hpp).
+  std::vector<std::array<double, 2>> reading_ranges;
 };
 
 struct RobotModel {

@@ -270,7 +270,14 @@ TEST_CASE("model files: read, write, read back") {
   // Radians: bit for bit, including a calibration record.
   std::mt19937_64 rng(3);
   RobotModel r = random_model(rng, 6);
-  r.calibration = model::CalibrationRecord{"full", "meas.csv", 12, 1e-4, {{"theta2", 1e-3, 2e-5}}, {"theta1"}, 2e-4};
+  r.calibration = model::CalibrationRecord{"full",
+                                           "meas.csv",
+                                           12,
+                                           1e-4,
+                                           {{"theta2", 1e-3, 2e-5}},
+                                           {"theta1"},
+                                           2e-4,
+                                           std::vector<std::array<double, 2>>(6, {-1.0 / 3.0, 0.1})};
   const RobotModel rb = model::parse_model(model::write_model(r), "r.yaml");
   for (int i = 0; i < 6; ++i) {
     const auto& a = r.joints[static_cast<std::size_t>(i)];
@@ -288,6 +295,7 @@ TEST_CASE("model files: read, write, read back") {
   REQUIRE(rb.calibration.has_value());
   CHECK(rb.calibration->parameters.at(0).name == "theta2");
   CHECK(rb.calibration->validation_rms_m.value() == 2e-4);
+  CHECK(rb.calibration->reading_ranges == r.calibration->reading_ranges);
 
   for (const char* name : {"puma560.yaml", "ur5.yaml", "stanford_rrp.yaml", "arid_prrr.yaml"})
     CHECK(model::load_model(robot_file(name)).joint_count() >= 3);
