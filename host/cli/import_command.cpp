@@ -19,7 +19,7 @@ namespace {
 
 struct ImportArgs {
   std::string in, out, separator, position_unit, angle_unit = "deg", euler, id;
-  std::vector<std::string> joints, joint_units, position, position_std, orientation, orientation_std;
+  std::vector<std::string> joints, joint_units, position, position_std, orientation, orientation_std, quaternion;
   ModelOption model;
 };
 
@@ -55,6 +55,12 @@ int run_import(const ImportArgs& a) {
       o.angle_unit = model::parse_angle_unit(a.angle_unit);
     }
     if (!a.orientation_std.empty()) o.angle_std = three(a.orientation_std, "--orientation-std");
+    if (!a.quaternion.empty()) {
+      if (a.quaternion.size() != 4)
+        throw model::InputError("--quaternion: expected four column names (w, x, y, z) separated by commas, got " +
+                                std::to_string(a.quaternion.size()));
+      o.quaternion = std::array<std::string, 4>{a.quaternion[0], a.quaternion[1], a.quaternion[2], a.quaternion[3]};
+    }
     if (!a.id.empty()) o.id = a.id;
     files::refuse_overwriting({{"--out", a.out}}, {{"export", a.in}, {"--model", a.model.path}});
     // Everything is read and checked before the dataset is written: a failed run leaves no file.
@@ -144,6 +150,11 @@ void add_import_command(CLI::App& app, int& status) {
                   "header names of the Euler angles' std (checked, summarized)")
       ->delimiter(',')
       ->needs(orientation);
+  cmd->add_option("--quaternion", a->quaternion,
+                  "header names of the orientation as a unit quaternion, in the order w, x, y, z (whatever "
+                  "order the file's columns stand in; motion-capture exports)")
+      ->delimiter(',')
+      ->excludes(orientation);
   cmd->add_option("--id", a->id,
                   "header name of a row id or time stamp column, kept per row (the dataset's id column) and named "
                   "in messages about the row");

@@ -67,6 +67,7 @@ std::vector<std::string> named_columns(const ImportOptions& o) {
   names.insert(names.end(), o.position.begin(), o.position.end());
   for (const auto* three : {&o.position_std, &o.angles, &o.angle_std})
     if (*three) names.insert(names.end(), (*three)->begin(), (*three)->end());
+  if (o.quaternion) names.insert(names.end(), o.quaternion->begin(), o.quaternion->end());
   if (o.id) names.push_back(*o.id);
   return names;
 }
@@ -239,7 +240,9 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   ImportResult result;
   result.data.source = source;
   result.data.joint_count = static_cast<int>(o.joints.size());
-  result.data.has_orientation = o.angles.has_value();
+  result.data.has_orientation = o.angles.has_value() || o.quaternion.has_value();
+  if (o.angles && o.quaternion)
+    throw InputError(source + ": orientation given both as Euler angles and as a quaternion");
   result.data.noise = o.position_std ? NoiseColumns::covariance : NoiseColumns::none;
   const double length = o.position_unit == LengthUnit::mm ? 1e-3 : 1.0;
   if (o.joint_units.size() != 1 && o.joint_units.size() != o.joints.size())
@@ -293,6 +296,11 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   const auto position_std = o.position_std ? std::optional(columns(t, *o.position_std)) : std::nullopt;
   const auto angles = o.angles ? std::optional(columns(t, *o.angles)) : std::nullopt;
   const auto angle_std = o.angle_std ? std::optional(columns(t, *o.angle_std)) : std::nullopt;
+  std::optional<std::array<std::size_t, 4>> quaternion;
+  if (o.quaternion) {
+    quaternion.emplace();
+    for (std::size_t k = 0; k < 4; ++k) (*quaternion)[k] = t.column((*o.quaternion)[k]);
+  }
   // A plain index with o.id as its flag: GCC 12 at -O3 takes an optional's value as maybe unset.
   const std::size_t id_column = o.id ? t.column(*o.id) : 0;
   if (angle_std && !angles) throw InputError(source + ": orientation standard deviations without orientation columns");
@@ -314,12 +322,15 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   use_three(position_std, "--position-std");
   use_three(angles, "--orientation");
   use_three(angle_std, "--orientation-std");
+  for (std::size_t k = 0; quaternion && k < 4; ++k)
+    use((*quaternion)[k], std::string("value ") + "wxyz"[k] + " of --quaternion");
   if (o.id) use(id_column, "the row id (--id)");
   // The columns of what the instrument measured: a row in which every one holds no value is a
   // measurement not taken (a lost beam, an occluded marker), left out and counted.
   std::vector<std::size_t> measured(position.begin(), position.end());
   for (const auto* c : {&position_std, &angles, &angle_std})
     if (*c) measured.insert(measured.end(), (*c)->begin(), (*c)->end());
+  if (quaternion) measured.insert(measured.end(), quaternion->begin(), quaternion->end());
 
   std::vector<double> position_stds, angle_stds;
   std::set<std::string> ids;
@@ -375,6 +386,17 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
           angle_stds.push_back(s);
         }
       }
+    }
+    if (quaternion) {
+      Eigen::Vector4d wxyz;
+      for (std::size_t k = 0; k < 4; ++k) wxyz(static_cast<int>(k)) = t.number(fields, (*quaternion)[k], number);
+      constexpr double kUnitTolerance = 0.01;  // a unit quaternion written to 3 digits passes
+      if (!(std::abs(wxyz.norm() - 1.0) <= kUnitTolerance))
+        t.fail_row(number, (*quaternion)[0],
+                   "the quaternion (--quaternion) has norm " + std::to_string(wxyz.norm()) +
+                       ", not 1: are its columns the ones named, in the order w, x, y, z?");
+      wxyz.normalize();
+      m.orientation = Eigen::Quaterniond(wxyz(0), wxyz(1), wxyz(2), wxyz(3));
     }
     result.data.rows.push_back(std::move(m));
   }

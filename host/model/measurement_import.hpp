@@ -22,6 +22,10 @@
 //   extrinsic-xyz  R = Rz(c) * Ry(b) * Rx(a)   (rotate about the fixed x, then fixed y, then z)
 // R is device_R_tool (the tool's axes in the device frame), as the dataset's quaternion.
 //
+// Quaternions (instead of Euler angles; motion-capture exports): the columns named for w, x, y, z,
+// device_R_tool as the Euler angles give it. A quaternion whose norm is off 1 by more than 1 %
+// is refused (a column named wrong, or a scaled export); within it, normalized.
+//
 // Standard deviations: the position's three become the diagonal covariance columns (m^2). The
 // dataset format carries no orientation covariance, so orientation standard deviations are read,
 // checked and summarized (ImportResult) but not written; identify estimates the orientation noise.
@@ -97,7 +101,8 @@ struct ImportOptions {
   EulerConvention convention;
   AngleUnit angle_unit = AngleUnit::rad;  // also the unit of angle_std
   std::optional<std::array<std::string, 3>> angle_std;
-  std::optional<std::string> id;  // header name of the row id or time stamp column
+  std::optional<std::array<std::string, 4>> quaternion;  // w, x, y, z: the orientation instead of angles
+  std::optional<std::string> id;                         // header name of the row id or time stamp column
 };
 
 struct ImportResult {

@@ -306,3 +306,26 @@ TEST_CASE("lines before the header (a title, settings, a spreadsheet's sep=;) ar
   // A title line and the header alone: no data rows.
   CHECK(error_of("title\nJ 1,J 2,X,Y,Z\n", o) == "x.csv: no data rows after the header");
 }
+
+TEST_CASE("import --quaternion: w, x, y, z from the columns named, whatever their order; a norm off 1 refused") {
+  model::ImportOptions o = two_joint_options();
+  o.quaternion = std::array<std::string, 4>{"W", "QX", "QY", "QZ"};
+  // A motion-capture export writes x, y, z, w; 90 deg about z, written to 4 digits.
+  std::istringstream in("J 1,J 2,X,Y,Z,QX,QY,QZ,W\n1,2,3,4,5,0,0,0.7071,0.7071\n1,2,,,,,,,\n");
+  const model::ImportResult r = model::import_measurements(in, "x.csv", o);
+  CHECK(r.data.has_orientation);
+  REQUIRE(r.data.rows.size() == 1);
+  CHECK(r.skipped.size() == 1);  // the row whose position and quaternion are empty (a rigid body lost)
+  const Eigen::Matrix3d R = r.data.rows[0].orientation->toRotationMatrix();
+  CHECK(R(0, 1) == doctest::Approx(-1.0));
+  CHECK(R(1, 0) == doctest::Approx(1.0));
+  CHECK(r.data.rows[0].orientation->norm() == doctest::Approx(1.0).epsilon(1e-15));
+  CHECK(error_of("J 1,J 2,X,Y,Z,QX,QY,QZ,W\n1,2,3,4,5,3,4,5,1\n", o) ==
+        "x.csv:2:9: the quaternion (--quaternion) has norm 7.141428, not 1: are its columns the ones named, in the "
+        "order w, x, y, z?");
+  CHECK(error_of("J 1,J 2,X,Y,Z,QX,QY,QZ,W\n1,2,3,4,5,0,0,0.7071,\n", o) == "x.csv:2:9: column 'W' is empty");
+  o.quaternion = std::array<std::string, 4>{"W", "QX", "QY", "X"};
+  CHECK(error_of("J 1,J 2,X,Y,Z,QX,QY,QZ,W\n", o) ==
+        "x.csv:1:3: column 'X' is named twice: as value 1 of --position and as value z of --quaternion (every "
+        "column feeds one value)");
+}
