@@ -901,12 +901,9 @@ IdentifyResult identify(const RobotModel& nominal, const model::Dataset& data, c
 
 std::vector<int> still_joints(const model::Dataset& data) {
   std::vector<int> out;
-  for (int j = 0; j < data.joint_count; ++j) {
-    const auto k = static_cast<std::size_t>(j);
-    if (std::all_of(data.rows.begin(), data.rows.end(),
-                    [&](const model::Measurement& r) { return r.q[k] == data.rows.front().q[k]; }))
-      out.push_back(j);
-  }
+  const std::vector<std::array<double, 2>> ranges = model::reading_ranges(data);
+  for (std::size_t j = 0; j < ranges.size(); ++j)
+    if (ranges[j][0] == ranges[j][1]) out.push_back(static_cast<int>(j));
   return out;
 }
 

@@ -61,13 +61,21 @@ bool holds_no_value(const std::string& field) {
   return lower.empty() || lower == "nan" || lower == "-nan" || lower == "+nan";
 }
 
-// Every header name the options give.
-std::vector<std::string> named_columns(const ImportOptions& o) {
-  std::vector<std::string> names = o.joints;
-  names.insert(names.end(), o.position.begin(), o.position.end());
+// The header names of what the instrument measured: the position and, when named, its standard
+// deviations and the orientation (Euler angles and their standard deviations, or a quaternion).
+std::vector<std::string> measured_names(const ImportOptions& o) {
+  std::vector<std::string> names(o.position.begin(), o.position.end());
   for (const auto* three : {&o.position_std, &o.angles, &o.angle_std})
     if (*three) names.insert(names.end(), (*three)->begin(), (*three)->end());
   if (o.quaternion) names.insert(names.end(), o.quaternion->begin(), o.quaternion->end());
+  return names;
+}
+
+// Every header name the options give.
+std::vector<std::string> named_columns(const ImportOptions& o) {
+  std::vector<std::string> names = o.joints;
+  const std::vector<std::string> measured = measured_names(o);
+  names.insert(names.end(), measured.begin(), measured.end());
   if (o.id) names.push_back(*o.id);
   return names;
 }
@@ -262,6 +270,7 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   std::string line, first_line;
   int number = 0, first_number = 0;
   std::istream::pos_type after_first{-1};
+  const std::vector<std::string> names = named_columns(o);
   bool found = false;
   while (!found && number < kHeaderSearch && std::getline(in, line)) {
     ++number;
@@ -271,7 +280,7 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
       first_line = line;
       after_first = in.tellg();
     }
-    found = holds_every(line, o.separator, named_columns(o));
+    found = holds_every(line, o.separator, names);
   }
   if (first_number == 0) throw InputError(source + ": empty file (expected a header row)");
   if (!found) {
@@ -327,10 +336,8 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   if (o.id) use(id_column, "the row id (--id)");
   // The columns of what the instrument measured: a row in which every one holds no value is a
   // measurement not taken (a lost beam, an occluded marker), left out and counted.
-  std::vector<std::size_t> measured(position.begin(), position.end());
-  for (const auto* c : {&position_std, &angles, &angle_std})
-    if (*c) measured.insert(measured.end(), (*c)->begin(), (*c)->end());
-  if (quaternion) measured.insert(measured.end(), quaternion->begin(), quaternion->end());
+  std::vector<std::size_t> measured;
+  for (const std::string& name : measured_names(o)) measured.push_back(t.column(name));
 
   std::vector<double> position_stds, angle_stds;
   std::set<std::string> ids;

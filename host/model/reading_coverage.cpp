@@ -8,15 +8,10 @@
 namespace kincal::model {
 
 std::vector<std::array<double, 2>> reading_ranges(const Dataset& data) {
-  std::vector<std::array<double, 2>> out;
-  for (std::size_t j = 0; j < static_cast<std::size_t>(data.joint_count); ++j) {
-    std::array<double, 2> range{0.0, 0.0};
-    for (std::size_t i = 0; i < data.rows.size(); ++i) {
-      const double q = data.rows[i].q[j];
-      range =
-          i == 0 ? std::array<double, 2>{q, q} : std::array<double, 2>{std::min(range[0], q), std::max(range[1], q)};
-    }
-    out.push_back(range);
+  std::vector<std::array<double, 2>> out(static_cast<std::size_t>(data.joint_count), {0.0, 0.0});
+  for (std::size_t j = 0; j < out.size() && !data.rows.empty(); ++j) {
+    const auto [low, high] = std::ranges::minmax_element(data.rows, {}, [j](const Measurement& m) { return m.q[j]; });
+    out[j] = {low->q[j], high->q[j]};
   }
   return out;
 }

@@ -14,8 +14,8 @@
 
 namespace kincal::model {
 
-// Per joint, the lowest and highest reading of the rows (SI). Requires rows with
-// data.joint_count readings.
+// Per joint, the lowest and highest reading of the rows (SI); [0, 0] without rows. Requires rows
+// with data.joint_count readings.
 std::vector<std::array<double, 2>> reading_ranges(const Dataset& data);
 
 // What `readings` take beyond the recorded ranges by more than kSameReading: a warning per joint
