@@ -63,6 +63,27 @@ std::string aim_at_tcp(const CorrectArgs& a, model::RobotModel& nominal, model::
   return out.str();
 }
 
+// A program's pose and its qnear (PolyScope's Waypoint_1_p and Waypoint_1_q) are one waypoint: the
+// controller's pose of the TCP at those readings. Where the nominal model puts the TCP far from the
+// pose at them -- farther than a controller's own calibration moves it -- the program was made for
+// another TCP, robot or base than the model's, and its targets would be corrected for the wrong
+// point: said before the solve, which then usually refuses them by the joint-change limit.
+void warn_seed_gaps(const correct::UrProgram& program, const model::RobotModel& nominal) {
+  constexpr double kGapM = 0.01;
+  model::RobotModel arm = nominal;
+  arm.base_T_frame0 = model::Transform{};  // the program's poses are in the robot's base frame
+  std::size_t far = 0;
+  for (const correct::UrMotion& m : program.motions) {
+    if (!m.seed || !m.target.cartesian) continue;
+    const double gap = (model::forward_kinematics(arm, m.target.q).translation - m.target.pose.translation).norm();
+    if (gap <= kGapM || ++far > 3) continue;
+    std::cerr << program.source << ':' << m.target.line << ": warning: the target pose is " << gap * 1e3
+              << " mm from where the nominal model puts the TCP at its qnear readings: the program was made for "
+                 "another TCP (set_tcp; --tcp), robot or base than the model's (--nominal)\n";
+  }
+  if (far > 3) std::cerr << program.source << ": warning: " << far << " targets so, the first 3 named\n";
+}
+
 std::string csv(const correct::TargetTable& table, const std::vector<correct::TargetResult>& results, int n) {
   std::ostringstream out;
   for (int j = 1; j <= n; ++j) out << 'q' << j << ',';
@@ -122,7 +143,8 @@ int run_correct(const CorrectArgs& a) {
       program = correct::read_urscript(a.urscript, n);
       source = a.urscript;
       for (const correct::UrMotion& m : program.motions) targets.push_back(m.target);
-      if (targets.empty()) throw model::InputError(a.urscript + ": no movej, movel, movep or servoj line to correct");
+      if (targets.empty())
+        throw model::InputError(a.urscript + ": no movej, movel, movep, movec, servoj or servoc line to correct");
     } else {
       source = a.joints.empty() ? a.poses : a.joints;
       table = correct::read_target_table(source, n, correct::kMaxTargets);
@@ -144,6 +166,7 @@ int run_correct(const CorrectArgs& a) {
     correct::TargetCorrector corrector(nominal, calibrated,
                                        a.frame == "device" ? correct::TargetFrame::device : correct::TargetFrame::base,
                                        covariance, options, limit);
+    if (!a.urscript.empty()) warn_seed_gaps(program, nominal);
     const std::vector<correct::TargetResult> results = corrector.correct(targets, a.seed, source);
     std::ostream& log = a.out.empty() || a.out == "-" ? std::cerr : std::cout;
     int not_reached = 0;
@@ -203,7 +226,8 @@ void add_correct_command(CLI::App& app, int& status) {
   cmd->add_option("--poses", a->poses,
                   "Cartesian targets (CSV: x,y,z[,qw,qx,qy,qz][,q1..qN seed], m) -> readings by inverse kinematics");
   cmd->add_option("--urscript", a->urscript,
-                  "a URScript program: movej/movel/movep/servoj targets rewritten, every other byte kept");
+                  "a URScript program: movej/movel/movep/movec/servoj/servoc targets rewritten (literals, waypoint "
+                  "variables, get_inverse_kin), every other byte kept");
   cmd->add_option("--frame", a->frame,
                   "frame of --poses: base (the robot's, default) or device (the measuring device's)")
       ->check(CLI::IsMember({"base", "device"}))

@@ -1,8 +1,11 @@
 #include "host/correct/urscript.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <map>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <string_view>
 
@@ -17,7 +20,7 @@ namespace kincal::correct {
 namespace {
 
 constexpr std::size_t kMaxLineBytes = 65536;
-constexpr const char* kCalls[] = {"movej", "movel", "movep", "servoj"};
+constexpr const char* kCalls[] = {"movej", "movel", "movep", "movec", "servoj", "servoc"};
 
 bool name_char(char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_'; }
 
@@ -82,6 +85,201 @@ Call find_call(std::string_view code) {
   return found;
 }
 
+// Where a line stands in the text, for messages: "SOURCE:LINE:COLUMN: what".
+struct LineAt {
+  const std::string& source;
+  int number = 0;
+  std::size_t start = 0;  // the line's first byte in the text
+
+  [[noreturn]] void fail(std::size_t offset, const std::string& what) const {
+    throw model::InputError(source + ":" + std::to_string(number) + ":" + std::to_string(offset + 1) + ": " + what);
+  }
+};
+
+// A target's values in a line's code: a literal's brackets, or a variable's name.
+struct Ref {
+  bool literal = false, pose = false;
+  std::size_t open = 0, close = 0;  // a literal's '[' and ']' (offsets in the line)
+  std::string name;                 // a variable
+  std::size_t at = 0, after = 0;    // where it starts; the first non-blank after it
+};
+
+std::size_t name_end(std::string_view code, std::size_t at) {
+  while (at < code.size() && name_char(code[at])) ++at;
+  return at;
+}
+
+// The literal or the variable at `at`, or nothing when it is neither (a call, an element, any
+// other expression). A literal its line does not close is refused when `line` is given (a
+// motion's), else nothing (an assignment's: a list written over several lines is no target).
+std::optional<Ref> read_ref(std::string_view code, std::size_t at, const LineAt* line, const std::string& what) {
+  Ref r;
+  r.at = at;
+  std::size_t open = at;
+  if (at < code.size() && code[at] == 'p') {
+    const std::size_t bracket = skip_blanks(code, at + 1);
+    if (bracket < code.size() && code[bracket] == '[') r.pose = true, open = bracket;
+  }
+  if (open < code.size() && code[open] == '[') {
+    r.close = code.find(']', open);
+    if (r.close == std::string_view::npos) {
+      if (line == nullptr) return std::nullopt;
+      line->fail(open, what + ": no ']' closes the target on this line");
+    }
+    r.literal = true;
+    r.open = open;
+    r.after = skip_blanks(code, r.close + 1);
+    return r;
+  }
+  const std::size_t end = name_end(code, at);
+  if (end == at || std::isdigit(static_cast<unsigned char>(code[at])) != 0) return std::nullopt;
+  r.name = std::string(code.substr(at, end - at));
+  r.after = skip_blanks(code, end);
+  if (r.after < code.size() && (code[r.after] == '(' || code[r.after] == '[' || code[r.after] == '.'))
+    return std::nullopt;
+  return r;
+}
+
+// An assignment at the start of a line's code: [global|local] NAME [ [...] ] = VALUE (not ==).
+// `value`: the literal assigned, when the whole value is one; an element assignment never is.
+struct Assignment {
+  std::string name;
+  int line = 0;
+  std::size_t start = 0, end = 0;  // the line in the text
+  std::optional<Ref> value;
+};
+
+std::optional<Assignment> find_assignment(std::string_view code, const LineAt& line) {
+  std::size_t at = skip_blanks(code, 0), end = name_end(code, at);
+  if (const std::string_view word = code.substr(at, end - at); word == "global" || word == "local") {
+    at = skip_blanks(code, end);
+    if (at == end) return std::nullopt;
+    end = name_end(code, at);
+  }
+  if (end == at || std::isdigit(static_cast<unsigned char>(code[at])) != 0) return std::nullopt;
+  Assignment a{std::string(code.substr(at, end - at)), line.number, line.start, 0, std::nullopt};
+  std::size_t next = skip_blanks(code, end);
+  const bool element = next < code.size() && code[next] == '[';
+  if (element) {
+    next = code.find(']', next);
+    if (next == std::string_view::npos) return std::nullopt;
+    next = skip_blanks(code, next + 1);
+  }
+  if (next >= code.size() || code[next] != '=' || (next + 1 < code.size() && code[next + 1] == '='))
+    return std::nullopt;
+  if (element) return a;
+  const std::optional<Ref> value = read_ref(code, skip_blanks(code, next + 1), nullptr, a.name);
+  if (value && value->literal && value->after == code.size()) a.value = value;
+  return a;
+}
+
+// Skips an argument's value to the ',' or ')' that ends it (brackets and parentheses nested).
+std::size_t skip_argument(std::string_view code, std::size_t at) {
+  int depth = 0;
+  for (; at < code.size(); ++at) {
+    const char c = code[at];
+    if (c == '(' || c == '[') ++depth;
+    if ((c == ')' || c == ']') && depth-- == 0) break;
+    if (c == ',' && depth == 0) break;
+  }
+  return at;
+}
+
+// A motion's target as written: the literal or variable, and get_inverse_kin's qnear.
+struct Site {
+  std::string call;
+  LineAt line;
+  std::size_t end = 0;  // the line's end in the text
+  Ref target;
+  std::optional<Ref> seed;
+};
+
+const std::string kNotKnown =
+    "its value is not known before the program runs, so kincal cannot correct it (write the target out, or assign "
+    "it a literal once)";
+
+// The target argument of the motion `call` at `at` of a line's code; `after`: the ',' or ')' that
+// ends it.
+Site read_target(const std::string& call, std::string_view code, std::size_t at, const LineAt& line,
+                 std::size_t line_end, std::size_t& after) {
+  Site site{call, line, line_end, {}, std::nullopt};
+  const std::size_t word = name_end(code, at);
+  const std::size_t paren = skip_blanks(code, word);
+  const bool inverse = code.substr(at, word - at) == "get_inverse_kin" && paren < code.size() && code[paren] == '(';
+  const std::string target_what = inverse ? "get_inverse_kin" : call;
+  if (inverse) at = skip_blanks(code, paren + 1);
+  const std::optional<Ref> target = read_ref(code, at, &line, target_what);
+  if (!target)
+    line.fail(at, target_what +
+                      "'s target is not a literal [...] or p[...], a variable assigned one, or get_inverse_kin(...) "
+                      "of one: " +
+                      kNotKnown);
+  site.target = *target;
+  after = target->after;
+  const auto ends_argument = [&](std::size_t offset, const std::string& what) {
+    if (offset >= code.size() || (code[offset] != ',' && code[offset] != ')'))
+      line.fail(offset, what +
+                            "'s target goes on past its literal or name (an expression such as [...] + [...], or a "
+                            "call continued on the next line): " +
+                            kNotKnown);
+  };
+  ends_argument(after, target_what);
+  if (!inverse) return site;
+  for (int positional = 1; code[after] == ','; ++positional) {
+    std::size_t value = skip_blanks(code, after + 1);
+    const std::size_t key_end = name_end(code, value), equals = skip_blanks(code, key_end);
+    std::string key = positional == 1 ? "qnear" : positional == 4 ? "tcp" : "";
+    if (key_end > value && equals < code.size() && code[equals] == '=' &&
+        (equals + 1 >= code.size() || code[equals + 1] != '=')) {
+      key = std::string(code.substr(value, key_end - value));
+      value = skip_blanks(code, equals + 1);
+      --positional;
+    }
+    if (key == "tcp")
+      line.fail(value,
+                "get_inverse_kin with a tcp of its own: kincal corrects the targets of one TCP (--tcp); give the "
+                "pose of the program's TCP instead");
+    if (key == "qnear") {
+      site.seed = read_ref(code, value, &line, "qnear");
+      if (!site.seed)
+        line.fail(value, "get_inverse_kin's qnear is not a literal [...] or a variable assigned one: " + kNotKnown);
+      after = site.seed->after;
+      ends_argument(after, "qnear");
+    } else {
+      after = skip_argument(code, value);
+    }
+    if (after >= code.size()) break;
+  }
+  if (after >= code.size() || code[after] != ')') line.fail(after, "get_inverse_kin: no ')' closes it on this line");
+  after = skip_blanks(code, after + 1);
+  ends_argument(after, call);
+  return site;
+}
+
+// The numbers of a literal (ref, in the line the text holds at [start, end)), refused with the
+// line and column of the value that is not one.
+UrLiteral read_literal(const std::string& text, const Ref& ref, const LineAt& line, std::size_t end,
+                       const std::string& what) {
+  const std::string code = code_of(std::string_view(text).substr(line.start, end - line.start)).text;
+  const std::string_view c = code;
+  UrLiteral literal;
+  literal.line = line.number;
+  literal.pose = ref.pose;
+  literal.begin = line.start + ref.open + 1;
+  literal.end = line.start + ref.close;
+  for (std::size_t from = ref.open + 1; from <= ref.close;) {
+    const std::size_t comma = std::min(c.find(',', from), ref.close);
+    literal.numbers.push_back(parse_cell(c.substr(from, comma - from),
+                                         what + " value " + std::to_string(literal.numbers.size() + 1), line.source,
+                                         line.number, static_cast<int>(from + 1)));
+    std::size_t value_end = comma;
+    while (value_end > from && (c[value_end - 1] == ' ' || c[value_end - 1] == '\t')) --value_end;
+    literal.values.emplace_back(line.start + skip_blanks(c, from), line.start + value_end);
+    from = comma + 1;
+  }
+  return literal;
+}
+
 }  // namespace
 
 UrProgram read_urscript(const std::string& path, int joint_count, std::size_t max_motions) {
@@ -94,100 +292,125 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
   program.source = source;
   program.text = std::move(text);
   const std::string_view all(program.text);
+  // First the lines: every assignment and every motion's target as written; then each motion's
+  // target resolved (a variable may be assigned below the motion that names it).
+  std::map<std::string, std::vector<Assignment>> assigned;
+  std::vector<Site> sites;
   int number = 0;
   for (std::size_t start = 0; start < all.size();) {
     std::size_t end = std::min(all.find('\n', start), all.size());
     const std::size_t next = end + 1;
     if (end > start && all[end - 1] == '\r') --end;
-    const std::string_view line = all.substr(start, end - start);
-    ++number;
-    if (line.size() > kMaxLineBytes)
-      throw model::InputError(source + ":" + std::to_string(number) + ":1: a line of " + std::to_string(line.size()) +
-                              " bytes: not a URScript program (at most " + std::to_string(kMaxLineBytes) +
-                              " bytes a line)");
-    const auto where = [&](std::size_t offset) { return static_cast<int>(offset + 1); };
-    const auto fail = [&](std::size_t offset, const std::string& what) {
-      throw model::InputError(source + ":" + std::to_string(number) + ":" + std::to_string(where(offset)) + ": " +
-                              what);
-    };
-    const Code code = code_of(line);
-    if (code.unclosed != std::string_view::npos) fail(code.unclosed, "a string is not closed on its line");
+    const std::string_view text_line = all.substr(start, end - start);
+    const LineAt line{source, ++number, start};
+    if (text_line.size() > kMaxLineBytes)
+      line.fail(0, "a line of " + std::to_string(text_line.size()) + " bytes: not a URScript program (at most " +
+                       std::to_string(kMaxLineBytes) + " bytes a line)");
+    const Code code = code_of(text_line);
+    if (code.unclosed != std::string_view::npos) line.fail(code.unclosed, "a string is not closed on its line");
+    if (std::optional<Assignment> a = find_assignment(code.text, line)) {
+      a->end = end;
+      assigned[a->name].push_back(std::move(*a));
+    }
     const Call call = find_call(code.text);
-    if (call.at != std::string_view::npos) {
-      const std::string_view code_text = code.text;
-      std::size_t at = skip_blanks(code_text, call.open);
-      const bool pose = at < code_text.size() && code_text[at] == 'p';
-      if (pose) at = skip_blanks(code_text, at + 1);
-      const std::string not_literal =
-          "its value is not known before the program runs, so kincal cannot correct it "
-          "(write the target out)";
-      if (at >= code_text.size() || code_text[at] != '[')
-        fail(at, call.name + "'s target is not a literal [...] or p[...]: " + not_literal);
-      const std::size_t close = code_text.find(']', at);
-      if (close == std::string_view::npos) fail(at, call.name + ": no ']' closes the target on this line");
-      const std::size_t after = skip_blanks(code_text, close + 1);
-      if (after >= code_text.size() || (code_text[after] != ',' && code_text[after] != ')'))
-        fail(after, call.name +
-                        "'s target goes on past its literal (an expression such as [...] + [...], or a call "
-                        "continued on the next line): " +
-                        not_literal);
-      if (program.motions.size() == max_motions)
-        fail(call.at, "more than " + std::to_string(max_motions) + " motions, the most kincal correct takes");
-      UrMotion m;
-      m.call = call.name;
-      m.begin = start + at + 1;
-      m.end = start + close;
-      m.target.line = number;
-      m.target.cartesian = pose;
-      m.target.orientation = pose;
-      std::vector<double> values;
-      for (std::size_t from = at + 1; from <= close;) {
-        const std::size_t comma = std::min(code_text.find(',', from), close);
-        values.push_back(parse_cell(code_text.substr(from, comma - from),
-                                    call.name + " value " + std::to_string(values.size() + 1), source, number,
-                                    where(from)));
-        std::size_t value_end = comma;
-        while (value_end > from && (code_text[value_end - 1] == ' ' || code_text[value_end - 1] == '\t')) --value_end;
-        m.values.emplace_back(start + skip_blanks(code_text, from), start + value_end);
-        from = comma + 1;
-      }
-      if (pose && values.size() != 6)
-        fail(at, call.name + ": a pose p[x, y, z, rx, ry, rz] has 6 values, this one " + std::to_string(values.size()));
-      if (!pose && static_cast<int>(values.size()) != joint_count)
-        fail(at, call.name + ": " + std::to_string(values.size()) + " joint values, the model has " +
-                     std::to_string(joint_count) + " joints");
-      if (pose) {
-        m.target.pose.translation = {values[0], values[1], values[2]};
-        const Eigen::Vector3d r(values[3], values[4], values[5]);
-        const double angle = r.stableNorm();  // norm() squares: 1e300 overflowed to a NaN rotation
-        if (!(angle <= 2 * std::numbers::pi))
-          fail(at, call.name + ": the rotation vector's angle is " + model::shortest_number_text(angle) +
-                       " rad, more than a turn: degrees given as radians?");
-        if (angle > 0.0) m.target.pose.rotation = Eigen::AngleAxisd(angle, r / angle).toRotationMatrix();
-      } else {
-        m.target.q = std::move(values);
-      }
-      program.motions.push_back(std::move(m));
+    // movec's via point and its end are two targets, read in order.
+    std::size_t after = call.open - 1;
+    for (int k = 0; call.at != std::string_view::npos && k < (call.name == "movec" ? 2 : 1); ++k) {
+      if (sites.size() == max_motions)
+        line.fail(call.at, "more than " + std::to_string(max_motions) + " motions, the most kincal correct takes");
+      if (code.text[after] != (k == 0 ? '(' : ','))
+        line.fail(after, "movec takes a via point and an end: [...] or p[...] each, or a variable assigned one");
+      sites.push_back(read_target(call.name, code.text, skip_blanks(code.text, after + 1), line, end, after));
     }
     start = next;
+  }
+
+  std::map<std::string, std::size_t> literal_of;  // a variable's literal in program.literals
+  // The literal a reference names: the motion's own, or its variable's one assignment.
+  const auto resolve = [&](const Site& site, const Ref& ref, const std::string& what) -> std::size_t {
+    if (ref.literal) {
+      program.literals.push_back(read_literal(program.text, ref, site.line, site.end, what));
+      return program.literals.size() - 1;
+    }
+    if (const auto it = literal_of.find(ref.name); it != literal_of.end()) return it->second;
+    const auto it = assigned.find(ref.name);
+    const std::string named = what + "'s target " + ref.name;
+    if (it == assigned.end()) site.line.fail(ref.at, named + " is not assigned in this program: " + kNotKnown);
+    const std::vector<Assignment>& a = it->second;
+    if (a.size() > 1) {
+      std::string lines;
+      for (std::size_t k = 0; k < a.size() && k < 5; ++k) lines += (k ? ", " : "") + std::to_string(a[k].line);
+      site.line.fail(ref.at, named + " is assigned " + std::to_string(a.size()) + " times (lines " + lines +
+                                 (a.size() > 5 ? ", ..." : "") + "): " + kNotKnown);
+    }
+    if (!a[0].value)
+      site.line.fail(ref.at, named + " is assigned an expression on line " + std::to_string(a[0].line) +
+                                 ", not a literal [...] or p[...]: " + kNotKnown);
+    program.literals.push_back(
+        read_literal(program.text, *a[0].value, LineAt{source, a[0].line, a[0].start}, a[0].end, ref.name));
+    return literal_of[ref.name] = program.literals.size() - 1;
+  };
+  for (const Site& site : sites) {
+    UrMotion m;
+    m.call = site.call;
+    m.target.line = site.line.number;
+    const std::string what = site.target.literal ? site.call : site.target.name;
+    m.literal = resolve(site, site.target, site.call);
+    const UrLiteral& target = program.literals[m.literal];
+    const LineAt at{source, target.line, 0};
+    const std::size_t bracket = target.begin - 1, newline = program.text.rfind('\n', bracket);
+    const std::size_t column = bracket - (newline == std::string::npos ? 0 : newline + 1);  // the '[' in its line
+    m.target.cartesian = m.target.orientation = target.pose;
+    const std::vector<double>& values = target.numbers;
+    if (target.pose && values.size() != 6)
+      at.fail(column, what + ": a pose p[x, y, z, rx, ry, rz] has 6 values, this one " + std::to_string(values.size()));
+    if (!target.pose && static_cast<int>(values.size()) != joint_count)
+      at.fail(column, what + ": " + std::to_string(values.size()) + " joint values, the model has " +
+                          std::to_string(joint_count) + " joints");
+    if (target.pose) {
+      m.target.pose.translation = {values[0], values[1], values[2]};
+      const Eigen::Vector3d r(values[3], values[4], values[5]);
+      const double angle = r.stableNorm();  // norm() squares: 1e300 overflowed to a NaN rotation
+      if (!(angle <= 2 * std::numbers::pi))
+        at.fail(column, what + ": the rotation vector's angle is " + model::shortest_number_text(angle) +
+                            " rad, more than a turn: degrees given as radians?");
+      if (angle > 0.0) m.target.pose.rotation = Eigen::AngleAxisd(angle, r / angle).toRotationMatrix();
+    } else {
+      m.target.q = values;
+    }
+    if (site.seed) {
+      m.seed = resolve(site, *site.seed, "qnear");
+      const UrLiteral& seed = program.literals[*m.seed];
+      if (seed.pose || static_cast<int>(seed.numbers.size()) != joint_count)
+        site.line.fail(site.seed->at, "get_inverse_kin's qnear " + (site.seed->literal ? "" : site.seed->name + " ") +
+                                          "holds " +
+                                          (seed.pose ? "a pose" : std::to_string(seed.numbers.size()) + " values") +
+                                          ", not the model's " + std::to_string(joint_count) + " joint positions");
+      m.target.q = seed.numbers;
+    }
+    program.motions.push_back(std::move(m));
   }
   return program;
 }
 
 std::string write_urscript(const UrProgram& program, const std::vector<std::vector<double>>& values) {
-  if (values.size() != program.motions.size())
+  if (values.size() != program.literals.size())
     throw std::invalid_argument("write_urscript: " + std::to_string(values.size()) + " value lists for " +
-                                std::to_string(program.motions.size()) + " motions");
+                                std::to_string(program.literals.size()) + " literals");
+  std::vector<std::size_t> order(values.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return program.literals[a].begin < program.literals[b].begin; });
   std::string out;
   out.reserve(program.text.size() + 64 * values.size());
   std::size_t copied = 0;
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    const UrMotion& m = program.motions[i];
-    if (values[i].size() != m.values.size())
-      throw std::invalid_argument("write_urscript: " + std::to_string(values[i].size()) + " values for motion " +
-                                  std::to_string(i + 1) + ", which has " + std::to_string(m.values.size()));
+  for (const std::size_t i : order) {
+    const UrLiteral& literal = program.literals[i];
+    if (values[i].size() != literal.values.size())
+      throw std::invalid_argument("write_urscript: " + std::to_string(values[i].size()) + " values for literal " +
+                                  std::to_string(i + 1) + ", which has " + std::to_string(literal.values.size()));
     for (std::size_t k = 0; k < values[i].size(); ++k) {
-      const auto [begin, end] = m.values[k];
+      const auto [begin, end] = literal.values[k];
       out.append(program.text, copied, begin - copied);
       const std::string_view old(program.text.data() + begin, end - begin);
       double was = 0.0;
@@ -202,17 +425,26 @@ std::string write_urscript(const UrProgram& program, const std::vector<std::vect
 }
 
 std::vector<std::vector<double>> urscript_values(const UrProgram& program, const std::vector<TargetResult>& results) {
-  std::vector<std::vector<double>> values;
-  for (std::size_t i = 0; i < program.motions.size() && i < results.size(); ++i) {
+  std::vector<std::optional<std::vector<double>>> by_literal(program.literals.size());
+  const std::size_t n = std::min(program.motions.size(), results.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    std::optional<std::vector<double>>& values = by_literal[program.motions[i].literal];
+    if (values) continue;
     if (!program.motions[i].target.cartesian) {
-      values.push_back(results[i].solution.q);
+      values = results[i].solution.q;
       continue;
     }
     const model::Transform& c = results[i].command;
     const Eigen::AngleAxisd r{Eigen::Matrix3d(c.rotation)};
     const Eigen::Vector3d v = r.angle() * r.axis();
-    values.push_back({c.translation.x(), c.translation.y(), c.translation.z(), v.x(), v.y(), v.z()});
+    values = std::vector<double>{c.translation.x(), c.translation.y(), c.translation.z(), v.x(), v.y(), v.z()};
   }
+  for (std::size_t i = 0; i < n; ++i)
+    if (const auto seed = program.motions[i].seed; seed && !by_literal[*seed])
+      by_literal[*seed] = results[i].solution.q;
+  std::vector<std::vector<double>> values;
+  for (std::size_t i = 0; i < by_literal.size(); ++i)
+    values.push_back(by_literal[i] ? *by_literal[i] : program.literals[i].numbers);
   return values;
 }
 

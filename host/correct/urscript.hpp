@@ -1,19 +1,32 @@
-// Universal Robots' URScript programs in and out (issue #24): the literal targets of motion lines
-// read as joint or Cartesian targets, and the program written back with corrected targets.
+// Universal Robots' URScript programs in and out (issues #24, #42): the targets of motion lines read
+// as joint or Cartesian targets, and the program written back with corrected targets.
 //
-// Read: every call movej(, movel(, movep( or servoj( in the code of a line -- not inside a string
+// Read: every call movej(, movel(, movep(, movec(, servoj( or servoc( in the code of a line -- not inside a string
 // ("..." or '...', a backslash escaping the next character) nor behind a '#' -- whose first argument
-// is a literal: [q1, ..., qN] (joint positions, rad) or p[x, y, z, rx, ry, rz] (a pose in the
-// robot's base frame: m, and a rotation vector in rad) followed by ',' or ')'. One call per line
-// is read (the first). Refused (model::InputError "FILE:LINE:COLUMN: what"): a line longer than
-// 64 KiB (no program has one: the file is something else), a string not closed on its line, a
-// target that goes on past its literal ([...] + [...], [...] * 2: the program would move where no
-// correction was computed), a joint list whose length is not
-// the model's joint count, a pose without six values, a value that is not a plain finite number
-// (d2r(90), a variable inside the list), a pose's rotation vector longer than a turn (2 pi rad:
-// degrees, most likely), more than kMaxTargets motions, a motion call whose target is a variable
-// (movej(home)): its value is not known before the program runs, and a target left uncorrected
-// would be silent.
+// is one of
+//   - a literal: [q1, ..., qN] (joint positions, rad) or p[x, y, z, rx, ry, rz] (a pose in the
+//     robot's base frame: m, and a rotation vector in rad);
+//   - a variable the program assigns a literal once and nowhere else (`global Waypoint_1_p=p[...]`,
+//     as PolyScope writes its waypoints; `local` or neither too): that literal is the target, and
+//     the one rewritten, so every motion naming the variable moves to the corrected target;
+//   - get_inverse_kin(TARGET, qnear=SEED) (PolyScope's MoveJ; SEED also as the second positional
+//     argument, other arguments but tcp= ignored), TARGET a pose literal or variable as above and
+//     SEED a joint literal or variable: a Cartesian target whose seed (the controller's branch,
+//     the reference of the joint-change limit) is SEED, and SEED rewritten with the corrected
+//     readings unless a motion takes it as its own joint target;
+// followed by ',' or ')'; movec's second argument (its end; the first is its via point) too, a
+// target of its own. One call per line is read (the first). Refused (model::InputError
+// "FILE:LINE:COLUMN: what", at the motion, or at the assignment for what its literal holds): a
+// line longer than 64 KiB (no program has one: the file is something else), a string not closed
+// on its line, a target that goes on past its literal or name ([...] + [...], [...] * 2: the
+// program would move where no correction was computed), a variable assigned no literal in the
+// program, more than once, or an expression (its value is not known before the program runs; an
+// element assignment `q[0] = 1` counts), get_inverse_kin with a tcp of its own, a joint list whose
+// length is not the model's joint count, a pose without six values, a seed that is a pose, a value
+// that is not a plain finite number (d2r(90), a variable inside the list), a pose's rotation
+// vector longer than a turn (2 pi rad: degrees, most likely), more than kMaxTargets motions, a
+// motion whose target is any other expression (pose_trans(...), a function's parameter): a target
+// left uncorrected would be silent. A literal assigned to a variable no motion names is not read.
 //
 // Written: the program's bytes unchanged but for each target value's own bytes, which become the
 // new value (its shortest exact decimal; a value that did not change keeps its spelling). So the
@@ -24,6 +37,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -33,17 +47,27 @@
 
 namespace kincal::correct {
 
-struct UrMotion {
-  std::string call;                // movej, movel, movep, servoj
-  Target target;                   // line, cartesian, q or pose (orientation always)
+// A literal whose values a correction rewrites: a motion's own, or the one a variable is assigned.
+struct UrLiteral {
+  int line = 0;
+  bool pose = false;
+  std::vector<double> numbers;     // as read
   std::size_t begin = 0, end = 0;  // byte range of the values between the brackets in the text
   // Byte range of each value in the text (the number alone, without the blanks around it).
   std::vector<std::pair<std::size_t, std::size_t>> values;
 };
 
+struct UrMotion {
+  std::string call;                 // movej, movel, movep, movec (via point and end: two), servoj, servoc
+  Target target;                    // line (the motion's), cartesian, q (joints, or the seed) or pose
+  std::size_t literal = 0;          // program.literals index of the target's values
+  std::optional<std::size_t> seed;  // get_inverse_kin's qnear: program.literals index
+};
+
 struct UrProgram {
   std::string source;
   std::string text;
+  std::vector<UrLiteral> literals;  // each once, however many motions name it
   std::vector<UrMotion> motions;
 };
 
@@ -52,13 +76,15 @@ UrProgram read_urscript(const std::string& path, int joint_count, std::size_t ma
 UrProgram parse_urscript(std::string text, const std::string& source, int joint_count,
                          std::size_t max_motions = kMaxTargets);
 
-// The program with each motion's values replaced: values[i] for motions[i] (joint readings for a
-// joint target, x,y,z,rx,ry,rz for a pose). Throws std::invalid_argument when the counts differ
-// (motions, or values of a motion).
+// The program with each literal's values replaced: values[i] for literals[i] (joint readings, or
+// x,y,z,rx,ry,rz for a pose). Throws std::invalid_argument when the counts differ (literals, or
+// values of a literal).
 std::string write_urscript(const UrProgram& program, const std::vector<std::vector<double>>& values);
 
-// The new values of each motion from the corrector's results: the corrected readings for joint
-// targets, the commanded pose (TargetResult::command) as x,y,z,rx,ry,rz for Cartesian ones.
+// The new values of each literal from the corrector's results (results[i] for motions[i]): the
+// corrected readings for a joint target, the commanded pose (TargetResult::command) as
+// x,y,z,rx,ry,rz for a Cartesian one, the first motion naming a literal deciding; a seed no motion
+// takes as its target gets the corrected readings of the first target it seeds.
 std::vector<std::vector<double>> urscript_values(const UrProgram& program, const std::vector<TargetResult>& results);
 
 }  // namespace kincal::correct

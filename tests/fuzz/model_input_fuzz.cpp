@@ -16,12 +16,13 @@
 //   3  parse_target_table for 3 joints, at most 50 rows: either InputError or a table of 1 to 50
 //      rows on increasing lines, each with 3 finite readings (joint targets) or none or 3 (a
 //      Cartesian target's seed), a finite point and a rotation orthonormal to 1e-9
-//   4  parse_urscript for 3 joints, at most 50 motions: either InputError or motions whose
-//      bracketed values lie in order inside the text; writing each target back (readings, or
-//      x,y,z and the rotation vector) and reading the result gives the same targets, and the
-//      text outside the brackets is kept byte for byte
+//   4  parse_urscript for 3 joints, at most 50 motions: either InputError or literals (a motion's
+//      own or a variable's) whose bracketed values lie apart inside the text; writing each
+//      target back (readings, or x,y,z and the rotation vector) and reading the result gives the
+//      same targets, and the text outside the brackets is kept byte for byte
 // Any other exception, a crash, a leak or undefined behaviour is a finding. Runs standalone too
 // (file arguments), and as the ctest fuzz.model_input for a bounded time.
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -149,38 +150,54 @@ void fuzz_urscript(const std::string& text) {
     return;
   }
   require(p.motions.size() <= 50);
+  // The literals' bracketed values lie in the text, apart from each other.
+  const auto text_order = [](const correct::UrProgram& program) {
+    std::vector<std::size_t> order(program.literals.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(),
+              [&](std::size_t a, std::size_t b) { return program.literals[a].begin < program.literals[b].begin; });
+    return order;
+  };
+  const std::vector<std::size_t> order = text_order(p);
   std::size_t after = 0;
+  for (const std::size_t i : order) {
+    const correct::UrLiteral& l = p.literals[i];
+    require(l.begin >= after && l.begin <= l.end && l.end <= p.text.size() && l.values.size() == l.numbers.size());
+    after = l.end;
+  }
+  // Each motion's target written back (readings, or x,y,z and the rotation vector), a seed as read.
   std::vector<std::vector<double>> values;
+  for (const correct::UrLiteral& l : p.literals) values.push_back(l.numbers);
   for (const correct::UrMotion& m : p.motions) {
-    require(m.begin >= after && m.begin <= m.end && m.end <= p.text.size());
-    after = m.end;
+    require(m.literal < p.literals.size() && (!m.seed || *m.seed < p.literals.size()));
     if (!m.target.cartesian) {
       require(m.target.q.size() == 3);
-      values.push_back(m.target.q);
+      values[m.literal] = m.target.q;
       continue;
     }
     require(finite_pose(m.target.pose));
     const Eigen::AngleAxisd r{Eigen::Matrix3d(m.target.pose.rotation)};
     const Eigen::Vector3d v = r.angle() * r.axis();
     const model::Vector3& x = m.target.pose.translation;
-    values.push_back({x.x(), x.y(), x.z(), v.x(), v.y(), v.z()});
+    values[m.literal] = {x.x(), x.y(), x.z(), v.x(), v.y(), v.z()};
   }
   const std::string written = correct::write_urscript(p, values);
   const correct::UrProgram again = correct::parse_urscript(written, "again.script", 3, 50);
-  require(again.motions.size() == p.motions.size());
+  require(again.motions.size() == p.motions.size() && again.literals.size() == p.literals.size());
   for (std::size_t i = 0; i < p.motions.size(); ++i) {
     const correct::Target &a = p.motions[i].target, &b = again.motions[i].target;
     require(a.line == b.line && a.cartesian == b.cartesian && a.q == b.q);
     require(a.pose.translation == b.pose.translation);
     require((Eigen::Matrix3d(a.pose.rotation) - Eigen::Matrix3d(b.pose.rotation)).cwiseAbs().maxCoeff() < 1e-9);
-    // Outside the brackets, byte for byte: the text before each motion's values.
-    const std::size_t from = i == 0 ? 0 : p.motions[i - 1].end, to = p.motions[i].begin;
-    const std::size_t again_from = i == 0 ? 0 : again.motions[i - 1].end;
-    require(p.text.compare(from, to - from, written, again_from, again.motions[i].begin - again_from) == 0);
   }
-  const std::size_t tail = p.motions.empty() ? 0 : p.motions.back().end;
-  const std::size_t again_tail = again.motions.empty() ? 0 : again.motions.back().end;
-  require(p.text.compare(tail, std::string::npos, written, again_tail, std::string::npos) == 0);
+  // Outside the brackets, byte for byte: the text before each literal's values, and after the last.
+  std::size_t from = 0, again_from = 0;
+  for (const std::size_t i : order) {
+    const correct::UrLiteral &l = p.literals[i], &m = again.literals[i];
+    require(p.text.compare(from, l.begin - from, written, again_from, m.begin - again_from) == 0);
+    from = l.end, again_from = m.end;
+  }
+  require(p.text.compare(from, std::string::npos, written, again_from, std::string::npos) == 0);
 }
 
 }  // namespace

@@ -90,7 +90,10 @@ TEST_CASE("URScript: refused targets name file:line:column") {
     }
     return std::string("accepted");
   };
-  CHECK(refused("def p():\n  movej(home_q, a=1.4)\nend\n").find("p.script:2:9: movej's target is not a literal") == 0);
+  CHECK(refused("def p():\n  movej(home_q, a=1.4)\nend\n")
+            .find("p.script:2:9: movej's target home_q is not assigned in this program") == 0);
+  CHECK(refused("def p():\n  movel(pose_trans(base, p[0, 0, 1, 0, 0, 0]))\nend\n")
+            .find("p.script:2:9: movel's target is not a literal [...] or p[...], a variable assigned one") == 0);
   CHECK(refused("  movej([1, 2, 3])\n").find("p.script:1:9: movej: 3 joint values, the model has 6 joints") == 0);
   CHECK(refused("  movel(p[1, 2, 3, 0, 0])\n").find("p.script:1:10: movel: a pose") == 0);
   CHECK(refused("movej([d2r(90), 0, 0, 0, 0, 0])\n")
@@ -106,7 +109,7 @@ TEST_CASE("URScript: refused targets name file:line:column") {
   const correct::UrProgram after_string =
       correct::parse_urscript("textmsg(\"# movej(\") movej(" + q6 + ", a=1)\n", "p.script", 6);
   REQUIRE(after_string.motions.size() == 1);
-  CHECK(after_string.motions[0].begin == 27);
+  CHECK(after_string.literals[after_string.motions[0].literal].begin == 27);
   CHECK(refused("textmsg(\"movej(" + q6 + "))\n") == "p.script:1:9: a string is not closed on its line");
   CHECK(refused("movej(" + q6 + ", a=1) # don't\nx = 'it''s'\ny = 'a\\'\n") ==
         "p.script:3:5: a string is not closed on its line");
@@ -224,6 +227,110 @@ TEST_CASE("URScript round trip: other lines byte for byte, CRLF kept, targets eq
   }
 }
 
+TEST_CASE("URScript as PolyScope writes it: waypoint variables and get_inverse_kin corrected where they are assigned") {
+  const model::RobotModel start = robot("ur10.yaml");
+  model::RobotModel calibrated = start;
+  calibrated.joints[1].parameters.a_m += 2e-3;
+  calibrated.joints[3].offset += 1e-3;
+  model::RobotModel arm = start;
+  arm.base_T_frame0 = model::Transform{};
+  const std::vector<double> a = {0.1, -1.2, 1.4, -1.6, -1.5, 0.3}, b = {0.4, -1.0, 1.2, -1.8, -1.4, 0.1};
+  const auto pose = [&](const std::vector<double>& q) {
+    const model::Transform t = model::forward_kinematics(arm, q);
+    const Eigen::AngleAxisd r{Eigen::Matrix3d(t.rotation)};
+    const Eigen::Vector3d v = r.angle() * r.axis();
+    return std::vector<double>{t.translation.x(), t.translation.y(), t.translation.z(), v.x(), v.y(), v.z()};
+  };
+  const auto list = [](const std::vector<double>& v) {
+    std::string s;
+    for (double x : v) s += (s.empty() ? "" : ", ") + model::shortest_number_text(x);
+    return s;
+  };
+  // A subprogram above the globals names a waypoint assigned below it; an unused variable's
+  // literal is not read; a string and a comment name variables too.
+  const std::string program =
+      "def cell():\n  def approach():\n    movel(Waypoint_2_p, a=1.2, v=0.25)\n  end\n"
+      "  global Plane_1=p[x, y]\n  set_tcp(p[0.0,0.0,0.0,0.0,0.0,0.0])\n"
+      "  global Waypoint_1_p=p[" +
+      list(pose(a)) + "]\n  global Waypoint_1_q=[" + list(a) + "]\n  global Waypoint_2_p=p[" + list(pose(b)) +
+      "]\n  global Waypoint_2_q=[" + list(b) +
+      "]\n  $ 3 \"Waypoint_1\" \"breakAfter\"\n"
+      "  movej(get_inverse_kin(Waypoint_1_p, qnear=Waypoint_1_q), a=1.39, v=1.05)\n"
+      "  approach()  # movej(Waypoint_9_q)\n  movej(Waypoint_2_q, a=1.39, v=1.05)\n"
+      "  movel(Waypoint_1_p, a=1.2, v=0.25)\nend\n";
+  const correct::UrProgram parsed = correct::parse_urscript(program, "cell.script", 6);
+  REQUIRE(parsed.motions.size() == 4);
+  REQUIRE(parsed.literals.size() == 4);  // each waypoint's p and q once, Plane_1 not read
+  const correct::UrMotion &first = parsed.motions[1], &last = parsed.motions[3];
+  CHECK(first.target.cartesian);
+  CHECK(first.target.q == a);  // the seed: qnear
+  REQUIRE(first.seed);
+  CHECK(parsed.literals[*first.seed].numbers == a);
+  CHECK(last.literal == first.literal);
+  CHECK(!last.seed);
+  CHECK(!parsed.motions[2].target.cartesian);
+  CHECK(parsed.motions[2].target.q == b);
+  CHECK(parsed.motions[0].target.line == 3);
+  CHECK((parsed.motions[0].target.pose.translation - model::forward_kinematics(arm, b).translation).norm() < 1e-12);
+
+  correct::TargetCorrector corrector(start, calibrated, correct::TargetFrame::base, std::nullopt);
+  std::vector<correct::Target> targets;
+  for (const correct::UrMotion& m : parsed.motions) targets.push_back(m.target);
+  const std::vector<correct::TargetResult> results = corrector.correct(targets, b, "cell.script");
+  for (const correct::TargetResult& r : results) REQUIRE(r.solution.outcome == correct::Outcome::reached);
+  const std::string written = correct::write_urscript(parsed, correct::urscript_values(parsed, results));
+  // Only the four assignments changed; every motion line is byte for byte, as is Plane_1's.
+  const std::vector<std::string> before = lines(program), after = lines(written);
+  REQUIRE(before.size() == after.size());
+  for (std::size_t i = 0; i < before.size(); ++i)
+    CHECK((before[i] == after[i]) == (before[i].find("global Waypoint_") == std::string::npos));
+  const correct::UrProgram back = correct::parse_urscript(written, "back.script", 6);
+  // The pose is the command of the first motion naming it, its qnear that motion's readings, and
+  // the joint target its own correction.
+  CHECK(back.literals[back.motions[1].literal].numbers == correct::urscript_values(parsed, results)[first.literal]);
+  CHECK(back.motions[1].target.q == results[1].solution.q);
+  CHECK((back.motions[1].target.pose.translation - results[1].command.translation).norm() < 1e-12);
+  CHECK(back.motions[2].target.q == results[2].solution.q);
+  CHECK(results[1].solution.q != a);
+
+  const auto refused = [&](const std::string& text) {
+    try {
+      correct::parse_urscript(text, "p.script", 6);
+    } catch (const model::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  const std::string q = "[" + list(a) + "]", p = "p[" + list(pose(a)) + "]";
+  CHECK(refused("w = " + q + "\nmovej(w)\nw = " + q + "\n")
+            .find("p.script:2:7: movej's target w is assigned 2 times (lines 1, 3)") == 0);
+  CHECK(refused("global w = get_actual_joint_positions()\nmovej(w)\n")
+            .find("p.script:2:7: movej's target w is assigned an expression on line 1, not a literal") == 0);
+  CHECK(refused("w = " + q + "\nw[0] = 0.5\nmovej(w)\n").find("movej's target w is assigned 2 times") !=
+        std::string::npos);
+  CHECK(refused("w = " + q + " + " + q + "\nmovej(w)\n").find("assigned an expression on line 1") != std::string::npos);
+  const std::string own_tcp = "movej(get_inverse_kin(w, qnear=" + q + ", tcp=p[0, 0, 0.1, 0, 0, 0]))";
+  CHECK(refused("w = " + p + "\n" + own_tcp + "\n")
+            .find("p.script:2:" + std::to_string(own_tcp.find("tcp=") + 5) +
+                  ": get_inverse_kin with a tcp of its own") == 0);
+  CHECK(refused("w = " + p + "\nmovej(get_inverse_kin(w, qnear=w))\n")
+            .find("p.script:2:32: get_inverse_kin's qnear w holds a pose, not the model's 6 joint positions") == 0);
+  CHECK(refused("w = [1, 2, 3, 4, d2r(5), 6]\nmovej(w)\n").find("p.script:1:17: column w value 5: 'd2r(5)'") == 0);
+  CHECK(refused("w = [1, 2, 3]\nmovej(w)\n").find("p.script:1:5: w: 3 joint values, the model has 6 joints") == 0);
+  CHECK(refused("movej(w + 1)\n").find("p.script:1:9: movej's target goes on past its literal or name") == 0);
+  CHECK(refused("w = " + p + "\nmovej(get_inverse_kin(w, " + q + ", 1e-10, 1e-10))\n") == "accepted");
+  // movec: its via point and its end, two targets of one motion line.
+  const correct::UrProgram circle =
+      correct::parse_urscript("w = " + p + "\nmovec(w, " + p + ", a=1.2, r=0)\n", "c.script", 6);
+  REQUIRE(circle.motions.size() == 2);
+  CHECK(circle.motions[0].call == "movec");
+  CHECK(circle.motions[1].target.cartesian);
+  CHECK(circle.motions[0].literal != circle.motions[1].literal);
+  CHECK(circle.motions[1].target.line == 2);
+  CHECK(refused("movec(" + p + ")\n").find("p.script:1:") == 0);
+  CHECK(refused("movec(" + p + ")\n").find("movec takes a via point and an end") != std::string::npos);
+}
+
 TEST_CASE("URScript from a file: a byte-order mark is kept, the rest read as without it") {
   const std::string path =
       (std::filesystem::temp_directory_path() / ("kincal_bom_" + std::to_string(::getpid()) + ".script")).string();
@@ -248,9 +355,10 @@ TEST_CASE("urscript: a program as editors write it comes back byte for byte but 
   REQUIRE(parsed.motions.size() == 3);
   CHECK(parsed.motions[0].target.q[3] == 0.2);
   // Each value's own bytes are the number alone.
-  for (const correct::UrMotion& m : parsed.motions) {
-    REQUIRE(m.values.size() == 6);
-    for (const auto& [begin, end] : m.values) {
+  REQUIRE(parsed.literals.size() == 3);
+  for (const correct::UrLiteral& literal : parsed.literals) {
+    REQUIRE(literal.values.size() == 6);
+    for (const auto& [begin, end] : literal.values) {
       const std::string value = program.substr(begin, end - begin);
       CHECK(value.find_first_of(" \t,[]") == std::string::npos);
       CHECK(!value.empty());
@@ -270,7 +378,7 @@ TEST_CASE("urscript: a program as editors write it comes back byte for byte but 
         "def p():\r\n\t# home\r\n\tmovej([0.1,-0.4,0.3125,2e-1,-0.5,0.7], a=1.4)\n"
         "\tservoj([ 0.2 ,\t-0.3, 0.2, 0.1, -0.6, 0.5 ], t=0.008)\r\n"
         "\tmovel( p[0.5,\t-0.25, 0.4 , 0, 3.14, 0] )\r\nend");
-  // A motion given a wrong count of values is a programming error, not a silent truncation.
+  // A literal given a wrong count of values is a programming error, not a silent truncation.
   changed[1].pop_back();
   CHECK_THROWS_AS(correct::write_urscript(parsed, changed), std::invalid_argument);
 }

@@ -730,7 +730,24 @@ case("correct:two inputs", C + ["--joints", "targets.csv", "--poses", "poses.csv
 case("correct:joints as poses", C + ["--poses", "targets.csv"], r"joint targets \(no x,y,z\) given as --poses")
 case("correct:out of reach", C + ["--poses", "far.csv", "--frame", "device", "-o", "-"], r"far\.csv:2: not reached: out-of-reach")
 case("correct:URScript variable target", C + ["--urscript", "variable.script", "-o", "o6.script"],
-     r"variable\.script:2:9: movej's target is not a literal")
+     r"variable\.script:2:9: movej's target home_q is not assigned in this program")
+# PolyScope's waypoints: variables assigned a literal once, corrected where they are assigned (the
+# motion lines byte for byte); a pose far from where the model puts the TCP at its qnear is named.
+with open("waypoints.script", "w") as f:
+    f.write("def cell():\n  global Waypoint_1_q=[0.1, -0.4, 0.3, 0.2, -0.5, 0.7]\n"
+            "  global Waypoint_2_q=[0.2, -0.3, 0.2, 0.1, -0.6, 0.5]\n  movej(Waypoint_1_q, a=1.39, v=1.04)\n"
+            "  servoj(Waypoint_2_q, t=0.008)\n  movej(Waypoint_1_q)\nend\n")
+run(C + ["--urscript", "waypoints.script", "-o", "o9.script"])
+waypoint_lines, corrected_lines = open("waypoints.script").read().split("\n"), open("o9.script").read().split("\n")
+if [k for k in range(len(waypoint_lines)) if waypoint_lines[k] != corrected_lines[k]] != [1, 2]:
+    fail("correct:URScript waypoint variables: not the two assignments alone rewritten:\n" + "\n".join(corrected_lines))
+with open("far_waypoint.script", "w") as f:
+    f.write("def cell():\n  global Waypoint_1_p=p[0.5, 0.1, 0.4, 0, 3.14, 0]\n"
+            "  global Waypoint_1_q=[0.1, -0.4, 0.3, 0.2, -0.5, 0.7]\n"
+            "  movej(get_inverse_kin(Waypoint_1_p, qnear=Waypoint_1_q), a=1.39, v=1.04)\nend\n")
+case("correct:URScript waypoint far from its qnear", C + ["--urscript", "far_waypoint.script", "-o", "o10.script"],
+     r"far_waypoint\.script:4: warning: the target pose is [0-9.]+ mm from where the nominal model puts the TCP at its "
+     r"qnear readings")
 with open("string.script", "w") as f:
     f.write('def p():\n  textmsg("movej([0.1, -0.4, 0.3, 0.2, -0.5, 0.7])")\n  movej([0.1, -0.4, 0.3, 0.2, -0.5, 0.7])\nend\n')
 run(C + ["--urscript", "string.script", "-o", "o7.script"])  # the string kept byte for byte, the motion corrected
