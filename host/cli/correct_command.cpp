@@ -1,5 +1,6 @@
 #include "host/cli/correct_command.hpp"
 
+#include <algorithm>
 #include <iostream>
 #include <memory>
 #include <numbers>
@@ -64,24 +65,88 @@ std::string aim_at_tcp(const CorrectArgs& a, model::RobotModel& nominal, model::
 }
 
 // A program's pose and its qnear (PolyScope's Waypoint_1_p and Waypoint_1_q) are one waypoint: the
-// controller's pose of the TCP at those readings. Where the nominal model puts the TCP far from the
-// pose at them -- farther than a controller's own calibration moves it -- the program was made for
-// another TCP, robot or base than the model's, and its targets would be corrected for the wrong
-// point: said before the solve, which then usually refuses them by the joint-change limit.
-void warn_seed_gaps(const correct::UrProgram& program, const model::RobotModel& nominal) {
-  constexpr double kGapM = 0.01;
+// controller's pose of the TCP at those readings. The distance of each such pose from where the
+// nominal model puts the TCP at its qnear readings (the program's line, m).
+constexpr double kSeedGapM = 0.01;  // farther than a controller's own calibration moves a TCP
+
+std::vector<std::pair<int, double>> seed_gaps(const correct::UrProgram& program, const model::RobotModel& nominal) {
   model::RobotModel arm = nominal;
   arm.base_T_frame0 = model::Transform{};  // the program's poses are in the robot's base frame
+  std::vector<std::pair<int, double>> gaps;
+  for (const correct::UrMotion& m : program.motions)
+    if (m.seed && m.target.cartesian)
+      gaps.emplace_back(m.target.line,
+                        (model::forward_kinematics(arm, m.target.q).translation - m.target.pose.translation).norm());
+  return gaps;
+}
+
+double largest_gap(const std::vector<std::pair<int, double>>& gaps) {
+  double largest = 0.0;
+  for (const auto& [line, gap] : gaps) largest = std::max(largest, gap);
+  return largest;
+}
+
+// The point a program's targets are aimed at. PolyScope writes the installation's TCP as
+// set_tcp(p[...]) and every waypoint's pose is of it. Without --tcp, when the program sets one TCP
+// and its waypoints' poses and qnear readings agree (within kSeedGapM) with that TCP on the nominal
+// model and not with the point aim_at_tcp would take, the program's TCP is aimed. A program that
+// sets a TCP other than the one aimed is named; so is each waypoint far from its qnear (another
+// TCP, robot or base than the model's), before the solve, which then usually refuses them by the
+// joint-change limit.
+std::string aim_program(const CorrectArgs& a, const correct::UrProgram& program, model::RobotModel& nominal,
+                        model::RobotModel& calibrated) {
+  std::optional<correct::UrTcp> set;  // the one TCP the program sets
+  bool one = !program.tcps.empty();
+  for (const correct::UrTcp& t : program.tcps) {
+    one = one && t.flange_T_tcp &&
+          (!set || (t.flange_T_tcp->translation - set->flange_T_tcp->translation).norm() +
+                           (t.flange_T_tcp->rotation - set->flange_T_tcp->rotation).norm() <
+                       1e-9);
+    if (!set && t.flange_T_tcp) set = t;
+  }
+  const model::RobotModel nominal_as_given = nominal, calibrated_as_given = calibrated;
+  std::string aimed = aim_at_tcp(a, nominal, calibrated);
+  std::vector<std::pair<int, double>> gaps = seed_gaps(program, nominal);
+  const auto mm = [](const model::Vector3& v) {
+    std::ostringstream out;
+    out.precision(4);
+    out << v.x() * 1e3 << ", " << v.y() * 1e3 << ", " << v.z() * 1e3 << " mm";
+    return out.str();
+  };
+  if (set) {
+    const model::Transform& t = *set->flange_T_tcp;
+    const model::Vector3 rpy = model::rpy_from_rotation(t.rotation);
+    CorrectArgs with = a;
+    with.tcp = {t.translation.x(), t.translation.y(), t.translation.z(), rpy.x(), rpy.y(), rpy.z()};
+    if (one && a.tcp.empty() && !gaps.empty() && largest_gap(gaps) > kSeedGapM) {
+      model::RobotModel n = nominal_as_given, c = calibrated_as_given;
+      const std::string aimed_there = aim_at_tcp(with, n, c);
+      if (const std::vector<std::pair<int, double>> there = seed_gaps(program, n); largest_gap(there) <= kSeedGapM) {
+        nominal = n, calibrated = c;
+        return "the program's TCP (set_tcp, line " + std::to_string(set->line) +
+               ": its waypoints' poses and qnear readings agree with it) -- " + aimed_there;
+      }
+    }
+    const bool differs =
+        !calibrated.flange_T_tcp || (calibrated.flange_T_tcp->translation - t.translation).norm() > 1e-3;
+    if (differs) {
+      std::cerr << program.source << ':' << set->line << ": warning: the program sets its TCP at " << mm(t.translation)
+                << " from the flange, not the point correct aims (" << aimed
+                << "): if its poses are of that TCP, give --tcp";
+      for (std::size_t k = 0; k < with.tcp.size(); ++k)
+        std::cerr << (k == 0 ? " " : ",") << model::shortest_number_text(with.tcp[k]);
+      std::cerr << '\n';
+    }
+  }
   std::size_t far = 0;
-  for (const correct::UrMotion& m : program.motions) {
-    if (!m.seed || !m.target.cartesian) continue;
-    const double gap = (model::forward_kinematics(arm, m.target.q).translation - m.target.pose.translation).norm();
-    if (gap <= kGapM || ++far > 3) continue;
-    std::cerr << program.source << ':' << m.target.line << ": warning: the target pose is " << gap * 1e3
+  for (const auto& [line, gap] : gaps) {
+    if (gap <= kSeedGapM || ++far > 3) continue;
+    std::cerr << program.source << ':' << line << ": warning: the target pose is " << gap * 1e3
               << " mm from where the nominal model puts the TCP at its qnear readings: the program was made for "
                  "another TCP (set_tcp; --tcp), robot or base than the model's (--nominal)\n";
   }
   if (far > 3) std::cerr << program.source << ": warning: " << far << " targets so, the first 3 named\n";
+  return aimed;
 }
 
 std::string csv(const correct::TargetTable& table, const std::vector<correct::TargetResult>& results, int n) {
@@ -159,14 +224,14 @@ int run_correct(const CorrectArgs& a) {
     // The calibration's own tool says what the data measured: a point leaves the orientation free.
     options.orientation = !a.position_only && calibrated.tool == model::ToolKind::frame;
     const std::optional<correct::ParameterCovariance> covariance = correct::record_covariance(calibrated);
-    const std::string aimed = aim_at_tcp(a, nominal, calibrated);
+    const std::string aimed =
+        a.urscript.empty() ? aim_at_tcp(a, nominal, calibrated) : aim_program(a, program, nominal, calibrated);
     correct::JointChangeLimit limit;
     limit.revolute_rad = a.max_change_deg * std::numbers::pi / 180.0;
     limit.prismatic_m = a.max_change_mm * 1e-3;
     correct::TargetCorrector corrector(nominal, calibrated,
                                        a.frame == "device" ? correct::TargetFrame::device : correct::TargetFrame::base,
                                        covariance, options, limit);
-    if (!a.urscript.empty()) warn_seed_gaps(program, nominal);
     const std::vector<correct::TargetResult> results = corrector.correct(targets, a.seed, source);
     std::ostream& log = a.out.empty() || a.out == "-" ? std::cerr : std::cout;
     int not_reached = 0;

@@ -21,6 +21,7 @@ namespace {
 
 constexpr std::size_t kMaxLineBytes = 65536;
 constexpr const char* kCalls[] = {"movej", "movel", "movep", "movec", "servoj", "servoc"};
+constexpr const char* kSetTcp[] = {"set_tcp"};
 
 bool name_char(char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_'; }
 
@@ -62,16 +63,17 @@ Code code_of(std::string_view line) {
   return code;
 }
 
-// The motion call in a line's code (code_of), if any: the first of kCalls that stands as a whole
-// name followed by '('.
+// The call in a line's code (code_of), if any: the first of `names` that stands as a whole name
+// followed by '('.
 struct Call {
   std::string name;
   std::size_t at = std::string_view::npos, open = 0;  // the name's offset, the offset after '('
 };
 
-Call find_call(std::string_view code) {
+template <std::size_t N>
+Call find_call(std::string_view code, const char* const (&names)[N]) {
   Call found;
-  for (const char* name : kCalls) {
+  for (const char* name : names) {
     const std::string_view n(name);
     for (std::size_t at = code.find(n); at != std::string_view::npos; at = code.find(n, at + 1)) {
       if ((at > 0 && name_char(code[at - 1])) || (at + n.size() < code.size() && name_char(code[at + n.size()])))
@@ -296,6 +298,12 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
   // target resolved (a variable may be assigned below the motion that names it).
   std::map<std::string, std::vector<Assignment>> assigned;
   std::vector<Site> sites;
+  struct SetTcp {
+    LineAt line;
+    std::size_t end = 0;
+    std::optional<Ref> pose;
+  };
+  std::vector<SetTcp> set_tcps;
   int number = 0;
   for (std::size_t start = 0; start < all.size();) {
     std::size_t end = std::min(all.find('\n', start), all.size());
@@ -312,7 +320,9 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
       a->end = end;
       assigned[a->name].push_back(std::move(*a));
     }
-    const Call call = find_call(code.text);
+    if (const Call set = find_call(code.text, kSetTcp); set.at != std::string_view::npos)
+      set_tcps.push_back({line, end, read_ref(code.text, skip_blanks(code.text, set.open), nullptr, "set_tcp")});
+    const Call call = find_call(code.text, kCalls);
     // movec's via point and its end are two targets, read in order.
     std::size_t after = call.open - 1;
     for (int k = 0; call.at != std::string_view::npos && k < (call.name == "movec" ? 2 : 1); ++k) {
@@ -389,6 +399,33 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
       m.target.q = seed.numbers;
     }
     program.motions.push_back(std::move(m));
+  }
+  // The TCPs the program sets: a pose literal, or a variable assigned one once; else unknown.
+  for (const SetTcp& set : set_tcps) {
+    UrTcp& tcp = program.tcps.emplace_back();
+    tcp.line = set.line.number;
+    try {
+      std::optional<UrLiteral> literal;
+      if (set.pose && set.pose->literal) literal = read_literal(program.text, *set.pose, set.line, set.end, "set_tcp");
+      if (set.pose && !set.pose->literal) {
+        const auto it = assigned.find(set.pose->name);
+        if (it != assigned.end() && it->second.size() == 1 && it->second[0].value) {
+          const Assignment& a = it->second[0];
+          literal = read_literal(program.text, *a.value, LineAt{source, a.line, a.start}, a.end, a.name);
+        }
+      }
+      if (!literal || !literal->pose || literal->numbers.size() != 6) continue;
+      const std::vector<double>& v = literal->numbers;
+      const Eigen::Vector3d r(v[3], v[4], v[5]);
+      const double angle = r.stableNorm();
+      if (!(angle <= 2 * std::numbers::pi)) continue;
+      model::Transform t;
+      t.translation = {v[0], v[1], v[2]};
+      if (angle > 0.0) t.rotation = Eigen::AngleAxisd(angle, r / angle).toRotationMatrix();
+      tcp.flange_T_tcp = t;
+    } catch (const model::InputError&) {
+      // a value that is no number: a TCP not known before the program runs
+    }
   }
   return program;
 }

@@ -64,11 +64,18 @@ struct UrMotion {
   std::optional<std::size_t> seed;  // get_inverse_kin's qnear: program.literals index
 };
 
+// A set_tcp( call: the TCP the program's poses are of from there on.
+struct UrTcp {
+  int line = 0;
+  std::optional<model::Transform> flange_T_tcp;  // a pose literal or a variable assigned one once; else unknown
+};
+
 struct UrProgram {
   std::string source;
   std::string text;
   std::vector<UrLiteral> literals;  // each once, however many motions name it
   std::vector<UrMotion> motions;
+  std::vector<UrTcp> tcps;  // every set_tcp, in the file's order (never refused: the poses are checked against them)
 };
 
 // max_motions: the motion past it is refused as it is read (kMaxTargets for `correct`).

@@ -319,6 +319,23 @@ TEST_CASE("URScript as PolyScope writes it: waypoint variables and get_inverse_k
   CHECK(refused("w = [1, 2, 3]\nmovej(w)\n").find("p.script:1:5: w: 3 joint values, the model has 6 joints") == 0);
   CHECK(refused("movej(w + 1)\n").find("p.script:1:9: movej's target goes on past its literal or name") == 0);
   CHECK(refused("w = " + p + "\nmovej(get_inverse_kin(w, " + q + ", 1e-10, 1e-10))\n") == "accepted");
+  // The TCPs a program sets: a literal, a variable assigned one once; anything else is unknown,
+  // never refused.
+  REQUIRE(parsed.tcps.size() == 1);
+  CHECK(parsed.tcps[0].line == 6);
+  REQUIRE(parsed.tcps[0].flange_T_tcp);
+  CHECK(parsed.tcps[0].flange_T_tcp->translation.norm() == 0.0);
+  const correct::UrProgram tcps = correct::parse_urscript(
+      "t = p[0, 0, 0.15, 0, 0, 1.5708]\nset_tcp(t)\nset_tcp(get_tcp_offset())\nset_tcp(p[0, 0, d2r(1)])\n", "t.script",
+      6);
+  REQUIRE(tcps.tcps.size() == 3);
+  REQUIRE(tcps.tcps[0].flange_T_tcp);
+  CHECK(tcps.tcps[0].flange_T_tcp->translation.z() == 0.15);
+  CHECK(tcps.tcps[0].flange_T_tcp->rotation(1, 0) == doctest::Approx(1.0));
+  CHECK(!tcps.tcps[1].flange_T_tcp);
+  CHECK(!tcps.tcps[2].flange_T_tcp);
+  CHECK(tcps.tcps[2].line == 4);
+
   // movec: its via point and its end, two targets of one motion line.
   const correct::UrProgram circle =
       correct::parse_urscript("w = " + p + "\nmovec(w, " + p + ", a=1.2, r=0)\n", "c.script", 6);
