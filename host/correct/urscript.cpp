@@ -187,13 +187,13 @@ std::size_t skip_argument(std::string_view code, std::size_t at) {
   return at;
 }
 
-// A motion's target as written: the literal or variable, and get_inverse_kin's qnear.
+// A motion's target as written: the literal or variable, get_inverse_kin's qnear, pose_trans's frame.
 struct Site {
   std::string call;
   LineAt line;
   std::size_t end = 0;  // the line's end in the text
   Ref target;
-  std::optional<Ref> seed;
+  std::optional<Ref> seed, frame;
 };
 
 const std::string kNotKnown =
@@ -204,17 +204,27 @@ const std::string kNotKnown =
 // ends it.
 Site read_target(const std::string& call, std::string_view code, std::size_t at, const LineAt& line,
                  std::size_t line_end, std::size_t& after) {
-  Site site{call, line, line_end, {}, std::nullopt};
+  Site site{call, line, line_end, {}, std::nullopt, std::nullopt};
   const std::size_t word = name_end(code, at);
   const std::size_t paren = skip_blanks(code, word);
-  const bool inverse = code.substr(at, word - at) == "get_inverse_kin" && paren < code.size() && code[paren] == '(';
-  const std::string target_what = inverse ? "get_inverse_kin" : call;
-  if (inverse) at = skip_blanks(code, paren + 1);
+  const std::string_view name = code.substr(at, word - at);
+  const bool called = paren < code.size() && code[paren] == '(';
+  const bool inverse = called && name == "get_inverse_kin", in_frame = called && name == "pose_trans";
+  const std::string target_what = inverse ? "get_inverse_kin" : in_frame ? "pose_trans" : call;
+  if (inverse || in_frame) at = skip_blanks(code, paren + 1);
+  if (in_frame) {
+    site.frame = read_ref(code, at, &line, "pose_trans");
+    if (!site.frame || site.frame->after >= code.size() || code[site.frame->after] != ',')
+      line.fail(
+          site.frame ? site.frame->after : at,
+          "pose_trans's frame is not a literal p[...] or a variable assigned one, followed by the pose: " + kNotKnown);
+    at = skip_blanks(code, site.frame->after + 1);
+  }
   const std::optional<Ref> target = read_ref(code, at, &line, target_what);
   if (!target)
     line.fail(at, target_what +
                       "'s target is not a literal [...] or p[...], a variable assigned one, or get_inverse_kin(...) "
-                      "of one: " +
+                      "or pose_trans(...) of them: " +
                       kNotKnown);
   site.target = *target;
   after = target->after;
@@ -226,6 +236,11 @@ Site read_target(const std::string& call, std::string_view code, std::size_t at,
                             kNotKnown);
   };
   ends_argument(after, target_what);
+  if (in_frame) {
+    if (code[after] != ')') line.fail(after, "pose_trans takes a frame and a pose, nothing more");
+    after = skip_blanks(code, after + 1);
+    ends_argument(after, call);
+  }
   if (!inverse) return site;
   for (int positional = 1; code[after] == ','; ++positional) {
     std::size_t value = skip_blanks(code, after + 1);
@@ -256,6 +271,18 @@ Site read_target(const std::string& call, std::string_view code, std::size_t at,
   after = skip_blanks(code, after + 1);
   ends_argument(after, call);
   return site;
+}
+
+// A pose p[x, y, z, rx, ry, rz] (6 values) as a transform; nothing when its rotation vector is
+// longer than a turn (or not finite).
+std::optional<model::Transform> pose_of(const std::vector<double>& v) {
+  const Eigen::Vector3d r(v[3], v[4], v[5]);
+  const double angle = r.stableNorm();  // norm() squares: 1e300 overflowed to a NaN rotation
+  if (!(angle <= 2 * std::numbers::pi)) return std::nullopt;
+  model::Transform t;
+  t.translation = {v[0], v[1], v[2]};
+  if (angle > 0.0) t.rotation = Eigen::AngleAxisd(angle, r / angle).toRotationMatrix();
+  return t;
 }
 
 // The numbers of a literal (ref, in the line the text holds at [start, end)), refused with the
@@ -335,14 +362,14 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
     start = next;
   }
 
-  std::map<std::string, std::size_t> literal_of;  // a variable's literal in program.literals
-  // The literal a reference names: the motion's own, or its variable's one assignment.
-  const auto resolve = [&](const Site& site, const Ref& ref, const std::string& what) -> std::size_t {
-    if (ref.literal) {
-      program.literals.push_back(read_literal(program.text, ref, site.line, site.end, what));
-      return program.literals.size() - 1;
-    }
-    if (const auto it = literal_of.find(ref.name); it != literal_of.end()) return it->second;
+  // Where the literal a reference names is: the motion's own, or its variable's one assignment.
+  struct Located {
+    const Ref* ref;
+    LineAt line;
+    std::size_t end;
+  };
+  const auto locate = [&](const Site& site, const Ref& ref, const std::string& what) -> Located {
+    if (ref.literal) return {&ref, site.line, site.end};
     const auto it = assigned.find(ref.name);
     const std::string named = what + "'s target " + ref.name;
     if (it == assigned.end()) site.line.fail(ref.at, named + " is not assigned in this program: " + kNotKnown);
@@ -356,10 +383,40 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
     if (!a[0].value)
       site.line.fail(ref.at, named + " is assigned an expression on line " + std::to_string(a[0].line) +
                                  ", not a literal [...] or p[...]: " + kNotKnown);
-    program.literals.push_back(
-        read_literal(program.text, *a[0].value, LineAt{source, a[0].line, a[0].start}, a[0].end, ref.name));
-    return literal_of[ref.name] = program.literals.size() - 1;
+    return {&*a[0].value, LineAt{source, a[0].line, a[0].start}, a[0].end};
   };
+  const auto read = [&](const Located& l, const Ref& ref, const std::string& what) {
+    return read_literal(program.text, *l.ref, l.line, l.end, ref.literal ? what : ref.name);
+  };
+  // The literal's column in its line, for messages about its values.
+  const auto column_of = [&](const UrLiteral& literal) {
+    const std::size_t bracket = literal.begin - 1, newline = program.text.rfind('\n', bracket);
+    return bracket - (newline == std::string::npos ? 0 : newline + 1);
+  };
+  const auto pose_or_fail = [&](const UrLiteral& literal, const std::string& what) {
+    const LineAt at{source, literal.line, 0};
+    if (!literal.pose || literal.numbers.size() != 6)
+      at.fail(column_of(literal), what + ": a pose p[x, y, z, rx, ry, rz] has 6 values, this one " +
+                                      (literal.pose ? std::to_string(literal.numbers.size()) : "is a list [...]"));
+    const std::optional<model::Transform> pose = pose_of(literal.numbers);
+    if (!pose)
+      at.fail(column_of(literal),
+              what + ": the rotation vector's angle is " +
+                  model::shortest_number_text(
+                      Eigen::Vector3d(literal.numbers[3], literal.numbers[4], literal.numbers[5]).stableNorm()) +
+                  " rad, more than a turn: degrees given as radians?");
+    return *pose;
+  };
+  std::map<std::string, std::size_t> literal_of;  // a variable's literal in program.literals
+  // The literal a reference names, in program.literals (a variable's once).
+  const auto resolve = [&](const Site& site, const Ref& ref, const std::string& what) -> std::size_t {
+    if (!ref.literal)
+      if (const auto it = literal_of.find(ref.name); it != literal_of.end()) return it->second;
+    program.literals.push_back(read(locate(site, ref, what), ref, what));
+    if (!ref.literal) literal_of[ref.name] = program.literals.size() - 1;
+    return program.literals.size() - 1;
+  };
+  std::map<std::size_t, std::optional<model::Transform>> frame_of;  // the frame a literal's pose is in
   for (const Site& site : sites) {
     UrMotion m;
     m.call = site.call;
@@ -367,27 +424,33 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
     const std::string what = site.target.literal ? site.call : site.target.name;
     m.literal = resolve(site, site.target, site.call);
     const UrLiteral& target = program.literals[m.literal];
-    const LineAt at{source, target.line, 0};
-    const std::size_t bracket = target.begin - 1, newline = program.text.rfind('\n', bracket);
-    const std::size_t column = bracket - (newline == std::string::npos ? 0 : newline + 1);  // the '[' in its line
     m.target.cartesian = m.target.orientation = target.pose;
-    const std::vector<double>& values = target.numbers;
-    if (target.pose && values.size() != 6)
-      at.fail(column, what + ": a pose p[x, y, z, rx, ry, rz] has 6 values, this one " + std::to_string(values.size()));
-    if (!target.pose && static_cast<int>(values.size()) != joint_count)
-      at.fail(column, what + ": " + std::to_string(values.size()) + " joint values, the model has " +
-                          std::to_string(joint_count) + " joints");
-    if (target.pose) {
-      m.target.pose.translation = {values[0], values[1], values[2]};
-      const Eigen::Vector3d r(values[3], values[4], values[5]);
-      const double angle = r.stableNorm();  // norm() squares: 1e300 overflowed to a NaN rotation
-      if (!(angle <= 2 * std::numbers::pi))
-        at.fail(column, what + ": the rotation vector's angle is " + model::shortest_number_text(angle) +
-                            " rad, more than a turn: degrees given as radians?");
-      if (angle > 0.0) m.target.pose.rotation = Eigen::AngleAxisd(angle, r / angle).toRotationMatrix();
+    if (target.pose || site.frame) {
+      m.target.pose = pose_or_fail(target, what);
+    } else if (static_cast<int>(target.numbers.size()) != joint_count) {
+      LineAt{source, target.line, 0}.fail(column_of(target), what + ": " + std::to_string(target.numbers.size()) +
+                                                                 " joint values, the model has " +
+                                                                 std::to_string(joint_count) + " joints");
     } else {
-      m.target.q = values;
+      m.target.q = target.numbers;
     }
+    if (site.frame) {
+      const std::string frame_what = site.frame->literal ? "pose_trans" : site.frame->name;
+      m.base_T_frame =
+          pose_or_fail(read(locate(site, *site.frame, "pose_trans"), *site.frame, "pose_trans"), frame_what);
+      m.target.pose = *m.base_T_frame * m.target.pose;
+    }
+    // A variable's pose written back in one frame: every motion naming it must see it in that one.
+    const auto [first, inserted] = frame_of.emplace(m.literal, m.base_T_frame);
+    if (!inserted && first->second.has_value() != m.base_T_frame.has_value())
+      site.line.fail(site.target.at, what +
+                                         " is a target in the robot's base frame and in a pose_trans frame: "
+                                         "one corrected value cannot serve both");
+    if (!inserted && first->second &&
+        ((first->second->translation - m.base_T_frame->translation).norm() > 0.0 ||
+         (first->second->rotation - m.base_T_frame->rotation).norm() > 0.0))
+      site.line.fail(site.target.at,
+                     what + " is a target in two pose_trans frames: one corrected value cannot serve both");
     if (site.seed) {
       m.seed = resolve(site, *site.seed, "qnear");
       const UrLiteral& seed = program.literals[*m.seed];
@@ -414,15 +477,7 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
           literal = read_literal(program.text, *a.value, LineAt{source, a.line, a.start}, a.end, a.name);
         }
       }
-      if (!literal || !literal->pose || literal->numbers.size() != 6) continue;
-      const std::vector<double>& v = literal->numbers;
-      const Eigen::Vector3d r(v[3], v[4], v[5]);
-      const double angle = r.stableNorm();
-      if (!(angle <= 2 * std::numbers::pi)) continue;
-      model::Transform t;
-      t.translation = {v[0], v[1], v[2]};
-      if (angle > 0.0) t.rotation = Eigen::AngleAxisd(angle, r / angle).toRotationMatrix();
-      tcp.flange_T_tcp = t;
+      if (literal && literal->pose && literal->numbers.size() == 6) tcp.flange_T_tcp = pose_of(literal->numbers);
     } catch (const model::InputError&) {
       // a value that is no number: a TCP not known before the program runs
     }
@@ -471,7 +526,9 @@ std::vector<std::vector<double>> urscript_values(const UrProgram& program, const
       values = results[i].solution.q;
       continue;
     }
-    const model::Transform& c = results[i].command;
+    const model::Transform c = program.motions[i].base_T_frame
+                                   ? program.motions[i].base_T_frame->inverse() * results[i].command
+                                   : results[i].command;
     const Eigen::AngleAxisd r{Eigen::Matrix3d(c.rotation)};
     const Eigen::Vector3d v = r.angle() * r.axis();
     values = std::vector<double>{c.translation.x(), c.translation.y(), c.translation.z(), v.x(), v.y(), v.z()};

@@ -9,6 +9,10 @@
 //   - a variable the program assigns a literal once and nowhere else (`global Waypoint_1_p=p[...]`,
 //     as PolyScope writes its waypoints; `local` or neither too): that literal is the target, and
 //     the one rewritten, so every motion naming the variable moves to the corrected target;
+//   - pose_trans(FRAME, POSE) (offline programs' targets in a part's frame: Fusion's and RoboDK's
+//     posts), FRAME and POSE each a pose literal or a variable as above: the target FRAME * POSE,
+//     POSE rewritten (FRAME * POSE' the pose to command), FRAME kept; a variable's pose named in
+//     two frames (or in one and in the base frame) is refused, as one value cannot serve both;
 //   - get_inverse_kin(TARGET, qnear=SEED) (PolyScope's MoveJ; SEED also as the second positional
 //     argument, other arguments but tcp= ignored), TARGET a pose literal or variable as above and
 //     SEED a joint literal or variable: a Cartesian target whose seed (the controller's branch,
@@ -25,7 +29,7 @@
 // length is not the model's joint count, a pose without six values, a seed that is a pose, a value
 // that is not a plain finite number (d2r(90), a variable inside the list), a pose's rotation
 // vector longer than a turn (2 pi rad: degrees, most likely), more than kMaxTargets motions, a
-// motion whose target is any other expression (pose_trans(...), a function's parameter): a target
+// motion whose target is any other expression (pose_add(...), a function's parameter): a target
 // left uncorrected would be silent. A literal assigned to a variable no motion names is not read.
 //
 // Written: the program's bytes unchanged but for each target value's own bytes, which become the
@@ -62,6 +66,8 @@ struct UrMotion {
   Target target;                    // line (the motion's), cartesian, q (joints, or the seed) or pose
   std::size_t literal = 0;          // program.literals index of the target's values
   std::optional<std::size_t> seed;  // get_inverse_kin's qnear: program.literals index
+  // pose_trans(FRAME, POSE)'s frame: target.pose is FRAME * POSE, and POSE is what is rewritten.
+  std::optional<model::Transform> base_T_frame;
 };
 
 // A set_tcp( call: the TCP the program's poses are of from there on.

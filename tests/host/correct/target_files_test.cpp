@@ -92,7 +92,7 @@ TEST_CASE("URScript: refused targets name file:line:column") {
   };
   CHECK(refused("def p():\n  movej(home_q, a=1.4)\nend\n")
             .find("p.script:2:9: movej's target home_q is not assigned in this program") == 0);
-  CHECK(refused("def p():\n  movel(pose_trans(base, p[0, 0, 1, 0, 0, 0]))\nend\n")
+  CHECK(refused("def p():\n  movel(pose_add(base, p[0, 0, 1, 0, 0, 0]))\nend\n")
             .find("p.script:2:9: movel's target is not a literal [...] or p[...], a variable assigned one") == 0);
   CHECK(refused("  movej([1, 2, 3])\n").find("p.script:1:9: movej: 3 joint values, the model has 6 joints") == 0);
   CHECK(refused("  movel(p[1, 2, 3, 0, 0])\n").find("p.script:1:10: movel: a pose") == 0);
@@ -346,6 +346,76 @@ TEST_CASE("URScript as PolyScope writes it: waypoint variables and get_inverse_k
   CHECK(circle.motions[1].target.line == 2);
   CHECK(refused("movec(" + p + ")\n").find("p.script:1:") == 0);
   CHECK(refused("movec(" + p + ")\n").find("movec takes a via point and an end") != std::string::npos);
+}
+
+TEST_CASE("URScript from offline programming: pose_trans(FRAME, POSE) corrected in its frame") {
+  const model::RobotModel start = robot("ur10.yaml");
+  model::RobotModel calibrated = start;
+  calibrated.joints[1].parameters.a_m += 2e-3;
+  calibrated.joints[3].offset += 1e-3;
+  model::RobotModel arm = start;
+  arm.base_T_frame0 = model::Transform{};
+  const std::vector<double> a = {0.1, -1.2, 1.4, -1.6, -1.5, 0.3};
+  const auto text = [](const model::Transform& t) {
+    const Eigen::AngleAxisd r{Eigen::Matrix3d(t.rotation)};
+    const Eigen::Vector3d v = r.angle() * r.axis();
+    std::string s;
+    for (double x : {t.translation.x(), t.translation.y(), t.translation.z(), v.x(), v.y(), v.z()})
+      s += (s.empty() ? "" : ", ") + model::shortest_number_text(x);
+    return "p[" + s + "]";
+  };
+  model::Transform frame;  // a part's frame, as a CAM post writes it
+  frame.translation = {-0.3, 0.2, 0.1};
+  frame.rotation = Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const model::Transform goal = model::forward_kinematics(arm, a), local = frame.inverse() * goal;
+  const std::string program = "def cam():\n  global Ref_frame = " + text(frame) + "\n  movel(pose_trans(Ref_frame," +
+                              text(local) + "),a=1.2,v=0.1,r=0.001)\nend\n";
+  const correct::UrProgram parsed = correct::parse_urscript(program, "cam.script", 6);
+  REQUIRE(parsed.motions.size() == 1);
+  REQUIRE(parsed.literals.size() == 1);  // the pose alone: the frame is kept
+  const correct::UrMotion& m = parsed.motions[0];
+  REQUIRE(m.base_T_frame);
+  CHECK((m.target.pose.translation - goal.translation).norm() < 1e-12);
+  CHECK((m.target.pose.rotation - goal.rotation).norm() < 1e-12);
+
+  correct::TargetCorrector corrector(start, calibrated, correct::TargetFrame::base, std::nullopt);
+  const std::vector<correct::TargetResult> results = corrector.correct({m.target}, a, "cam.script");
+  REQUIRE(results[0].solution.outcome == correct::Outcome::reached);
+  const std::string written = correct::write_urscript(parsed, correct::urscript_values(parsed, results));
+  const std::vector<std::string> before = lines(program), after = lines(written);
+  CHECK(after[1] == before[1]);  // the frame kept
+  CHECK(after[2] != before[2]);
+  CHECK(after[2].find("  movel(pose_trans(Ref_frame,p[") == 0);
+  CHECK(after[2].find("]),a=1.2,v=0.1,r=0.001)") != std::string::npos);
+  // Frame * the written pose is the pose to command.
+  const correct::UrProgram back = correct::parse_urscript(written, "back.script", 6);
+  CHECK((back.motions[0].target.pose.translation - results[0].command.translation).norm() < 1e-12);
+  CHECK((back.motions[0].target.pose.rotation - results[0].command.rotation).norm() < 1e-12);
+
+  const auto refused = [&](const std::string& body) {
+    try {
+      correct::parse_urscript(body, "p.script", 6);
+    } catch (const model::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  const std::string f = text(frame), l = text(local);
+  CHECK(refused("movel(pose_trans(" + f + "," + l + "))\n") == "accepted");
+  CHECK(refused("movel(pose_trans(r," + l + "))\n").find("p.script:1:18: pose_trans's target r is not assigned") == 0);
+  CHECK(refused("r = " + f + "\nr = " + f + "\nmovel(pose_trans(r," + l + "))\n")
+            .find("p.script:3:18: pose_trans's target r is assigned 2 times (lines 1, 2)") == 0);
+  CHECK(refused("movel(pose_trans(get_actual_tcp_pose()," + l + "))\n")
+            .find("p.script:1:18: pose_trans's frame is not a literal p[...] or a variable assigned one") == 0);
+  CHECK(refused("movel(pose_trans(" + f + "," + l + "," + l + "))\n").find("pose_trans takes a frame and a pose") !=
+        std::string::npos);
+  CHECK(refused("movel(pose_trans(" + f + ",[1, 2, 3, 4, 5, 6]))\n").find("this one is a list [...]") !=
+        std::string::npos);
+  CHECK(refused("w = " + l + "\nmovel(pose_trans(" + f + ", w))\nmovel(w)\n")
+            .find("p.script:3:7: w is a target in the robot's base frame and in a pose_trans frame") == 0);
+  CHECK(refused("w = " + l + "\nmovel(pose_trans(" + f + ", w))\nmovel(pose_trans(p[0, 0, 0, 0, 0, 0], w))\n")
+            .find("w is a target in two pose_trans frames") != std::string::npos);
+  CHECK(refused("w = " + l + "\nmovel(pose_trans(" + f + ", w))\nmovep(pose_trans(" + f + ", w))\n") == "accepted");
 }
 
 TEST_CASE("URScript from a file: a byte-order mark is kept, the rest read as without it") {
