@@ -42,11 +42,43 @@ std::vector<std::string> lines(const std::string& text) {
   return out;
 }
 
-std::string numbers(const std::vector<double>& v) {
+// Numbers as a CSV row ("," between) or a URScript list (", " between).
+std::string numbers(const std::vector<double>& v, const char* between = ",") {
   std::string s;
-  for (double x : v) s += (s.empty() ? "" : ",") + model::shortest_number_text(x);
+  for (double x : v) s += (s.empty() ? "" : between) + model::shortest_number_text(x);
   return s;
 }
+
+std::string list(const std::vector<double>& v) { return numbers(v, ", "); }
+
+// A pose as URScript writes it: x, y, z and the rotation vector.
+std::vector<double> rotvec(const model::Transform& t) {
+  const Eigen::AngleAxisd r{Eigen::Matrix3d(t.rotation)};
+  const Eigen::Vector3d v = r.angle() * r.axis();
+  return {t.translation.x(), t.translation.y(), t.translation.z(), v.x(), v.y(), v.z()};
+}
+
+std::string urscript_refusal(const std::string& text) {
+  try {
+    correct::parse_urscript(text, "p.script", 6);
+  } catch (const model::InputError& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
+// The UR10 the URScript tests correct for: its nominal (ur10.yaml), a calibration of it, and the
+// nominal arm in frame 0, where a program's poses are.
+struct Ur10 {
+  model::RobotModel start = robot("ur10.yaml"), calibrated = start, arm = start;
+  Ur10() {
+    calibrated.joints[1].parameters.a_m += 2e-3;
+    calibrated.joints[2].offset += 1.5e-3;
+    calibrated.joints[4].parameters.alpha_rad -= 1e-3;
+    calibrated.flange_T_tool.translation.z() += 1e-3;
+    arm.base_T_frame0 = model::Transform{};
+  }
+};
 
 }  // namespace
 
@@ -82,14 +114,7 @@ TEST_CASE("target tables: joint and Cartesian targets read; bad tables refused w
 }
 
 TEST_CASE("URScript: refused targets name file:line:column") {
-  const auto refused = [](const std::string& text) {
-    try {
-      correct::parse_urscript(text, "p.script", 6);
-    } catch (const model::InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("accepted");
-  };
+  const auto refused = urscript_refusal;
   CHECK(refused("def p():\n  movej(home_q, a=1.4)\nend\n")
             .find("p.script:2:9: movej's target home_q is not assigned in this program") == 0);
   CHECK(refused("def p():\n  movel(pose_add(base, p[0, 0, 1, 0, 0, 0]))\nend\n")
@@ -135,32 +160,16 @@ TEST_CASE("URScript: refused targets name file:line:column") {
 }
 
 TEST_CASE("URScript round trip: other lines byte for byte, CRLF kept, targets equal to the CSV path's") {
-  const model::RobotModel start = robot("ur10.yaml");
-  model::RobotModel calibrated = start;
-  calibrated.joints[1].parameters.a_m += 2e-3;
-  calibrated.joints[2].offset += 1.5e-3;
-  calibrated.joints[4].parameters.alpha_rad -= 1e-3;
-  calibrated.flange_T_tool.translation.z() += 1e-3;
+  const Ur10 ur10;
+  const model::RobotModel &start = ur10.start, &calibrated = ur10.calibrated, &arm = ur10.arm;
   const std::vector<double> a = {0.1, -1.2, 1.4, -1.6, -1.5, 0.3}, b = {0.4, -1.0, 1.2, -1.8, -1.4, 0.1},
                             c = {0.3, -1.1, 1.3, -1.7, -1.5, 0.2};
-  model::RobotModel arm = start;
-  arm.base_T_frame0 = model::Transform{};
   const auto pose_near = [&](const std::vector<double>& q, double dz) {
     model::Transform t = model::forward_kinematics(arm, q);
     t.translation.z() += dz;
     return t;
   };
   const model::Transform p1 = pose_near(a, 0.01), p2 = pose_near(b, -0.02);
-  const auto rotvec = [](const model::Transform& t) {
-    const Eigen::AngleAxisd r{Eigen::Matrix3d(t.rotation)};
-    return std::vector<double>{t.translation.x(),        t.translation.y(),        t.translation.z(),
-                               r.angle() * r.axis().x(), r.angle() * r.axis().y(), r.angle() * r.axis().z()};
-  };
-  const auto list = [](const std::vector<double>& v) {
-    std::string s;
-    for (double x : v) s += (s.empty() ? "" : ", ") + model::shortest_number_text(x);
-    return s;
-  };
   const std::string program =
       "def pick():\r\n  # movej([0, 0, 0, 0, 0, 0]) stays a comment\r\n  set_tcp(p[0, 0, 0.1, 0, 0, 0])\r\n"
       "  movej([" +
@@ -228,24 +237,9 @@ TEST_CASE("URScript round trip: other lines byte for byte, CRLF kept, targets eq
 }
 
 TEST_CASE("URScript as PolyScope writes it: waypoint variables and get_inverse_kin corrected where they are assigned") {
-  const model::RobotModel start = robot("ur10.yaml");
-  model::RobotModel calibrated = start;
-  calibrated.joints[1].parameters.a_m += 2e-3;
-  calibrated.joints[3].offset += 1e-3;
-  model::RobotModel arm = start;
-  arm.base_T_frame0 = model::Transform{};
+  const Ur10 ur10;
   const std::vector<double> a = {0.1, -1.2, 1.4, -1.6, -1.5, 0.3}, b = {0.4, -1.0, 1.2, -1.8, -1.4, 0.1};
-  const auto pose = [&](const std::vector<double>& q) {
-    const model::Transform t = model::forward_kinematics(arm, q);
-    const Eigen::AngleAxisd r{Eigen::Matrix3d(t.rotation)};
-    const Eigen::Vector3d v = r.angle() * r.axis();
-    return std::vector<double>{t.translation.x(), t.translation.y(), t.translation.z(), v.x(), v.y(), v.z()};
-  };
-  const auto list = [](const std::vector<double>& v) {
-    std::string s;
-    for (double x : v) s += (s.empty() ? "" : ", ") + model::shortest_number_text(x);
-    return s;
-  };
+  const auto pose = [&](const std::vector<double>& q) { return rotvec(model::forward_kinematics(ur10.arm, q)); };
   // A subprogram above the globals names a waypoint assigned below it; an unused variable's
   // literal is not read; a string and a comment name variables too.
   const std::string program =
@@ -271,9 +265,10 @@ TEST_CASE("URScript as PolyScope writes it: waypoint variables and get_inverse_k
   CHECK(!parsed.motions[2].target.cartesian);
   CHECK(parsed.motions[2].target.q == b);
   CHECK(parsed.motions[0].target.line == 3);
-  CHECK((parsed.motions[0].target.pose.translation - model::forward_kinematics(arm, b).translation).norm() < 1e-12);
+  CHECK((parsed.motions[0].target.pose.translation - model::forward_kinematics(ur10.arm, b).translation).norm() <
+        1e-12);
 
-  correct::TargetCorrector corrector(start, calibrated, correct::TargetFrame::base, std::nullopt);
+  correct::TargetCorrector corrector(ur10.start, ur10.calibrated, correct::TargetFrame::base, std::nullopt);
   std::vector<correct::Target> targets;
   for (const correct::UrMotion& m : parsed.motions) targets.push_back(m.target);
   const std::vector<correct::TargetResult> results = corrector.correct(targets, b, "cell.script");
@@ -293,14 +288,7 @@ TEST_CASE("URScript as PolyScope writes it: waypoint variables and get_inverse_k
   CHECK(back.motions[2].target.q == results[2].solution.q);
   CHECK(results[1].solution.q != a);
 
-  const auto refused = [&](const std::string& text) {
-    try {
-      correct::parse_urscript(text, "p.script", 6);
-    } catch (const model::InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("accepted");
-  };
+  const auto refused = urscript_refusal;
   const std::string q = "[" + list(a) + "]", p = "p[" + list(pose(a)) + "]";
   CHECK(refused("w = " + q + "\nmovej(w)\nw = " + q + "\n")
             .find("p.script:2:7: movej's target w is assigned 2 times (lines 1, 3)") == 0);
@@ -349,25 +337,13 @@ TEST_CASE("URScript as PolyScope writes it: waypoint variables and get_inverse_k
 }
 
 TEST_CASE("URScript from offline programming: pose_trans(FRAME, POSE) corrected in its frame") {
-  const model::RobotModel start = robot("ur10.yaml");
-  model::RobotModel calibrated = start;
-  calibrated.joints[1].parameters.a_m += 2e-3;
-  calibrated.joints[3].offset += 1e-3;
-  model::RobotModel arm = start;
-  arm.base_T_frame0 = model::Transform{};
+  const Ur10 ur10;
   const std::vector<double> a = {0.1, -1.2, 1.4, -1.6, -1.5, 0.3};
-  const auto text = [](const model::Transform& t) {
-    const Eigen::AngleAxisd r{Eigen::Matrix3d(t.rotation)};
-    const Eigen::Vector3d v = r.angle() * r.axis();
-    std::string s;
-    for (double x : {t.translation.x(), t.translation.y(), t.translation.z(), v.x(), v.y(), v.z()})
-      s += (s.empty() ? "" : ", ") + model::shortest_number_text(x);
-    return "p[" + s + "]";
-  };
+  const auto text = [](const model::Transform& t) { return "p[" + list(rotvec(t)) + "]"; };
   model::Transform frame;  // a part's frame, as a CAM post writes it
   frame.translation = {-0.3, 0.2, 0.1};
   frame.rotation = Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  const model::Transform goal = model::forward_kinematics(arm, a), local = frame.inverse() * goal;
+  const model::Transform goal = model::forward_kinematics(ur10.arm, a), local = frame.inverse() * goal;
   const std::string program = "def cam():\n  global Ref_frame = " + text(frame) + "\n  movel(pose_trans(Ref_frame," +
                               text(local) + "),a=1.2,v=0.1,r=0.001)\nend\n";
   const correct::UrProgram parsed = correct::parse_urscript(program, "cam.script", 6);
@@ -378,7 +354,7 @@ TEST_CASE("URScript from offline programming: pose_trans(FRAME, POSE) corrected 
   CHECK((m.target.pose.translation - goal.translation).norm() < 1e-12);
   CHECK((m.target.pose.rotation - goal.rotation).norm() < 1e-12);
 
-  correct::TargetCorrector corrector(start, calibrated, correct::TargetFrame::base, std::nullopt);
+  correct::TargetCorrector corrector(ur10.start, ur10.calibrated, correct::TargetFrame::base, std::nullopt);
   const std::vector<correct::TargetResult> results = corrector.correct({m.target}, a, "cam.script");
   REQUIRE(results[0].solution.outcome == correct::Outcome::reached);
   const std::string written = correct::write_urscript(parsed, correct::urscript_values(parsed, results));
@@ -392,14 +368,7 @@ TEST_CASE("URScript from offline programming: pose_trans(FRAME, POSE) corrected 
   CHECK((back.motions[0].target.pose.translation - results[0].command.translation).norm() < 1e-12);
   CHECK((back.motions[0].target.pose.rotation - results[0].command.rotation).norm() < 1e-12);
 
-  const auto refused = [&](const std::string& body) {
-    try {
-      correct::parse_urscript(body, "p.script", 6);
-    } catch (const model::InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("accepted");
-  };
+  const auto refused = urscript_refusal;
   const std::string f = text(frame), l = text(local);
   CHECK(refused("movel(pose_trans(" + f + "," + l + "))\n") == "accepted");
   CHECK(refused("movel(pose_trans(r," + l + "))\n").find("p.script:1:18: pose_trans's target r is not assigned") == 0);
