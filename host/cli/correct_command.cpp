@@ -132,7 +132,7 @@ std::string aim_program(const CorrectArgs& a, const correct::UrProgram& program,
     if (differs) {
       std::cerr << program.source << ':' << set->line << ": warning: the program sets its TCP at " << mm(t.translation)
                 << " from the flange, not the point correct aims (" << aimed
-                << "): if its poses are of that TCP, give --tcp";
+                << "): if its targets are meant for that TCP, give --tcp";
       for (std::size_t k = 0; k < with.tcp.size(); ++k)
         std::cerr << (k == 0 ? " " : ",") << model::shortest_number_text(with.tcp[k]);
       std::cerr << '\n';
