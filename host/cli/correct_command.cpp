@@ -64,6 +64,17 @@ std::string aim_at_tcp(const CorrectArgs& a, model::RobotModel& nominal, model::
   return out.str();
 }
 
+// The motions a program leaves as written (urscript.hpp): named, at most 5, with the count.
+void warn_left(const correct::UrProgram& program) {
+  if (program.left.empty()) return;
+  std::cerr << "kincal correct: warning: " << program.left.size() << " of "
+            << program.left.size() + program.motions.size()
+            << " motions left as written: their targets are computed when the program runs, so no correction "
+               "is computed for them (write a target out to have it corrected)\n";
+  for (std::size_t k = 0; k < program.left.size() && k < 5; ++k) std::cerr << "  " << program.left[k].why << '\n';
+  if (program.left.size() > 5) std::cerr << "  ... and " << program.left.size() - 5 << " more\n";
+}
+
 // A program's pose and its qnear (PolyScope's Waypoint_1_p and Waypoint_1_q) are one waypoint: the
 // controller's pose of the TCP at those readings. The distance of each such pose from where the
 // nominal model puts the TCP at its qnear readings (the program's line, m).
@@ -208,8 +219,14 @@ int run_correct(const CorrectArgs& a) {
       program = correct::read_urscript(a.urscript, n);
       source = a.urscript;
       for (const correct::UrMotion& m : program.motions) targets.push_back(m.target);
+      if (targets.empty() && !program.left.empty())
+        throw model::InputError(a.urscript +
+                                ": no motion's target is known before the program runs, nothing to "
+                                "correct: " +
+                                program.left.front().why);
       if (targets.empty())
         throw model::InputError(a.urscript + ": no movej, movel, movep, movec, servoj or servoc line to correct");
+      warn_left(program);
     } else {
       source = a.joints.empty() ? a.poses : a.joints;
       table = correct::read_target_table(source, n, correct::kMaxTargets);

@@ -87,6 +87,8 @@ int run_import(const ImportArgs& a) {
                    "orientation noise)";
     if (o.id) std::cout << "; " << r.distinct_ids << " distinct ids in column '" << a.id << "' (kept as id)";
     if (r.header_line > 1) std::cout << "; the header on line " << r.header_line << " (the lines before it skipped)";
+    if (r.units_line > 0)
+      std::cout << "; the units row on line " << r.units_line << " agrees with the units given (skipped)";
     std::cout << "\nwrote " << a.out << '\n';
     if (!r.skipped.empty()) {
       constexpr std::size_t kNamed = 10;  // an export of 10,000 lost readings is not listed whole

@@ -87,15 +87,26 @@ Call find_call(std::string_view code, const char* const (&names)[N]) {
   return found;
 }
 
+// A motion target's value is not known before the program runs (UrProgram::left).
+struct Unknown : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 // Where a line stands in the text, for messages: "SOURCE:LINE:COLUMN: what".
 struct LineAt {
   const std::string& source;
   int number = 0;
   std::size_t start = 0;  // the line's first byte in the text
 
-  [[noreturn]] void fail(std::size_t offset, const std::string& what) const {
-    throw model::InputError(source + ":" + std::to_string(number) + ":" + std::to_string(offset + 1) + ": " + what);
+  std::string at(std::size_t offset) const {
+    return source + ":" + std::to_string(number) + ":" + std::to_string(offset + 1) + ": ";
   }
+  // Malformed: the program is refused.
+  [[noreturn]] void fail(std::size_t offset, const std::string& what) const {
+    throw model::InputError(at(offset) + what);
+  }
+  // A target whose value is not known before the program runs: its motion is left as written.
+  [[noreturn]] void unknown(std::size_t offset, const std::string& what) const { throw Unknown(at(offset) + what); }
 };
 
 // A target's values in a line's code: a literal's brackets, or a variable's name.
@@ -126,7 +137,7 @@ std::optional<Ref> read_ref(std::string_view code, std::size_t at, const LineAt*
     r.close = code.find(']', open);
     if (r.close == std::string_view::npos) {
       if (line == nullptr) return std::nullopt;
-      line->fail(open, what + ": no ']' closes the target on this line");
+      line->unknown(open, what + ": no ']' closes the target on this line");
     }
     r.literal = true;
     r.open = open;
@@ -215,29 +226,29 @@ Site read_target(const std::string& call, std::string_view code, std::size_t at,
   if (in_frame) {
     site.frame = read_ref(code, at, &line, "pose_trans");
     if (!site.frame || site.frame->after >= code.size() || code[site.frame->after] != ',')
-      line.fail(
+      line.unknown(
           site.frame ? site.frame->after : at,
           "pose_trans's frame is not a literal p[...] or a variable assigned one, followed by the pose: " + kNotKnown);
     at = skip_blanks(code, site.frame->after + 1);
   }
   const std::optional<Ref> target = read_ref(code, at, &line, target_what);
   if (!target)
-    line.fail(at, target_what +
-                      "'s target is not a literal [...] or p[...], a variable assigned one, or get_inverse_kin(...) "
-                      "or pose_trans(...) of them: " +
-                      kNotKnown);
+    line.unknown(at, target_what +
+                         "'s target is not a literal [...] or p[...], a variable assigned one, or get_inverse_kin(...) "
+                         "or pose_trans(...) of them: " +
+                         kNotKnown);
   site.target = *target;
   after = target->after;
   const auto ends_argument = [&](std::size_t offset, const std::string& what) {
     if (offset >= code.size() || (code[offset] != ',' && code[offset] != ')'))
-      line.fail(offset, what +
-                            "'s target goes on past its literal or name (an expression such as [...] + [...], or a "
-                            "call continued on the next line): " +
-                            kNotKnown);
+      line.unknown(offset, what +
+                               "'s target goes on past its literal or name (an expression such as [...] + [...], or a "
+                               "call continued on the next line): " +
+                               kNotKnown);
   };
   ends_argument(after, target_what);
   if (in_frame) {
-    if (code[after] != ')') line.fail(after, "pose_trans takes a frame and a pose, nothing more");
+    if (code[after] != ')') line.unknown(after, "pose_trans takes a frame and a pose, nothing more");
     after = skip_blanks(code, after + 1);
     ends_argument(after, call);
   }
@@ -253,13 +264,13 @@ Site read_target(const std::string& call, std::string_view code, std::size_t at,
       --positional;
     }
     if (key == "tcp")
-      line.fail(value,
-                "get_inverse_kin with a tcp of its own: kincal corrects the targets of one TCP (--tcp); give the "
-                "pose of the program's TCP instead");
+      line.unknown(value,
+                   "get_inverse_kin with a tcp of its own: kincal corrects the targets of one TCP (--tcp); give the "
+                   "pose of the program's TCP instead");
     if (key == "qnear") {
       site.seed = read_ref(code, value, &line, "qnear");
       if (!site.seed)
-        line.fail(value, "get_inverse_kin's qnear is not a literal [...] or a variable assigned one: " + kNotKnown);
+        line.unknown(value, "get_inverse_kin's qnear is not a literal [...] or a variable assigned one: " + kNotKnown);
       after = site.seed->after;
       ends_argument(after, "qnear");
     } else {
@@ -267,7 +278,7 @@ Site read_target(const std::string& call, std::string_view code, std::size_t at,
     }
     if (after >= code.size()) break;
   }
-  if (after >= code.size() || code[after] != ')') line.fail(after, "get_inverse_kin: no ')' closes it on this line");
+  if (after >= code.size() || code[after] != ')') line.unknown(after, "get_inverse_kin: no ')' closes it on this line");
   after = skip_blanks(code, after + 1);
   ends_argument(after, call);
   return site;
@@ -352,12 +363,19 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
     const Call call = find_call(code.text, kCalls);
     // movec's via point and its end are two targets, read in order.
     std::size_t after = call.open - 1;
-    for (int k = 0; call.at != std::string_view::npos && k < (call.name == "movec" ? 2 : 1); ++k) {
-      if (sites.size() == max_motions)
-        line.fail(call.at, "more than " + std::to_string(max_motions) + " motions, the most kincal correct takes");
-      if (code.text[after] != (k == 0 ? '(' : ','))
-        line.fail(after, "movec takes a via point and an end: [...] or p[...] each, or a variable assigned one");
-      sites.push_back(read_target(call.name, code.text, skip_blanks(code.text, after + 1), line, end, after));
+    // movec's via point and its end are two targets, read in order; one not known leaves both.
+    std::vector<Site> read;
+    try {
+      for (int k = 0; call.at != std::string_view::npos && k < (call.name == "movec" ? 2 : 1); ++k) {
+        if (sites.size() + read.size() == max_motions)
+          line.fail(call.at, "more than " + std::to_string(max_motions) + " motions, the most kincal correct takes");
+        if (code.text[after] != (k == 0 ? '(' : ','))
+          line.fail(after, "movec takes a via point and an end: [...] or p[...] each, or a variable assigned one");
+        read.push_back(read_target(call.name, code.text, skip_blanks(code.text, after + 1), line, end, after));
+      }
+      for (Site& site : read) sites.push_back(std::move(site));
+    } catch (const Unknown& e) {
+      program.left.push_back({number, call.name, e.what()});
     }
     start = next;
   }
@@ -372,17 +390,17 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
     if (ref.literal) return {&ref, site.line, site.end};
     const auto it = assigned.find(ref.name);
     const std::string named = what + "'s target " + ref.name;
-    if (it == assigned.end()) site.line.fail(ref.at, named + " is not assigned in this program: " + kNotKnown);
+    if (it == assigned.end()) site.line.unknown(ref.at, named + " is not assigned in this program: " + kNotKnown);
     const std::vector<Assignment>& a = it->second;
     if (a.size() > 1) {
       std::string lines;
       for (std::size_t k = 0; k < a.size() && k < 5; ++k) lines += (k ? ", " : "") + std::to_string(a[k].line);
-      site.line.fail(ref.at, named + " is assigned " + std::to_string(a.size()) + " times (lines " + lines +
-                                 (a.size() > 5 ? ", ..." : "") + "): " + kNotKnown);
+      site.line.unknown(ref.at, named + " is assigned " + std::to_string(a.size()) + " times (lines " + lines +
+                                    (a.size() > 5 ? ", ..." : "") + "): " + kNotKnown);
     }
     if (!a[0].value)
-      site.line.fail(ref.at, named + " is assigned an expression on line " + std::to_string(a[0].line) +
-                                 ", not a literal [...] or p[...]: " + kNotKnown);
+      site.line.unknown(ref.at, named + " is assigned an expression on line " + std::to_string(a[0].line) +
+                                    ", not a literal [...] or p[...]: " + kNotKnown);
     return {&*a[0].value, LineAt{source, a[0].line, a[0].start}, a[0].end};
   };
   const auto read = [&](const Located& l, const Ref& ref, const std::string& what) {
@@ -417,7 +435,24 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
     return program.literals.size() - 1;
   };
   std::map<std::size_t, std::optional<model::Transform>> frame_of;  // the frame a literal's pose is in
-  for (const Site& site : sites) {
+  const auto locate_all = [&](const Site& site) {
+    locate(site, site.target, site.frame ? "pose_trans" : site.call);
+    if (site.frame) locate(site, *site.frame, "pose_trans");
+    if (site.seed) locate(site, *site.seed, "qnear");
+  };
+  std::size_t pair_end = 0;  // a movec's via point and end (consecutive sites) are left together
+  for (std::size_t i = 0; i < sites.size(); ++i) {
+    const Site& site = sites[i];
+    if (i >= pair_end) {
+      pair_end = i + (site.call == "movec" ? 2 : 1);
+      try {  // every value the motion names known before anything is taken from it
+        for (std::size_t k = i; k < pair_end && k < sites.size(); ++k) locate_all(sites[k]);
+      } catch (const Unknown& e) {
+        program.left.push_back({site.line.number, site.call, e.what()});
+        i = pair_end - 1;
+        continue;
+      }
+    }
     UrMotion m;
     m.call = site.call;
     m.target.line = site.line.number;
@@ -463,6 +498,8 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
     }
     program.motions.push_back(std::move(m));
   }
+  std::stable_sort(program.left.begin(), program.left.end(),
+                   [](const UrLeft& a, const UrLeft& b) { return a.line < b.line; });
   // The TCPs the program sets: a pose literal, or a variable assigned one once; else unknown.
   for (const SetTcp& set : set_tcps) {
     UrTcp& tcp = program.tcps.emplace_back();

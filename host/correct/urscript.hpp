@@ -11,26 +11,33 @@
 //     the one rewritten, so every motion naming the variable moves to the corrected target;
 //   - pose_trans(FRAME, POSE) (offline programs' targets in a part's frame: Fusion's and RoboDK's
 //     posts), FRAME and POSE each a pose literal or a variable as above: the target FRAME * POSE,
-//     POSE rewritten (FRAME * POSE' the pose to command), FRAME kept; a variable's pose named in
-//     two frames (or in one and in the base frame) is refused, as one value cannot serve both;
+//     POSE rewritten (FRAME * POSE' the pose to command), FRAME kept (a variable's pose named in
+//     two frames, or in one and in the base frame, is refused: one value cannot serve both);
 //   - get_inverse_kin(TARGET, qnear=SEED) (PolyScope's MoveJ; SEED also as the second positional
 //     argument, other arguments but tcp= ignored), TARGET a pose literal or variable as above and
 //     SEED a joint literal or variable: a Cartesian target whose seed (the controller's branch,
 //     the reference of the joint-change limit) is SEED, and SEED rewritten with the corrected
 //     readings unless a motion takes it as its own joint target;
 // followed by ',' or ')'; movec's second argument (its end; the first is its via point) too, a
-// target of its own. One call per line is read (the first). Refused (model::InputError
-// "FILE:LINE:COLUMN: what", at the motion, or at the assignment for what its literal holds): a
-// line longer than 64 KiB (no program has one: the file is something else), a string not closed
-// on its line, a target that goes on past its literal or name ([...] + [...], [...] * 2: the
-// program would move where no correction was computed), a variable assigned no literal in the
-// program, more than once, or an expression (its value is not known before the program runs; an
-// element assignment `q[0] = 1` counts), get_inverse_kin with a tcp of its own, a joint list whose
-// length is not the model's joint count, a pose without six values, a seed that is a pose, a value
-// that is not a plain finite number (d2r(90), a variable inside the list), a pose's rotation
-// vector longer than a turn (2 pi rad: degrees, most likely), more than kMaxTargets motions, a
-// motion whose target is any other expression (pose_add(...), a function's parameter): a target
-// left uncorrected would be silent. A literal assigned to a variable no motion names is not read.
+// target of its own. One call per line is read (the first).
+//
+// Left as written, each named in UrProgram::left ("FILE:LINE:COLUMN: what"; correct says so on
+// standard error): a motion whose target is computed when the program runs -- any other
+// expression (pose_add(...), get_actual_tcp_pose(), a function's parameter: a gripper URCap's
+// depth-compensating servoj), a target that goes on past its literal or name ([...] + [...]), a
+// variable assigned no literal in the program, more than once, or an expression (an element
+// assignment `q[0] = 1` counts), get_inverse_kin with a tcp of its own, a literal continued on the
+// next line; a movec with either target so is left whole. Its value is not known before the
+// program runs, so no correction is computed for it, and refusing the program would leave its
+// corrected motions to hand editing.
+//
+// Refused (model::InputError "FILE:LINE:COLUMN: what", at the motion, or at the assignment for
+// what its literal holds): a line longer than 64 KiB (no program has one: the file is something
+// else), a string not closed on its line, a joint list whose length is not the model's joint
+// count, a pose without six values, a seed that is a pose, a value that is not a plain finite
+// number (d2r(90), a variable inside the list), a pose's rotation vector longer than a turn (2 pi
+// rad: degrees, most likely), a variable's pose named in two frames, a movec with one argument,
+// more than kMaxTargets motions. A literal assigned to a variable no motion names is not read.
 //
 // Written: the program's bytes unchanged but for each target value's own bytes, which become the
 // new value (its shortest exact decimal; a value that did not change keeps its spelling). So the
@@ -76,12 +83,20 @@ struct UrTcp {
   std::optional<model::Transform> flange_T_tcp;  // a pose literal or a variable assigned one once; else unknown
 };
 
+// A motion left as written: its target is computed when the program runs.
+struct UrLeft {
+  int line = 0;
+  std::string call;
+  std::string why;  // "FILE:LINE:COLUMN: what"
+};
+
 struct UrProgram {
   std::string source;
   std::string text;
   std::vector<UrLiteral> literals;  // each once, however many motions name it
   std::vector<UrMotion> motions;
-  std::vector<UrTcp> tcps;  // every set_tcp, in the file's order (never refused: the poses are checked against them)
+  std::vector<UrLeft> left;  // in line order
+  std::vector<UrTcp> tcps;   // every set_tcp, in the file's order (never refused: the poses are checked against them)
 };
 
 // max_motions: the motion past it is refused as it is read (kMaxTargets for `correct`).

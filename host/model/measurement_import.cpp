@@ -9,6 +9,7 @@
 #include <numbers>
 #include <set>
 #include <sstream>
+#include <utility>
 
 #include "host/files/input_file.hpp"
 #include "host/model/csv_fields.hpp"
@@ -69,6 +70,26 @@ std::vector<std::string> measured_names(const ImportOptions& o) {
     if (*three) names.insert(names.end(), (*three)->begin(), (*three)->end());
   if (o.quaternion) names.insert(names.end(), o.quaternion->begin(), o.quaternion->end());
   return names;
+}
+
+// A unit word as exports write it under a header ("mm", "[deg]", "Millimeters", "°"): the unit's
+// name as the options spell it, or empty when it is none kincal knows.
+std::string unit_word(std::string field) {
+  std::transform(field.begin(), field.end(), field.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (field.size() >= 2 &&
+      ((field.front() == '[' && field.back() == ']') || (field.front() == '(' && field.back() == ')')))
+    field = trim_field(field.substr(1, field.size() - 2));
+  struct Word {
+    const char *unit, *word;
+  };
+  static constexpr Word kWords[] = {
+      {"m", "m"},         {"m", "meter"},       {"m", "meters"},       {"m", "metre"},       {"m", "metres"},
+      {"mm", "mm"},       {"mm", "millimeter"}, {"mm", "millimeters"}, {"mm", "millimetre"}, {"mm", "millimetres"},
+      {"rad", "rad"},     {"rad", "radian"},    {"rad", "radians"},    {"deg", "deg"},       {"deg", "degree"},
+      {"deg", "degrees"}, {"deg", "\xc2\xb0"}};
+  for (const Word& w : kWords)
+    if (field == w.word) return w.unit;
+  return {};
 }
 
 // Every header name the options give.
@@ -339,11 +360,63 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   std::vector<std::size_t> measured;
   for (const std::string& name : measured_names(o)) measured.push_back(t.column(name));
 
+  // The unit each named column holds, as the options say (a quaternion's is none).
+  std::map<std::size_t, std::pair<std::string, std::string>> unit_of;  // column: unit, option
+  const char* const length_name = o.position_unit == LengthUnit::mm ? "mm" : "m";
+  const char* const angle_name = o.angle_unit == AngleUnit::deg ? "deg" : "rad";
+  for (std::size_t j = 0; j < joint_columns.size(); ++j) {
+    static constexpr const char* kJointNames[] = {"rad", "deg", "m", "mm"};
+    unit_of[joint_columns[j]] = {kJointNames[static_cast<int>(o.joint_units[o.joint_units.size() == 1 ? 0 : j])],
+                                 "--joint-unit"};
+  }
+  for (const auto* three : {&position_std, &angles, &angle_std})
+    for (std::size_t k = 0; *three && k < 3; ++k)
+      unit_of[(**three)[k]] = three == &position_std
+                                  ? std::pair{std::string(length_name), std::string("--position-unit")}
+                                  : std::pair{std::string(angle_name), std::string("--angle-unit")};
+  for (std::size_t k = 0; k < 3; ++k) unit_of[position[k]] = {length_name, "--position-unit"};
+
   std::vector<double> position_stds, angle_stds;
   std::set<std::string> ids;
+  bool first_row = true;
   while (std::getline(in, line)) {
     ++number;
     if (trim_field(line, true).empty()) continue;
+    // A units row under the header (motion-capture and tracker exports: "mm", "deg"): no named
+    // column holds a number and one holds a unit word. Each unit it gives is held against the
+    // options: a file in mm imported as m is refused, naming both.
+    if (std::exchange(first_row, false)) {
+      const std::optional<std::vector<std::string>> fields = split_quoted_fields(line, result.separator);
+      const auto is_number = [](std::string f) {
+        std::replace(f.begin(), f.end(), ',', '.');
+        double v = 0.0;
+        const char* first = f.data() + (!f.empty() && f[0] == '+' ? 1 : 0);
+        const auto [end, ec] = std::from_chars(first, f.data() + f.size(), v);
+        return !f.empty() && ec == std::errc() && end == f.data() + f.size();
+      };
+      if (fields && fields->size() == t.names.size()) {
+        bool units = false, numbers = false;
+        for (const auto& [column, unit] : unit_of) {
+          const std::string cell = trim_field((*fields)[column]);
+          numbers = numbers || is_number(cell);
+          units = units || !unit_word(cell).empty();
+        }
+        if (units && !numbers) {
+          for (const auto& [column, unit] : unit_of) {
+            const std::string cell = trim_field((*fields)[column]);
+            const std::string word = unit_word(cell);
+            if (cell.empty() || word == unit.first) continue;
+            fail(source, number, column,
+                 "the units row under the header gives '" + files::excerpt(cell) + "' for column '" +
+                     files::excerpt(t.names[column]) + "', " + unit.second + " says " + unit.first +
+                     (word.empty() ? " (and '" + files::excerpt(cell) + "' is no unit kincal reads: m, mm, rad, deg)"
+                                   : ": give " + unit.second + " " + word + " if the file is in " + word));
+          }
+          result.units_line = number;
+          continue;
+        }
+      }
+    }
     if (result.data.rows.size() == kMaxRows) fail(source, number, 0, too_many_rows());
     const std::vector<std::string> fields = export_fields(line, result.separator, source, number);
     if (fields.size() != t.names.size())

@@ -35,6 +35,14 @@
 // (ImportResult counts the distinct ones: an export whose time stamps a spreadsheet rounded to one
 // value tells no row apart, and the dataset's line still does).
 //
+// A units row (motion-capture and tracker exports write one under the header: "mm", "[deg]",
+// "Millimeters", "°"): the first row after the header, when none of the named numeric columns
+// holds a number and one holds a unit word (m, mm, rad, deg and their spelled-out names). Each
+// unit it gives is held against the options (--joint-unit, --position-unit, --angle-unit) and a
+// difference is refused naming the column and both units (a file in mm imported as m); a word
+// that is no unit kincal reads is refused too; an empty cell is taken as the options say. The row
+// is then skipped (ImportResult::units_line).
+//
 // Measurements not taken: a row in which every measured column (the position, and the
 // orientation and standard deviations when named) is empty or NaN -- a tracker that lost its beam,
 // a marker the cameras did not see -- is left out and listed (ImportResult::skipped), its joint
@@ -113,6 +121,7 @@ struct ImportResult {
   double median_angle_std_rad = 0.0;   // read, not written (see above)
   std::size_t distinct_ids = 0;        // 0 without an id column
   int header_line = 0;                 // 1-based: the lines before it skipped
+  int units_line = 0;                  // a units row under the header, checked against the options; 0: none
   struct Skipped {
     int line = 0;
     std::string id;  // empty without an id column

@@ -14,6 +14,8 @@ here are the UR10's (ur10.yaml) at a TCP 150 mm out along the flange's z, made b
   - a program whose set_tcp is not its poses' TCP (the poses of the flange, which the model's
     tool is not either): the TCP it sets is named with the --tcp that aims it, the waypoints far
     from their readings are named, nothing is aimed at the set TCP silently, nothing is written;
+  - a gripper URCap's servoj to a pose computed when the program runs: left as written and named,
+    the rest corrected as without it;
   - a program made for another robot (the poses 0.2 m off their readings): each waypoint named.
 Exit status 0 on success, 1 with what failed."""
 import math
@@ -98,6 +100,21 @@ log = run(C + ["--urscript", "flange_poses.script", "-o", "flange_poses_correcte
 if "flange_poses.script:2: warning: the program sets its TCP at 0, 0, 150 mm from the flange" not in log or \
         "give --tcp 0,0,0.15,0,0,0" not in log or "aimed the program's TCP" in log:
     failures.append("a set_tcp its poses are not of: not named, or aimed:\n" + log)
+
+# A gripper URCap's preamble (as OnRobot's RG2 node writes it into every program of its users): a
+# depth-compensating servoj to a pose computed when the program runs, left as written and named.
+urcap = ("  def RG2(target_width=110, depth_compensation=False):\n    start_pose = get_forward_kin()\n"
+         "    target_pose = pose_trans(start_pose, p[0, 0, -0.002, 0, 0, 0])\n"
+         "    servoj(get_inverse_kin(target_pose), 0, 0, 0.008, 0.01, 2000)\n  end\n")
+with open("urcap.script", "w") as f:
+    f.write(source.replace("  while (True):\n", urcap + "  while (True):\n"))
+log = run(C + ["--urscript", "urcap.script", "-o", "urcap_corrected.script"])
+if "warning: 1 of 5 motions left as written" not in log or \
+        "urcap.script:12:28: servoj's target target_pose is assigned an expression on line 11" not in log:
+    failures.append("the URCap's runtime servoj not named as left as written:\n" + log)
+if os.path.exists("urcap_corrected.script") and open("urcap_corrected.script").read() != \
+        written.replace("  while (True):\n", urcap + "  while (True):\n"):
+    failures.append("a program with a URCap's preamble not corrected as the same program without it")
 
 far = [[p[0] + 0.2] + p[1:] for p in at_tcp]
 program("other_robot.script", 0.15, far, readings)

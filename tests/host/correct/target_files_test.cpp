@@ -67,6 +67,12 @@ std::string urscript_refusal(const std::string& text) {
   return "accepted";
 }
 
+// Why the first motion a program leaves as written is left ("none" when it leaves none).
+std::string urscript_left(const std::string& text) {
+  const correct::UrProgram p = correct::parse_urscript(text, "p.script", 6);
+  return p.left.empty() ? "none" : p.left.front().why;
+}
+
 // The UR10 the URScript tests correct for: its nominal (ur10.yaml), a calibration of it, and the
 // nominal arm in frame 0, where a program's poses are.
 struct Ur10 {
@@ -113,17 +119,29 @@ TEST_CASE("target tables: joint and Cartesian targets read; bad tables refused w
   CHECK(refusal("", 3).find("t.csv:1:1: no header row") == 0);
 }
 
-TEST_CASE("URScript: refused targets name file:line:column") {
+TEST_CASE("URScript: refused targets and the ones left as written name file:line:column") {
   const auto refused = urscript_refusal;
-  CHECK(refused("def p():\n  movej(home_q, a=1.4)\nend\n")
+  const auto left = urscript_left;  // a target computed when the program runs: left as written, named
+  CHECK(left("def p():\n  movej(home_q, a=1.4)\nend\n")
             .find("p.script:2:9: movej's target home_q is not assigned in this program") == 0);
-  CHECK(refused("def p():\n  movel(pose_add(base, p[0, 0, 1, 0, 0, 0]))\nend\n")
+  CHECK(left("def p():\n  movel(pose_add(base, p[0, 0, 1, 0, 0, 0]))\nend\n")
             .find("p.script:2:9: movel's target is not a literal [...] or p[...], a variable assigned one") == 0);
   CHECK(refused("  movej([1, 2, 3])\n").find("p.script:1:9: movej: 3 joint values, the model has 6 joints") == 0);
   CHECK(refused("  movel(p[1, 2, 3, 0, 0])\n").find("p.script:1:10: movel: a pose") == 0);
   CHECK(refused("movej([d2r(90), 0, 0, 0, 0, 0])\n")
             .find("p.script:1:8: column movej value 1: 'd2r(90)' is not a number") == 0);
   CHECK(refused("  # movej(home)\n  textmsg(\"movej\")\n  my_movej(1)\n") == "accepted");
+  // A motion left as written takes nothing from the program; the others are read as ever.
+  const correct::UrProgram some_left = correct::parse_urscript(
+      "def p():\n  movej(get_actual_joint_positions())\n  movej([0, 0, 0, 0, 0, 0])\n  movec(w, p[0, 0, 1, 0, 0, 0])\n"
+      "end\n",
+      "p.script", 6);
+  CHECK(some_left.motions.size() == 1);
+  CHECK(some_left.literals.size() == 1);
+  REQUIRE(some_left.left.size() == 2);
+  CHECK(some_left.left[0].line == 2);
+  CHECK(some_left.left[1].call == "movec");
+  CHECK(some_left.left[1].why.find("p.script:4:9: movec's target w is not assigned in this program") == 0);
   // Strings are not code: a motion written in one is text, a '#' in one starts no comment, and an
   // escaped quote does not end one (the audit's finding: a textmsg's movej was rewritten).
   const std::string q6 = "[0.1, -0.4, 0.3, 0.2, -0.5, 0.7]";
@@ -140,7 +158,7 @@ TEST_CASE("URScript: refused targets name file:line:column") {
         "p.script:3:5: a string is not closed on its line");
   // A target that goes on past its literal is an expression: refused, not corrected as the literal.
   for (const std::string rest : {" + [0.01, 0, 0, 0, 0, 0])", "*2)", "[0])", " ", ""})
-    CHECK(refused("movej(" + q6 + rest + "\n")
+    CHECK(left("movej(" + q6 + rest + "\n")
               .find("p.script:1:" + std::to_string(39 + (rest[0] == ' ')) +
                     ": movej's target goes on past its literal") == 0);
   CHECK(refused("movel(p" + q6 + " , a=1)\nmovej(" + q6 + ")\nservoj( " + q6 + "\t)\n") == "accepted");
@@ -289,23 +307,24 @@ TEST_CASE("URScript as PolyScope writes it: waypoint variables and get_inverse_k
   CHECK(results[1].solution.q != a);
 
   const auto refused = urscript_refusal;
+  const auto left = urscript_left;  // a target computed when the program runs: left as written, named
   const std::string q = "[" + list(a) + "]", p = "p[" + list(pose(a)) + "]";
-  CHECK(refused("w = " + q + "\nmovej(w)\nw = " + q + "\n")
+  CHECK(left("w = " + q + "\nmovej(w)\nw = " + q + "\n")
             .find("p.script:2:7: movej's target w is assigned 2 times (lines 1, 3)") == 0);
-  CHECK(refused("global w = get_actual_joint_positions()\nmovej(w)\n")
+  CHECK(left("global w = get_actual_joint_positions()\nmovej(w)\n")
             .find("p.script:2:7: movej's target w is assigned an expression on line 1, not a literal") == 0);
-  CHECK(refused("w = " + q + "\nw[0] = 0.5\nmovej(w)\n").find("movej's target w is assigned 2 times") !=
+  CHECK(left("w = " + q + "\nw[0] = 0.5\nmovej(w)\n").find("movej's target w is assigned 2 times") !=
         std::string::npos);
-  CHECK(refused("w = " + q + " + " + q + "\nmovej(w)\n").find("assigned an expression on line 1") != std::string::npos);
+  CHECK(left("w = " + q + " + " + q + "\nmovej(w)\n").find("assigned an expression on line 1") != std::string::npos);
   const std::string own_tcp = "movej(get_inverse_kin(w, qnear=" + q + ", tcp=p[0, 0, 0.1, 0, 0, 0]))";
-  CHECK(refused("w = " + p + "\n" + own_tcp + "\n")
+  CHECK(left("w = " + p + "\n" + own_tcp + "\n")
             .find("p.script:2:" + std::to_string(own_tcp.find("tcp=") + 5) +
                   ": get_inverse_kin with a tcp of its own") == 0);
   CHECK(refused("w = " + p + "\nmovej(get_inverse_kin(w, qnear=w))\n")
             .find("p.script:2:32: get_inverse_kin's qnear w holds a pose, not the model's 6 joint positions") == 0);
   CHECK(refused("w = [1, 2, 3, 4, d2r(5), 6]\nmovej(w)\n").find("p.script:1:17: column w value 5: 'd2r(5)'") == 0);
   CHECK(refused("w = [1, 2, 3]\nmovej(w)\n").find("p.script:1:5: w: 3 joint values, the model has 6 joints") == 0);
-  CHECK(refused("movej(w + 1)\n").find("p.script:1:9: movej's target goes on past its literal or name") == 0);
+  CHECK(left("movej(w + 1)\n").find("p.script:1:9: movej's target goes on past its literal or name") == 0);
   CHECK(refused("w = " + p + "\nmovej(get_inverse_kin(w, " + q + ", 1e-10, 1e-10))\n") == "accepted");
   // The TCPs a program sets: a literal, a variable assigned one once; anything else is unknown,
   // never refused.
@@ -369,14 +388,15 @@ TEST_CASE("URScript from offline programming: pose_trans(FRAME, POSE) corrected 
   CHECK((back.motions[0].target.pose.rotation - results[0].command.rotation).norm() < 1e-12);
 
   const auto refused = urscript_refusal;
+  const auto left = urscript_left;  // a target computed when the program runs: left as written, named
   const std::string f = text(frame), l = text(local);
   CHECK(refused("movel(pose_trans(" + f + "," + l + "))\n") == "accepted");
-  CHECK(refused("movel(pose_trans(r," + l + "))\n").find("p.script:1:18: pose_trans's target r is not assigned") == 0);
-  CHECK(refused("r = " + f + "\nr = " + f + "\nmovel(pose_trans(r," + l + "))\n")
+  CHECK(left("movel(pose_trans(r," + l + "))\n").find("p.script:1:18: pose_trans's target r is not assigned") == 0);
+  CHECK(left("r = " + f + "\nr = " + f + "\nmovel(pose_trans(r," + l + "))\n")
             .find("p.script:3:18: pose_trans's target r is assigned 2 times (lines 1, 2)") == 0);
-  CHECK(refused("movel(pose_trans(get_actual_tcp_pose()," + l + "))\n")
+  CHECK(left("movel(pose_trans(get_actual_tcp_pose()," + l + "))\n")
             .find("p.script:1:18: pose_trans's frame is not a literal p[...] or a variable assigned one") == 0);
-  CHECK(refused("movel(pose_trans(" + f + "," + l + "," + l + "))\n").find("pose_trans takes a frame and a pose") !=
+  CHECK(left("movel(pose_trans(" + f + "," + l + "," + l + "))\n").find("pose_trans takes a frame and a pose") !=
         std::string::npos);
   CHECK(refused("movel(pose_trans(" + f + ",[1, 2, 3, 4, 5, 6]))\n").find("this one is a list [...]") !=
         std::string::npos);

@@ -329,3 +329,30 @@ TEST_CASE("import --quaternion: w, x, y, z from the columns named, whatever thei
         "x.csv:1:3: column 'X' is named twice: as value 1 of --position and as value z of --quaternion (every "
         "column feeds one value)");
 }
+
+TEST_CASE("a units row under the header (motion-capture exports) is checked against the units given and skipped") {
+  const model::ImportOptions o = two_joint_options();  // deg, mm
+  std::istringstream in("Trajectories\nJ 1,J 2,X,Y,Z\n[deg],\xc2\xb0,Millimeters,mm,(mm)\n1,2,3,4,5\n");
+  const model::ImportResult r = model::import_measurements(in, "x.csv", o);
+  CHECK(r.header_line == 2);
+  CHECK(r.units_line == 3);
+  REQUIRE(r.data.rows.size() == 1);
+  CHECK(r.data.rows[0].position.x() == doctest::Approx(0.003));
+  // An empty cell is taken as the options say; the id column's cell is not read.
+  CHECK(error_of("J 1,J 2,X,Y,Z\n,,mm,mm,mm\n1,2,3,4,5\n", o).empty());
+  // A unit other than the one given: refused naming both (a file in m imported as mm).
+  CHECK(error_of("J 1,J 2,X,Y,Z\ndeg,deg,m,m,m\n1,2,3,4,5\n", o) ==
+        "x.csv:2:3: the units row under the header gives 'm' for column 'X', --position-unit says mm: give "
+        "--position-unit m if the file is in m");
+  CHECK(error_of("J 1,J 2,X,Y,Z\nrad,rad,mm,mm,mm\n1,2,3,4,5\n", o)
+            .starts_with(
+                "x.csv:2:1: the units row under the header gives 'rad' for column 'J 1', --joint-unit says deg"));
+  CHECK(error_of("J 1,J 2,X,Y,Z\ndeg,deg,in,in,in\n1,2,3,4,5\n", o) ==
+        "x.csv:2:3: the units row under the header gives 'in' for column 'X', --position-unit says mm (and 'in' is "
+        "no unit kincal reads: m, mm, rad, deg)");
+  // A row holding a number is data, however its other cells read: its text is refused as before.
+  CHECK(error_of("J 1,J 2,X,Y,Z\n1,deg,mm,mm,mm\n", o) == "x.csv:2:2: column 'J 2': 'deg' is not a number");
+  // Only the row under the header is read as units.
+  CHECK(error_of("J 1,J 2,X,Y,Z\n1,2,3,4,5\ndeg,deg,mm,mm,mm\n", o) ==
+        "x.csv:3:1: column 'J 1': 'deg' is not a number");
+}
