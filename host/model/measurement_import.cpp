@@ -101,6 +101,15 @@ std::vector<std::string> named_columns(const ImportOptions& o) {
   return names;
 }
 
+// A column named by its number, "#7" (1-based; a header may hold a name twice: a motion-capture
+// export's X, Y, Z of the rotation and of the position); 0 when the name is no such number.
+std::size_t column_number(const std::string& name) {
+  if (name.size() < 2 || name.size() > 7 || name[0] != '#') return 0;
+  std::size_t n = 0;
+  const auto [end, ec] = std::from_chars(name.data() + 1, name.data() + name.size(), n);
+  return ec == std::errc() && end == name.data() + name.size() ? n : 0;
+}
+
 // Whether a line, split by the given separator or the one detected on it, holds every name.
 bool holds_every(const std::string& line, char separator, const std::vector<std::string>& names) {
   std::optional<std::vector<std::string>> fields =
@@ -108,13 +117,15 @@ bool holds_every(const std::string& line, char separator, const std::vector<std:
   if (!fields) return false;
   for (std::string& f : *fields) f = trim_field(f);
   return std::all_of(names.begin(), names.end(), [&](const std::string& name) {
-    return std::find(fields->begin(), fields->end(), name) != fields->end();
+    return std::find(fields->begin(), fields->end(), name) != fields->end() ||
+           (column_number(name) > 0 && column_number(name) <= fields->size());
   });
 }
 
 struct Table {
   const std::string& source;
-  std::map<std::string, std::size_t> index;
+  std::map<std::string, std::size_t> index;               // each name's first column
+  std::map<std::string, std::vector<std::size_t>> twice;  // a name's later columns
   std::vector<std::string> names;
   int header_line = 0;
   char separator = ',';
@@ -132,6 +143,19 @@ struct Table {
 
   std::size_t column(const std::string& name) const {
     const auto it = index.find(name);
+    if (const auto again = twice.find(name); it != index.end() && again != twice.end())
+      fail(source, header_line, again->second.front(),
+           "header: column '" + files::excerpt(name) + "' appears " + std::to_string(again->second.size() + 1) +
+               " times (columns " + std::to_string(it->second + 1) + " and " +
+               std::to_string(again->second.front() + 1) + (again->second.size() > 1 ? ", ..." : "") +
+               "): name the one meant by its number, #" + std::to_string(it->second + 1) + " or #" +
+               std::to_string(again->second.front() + 1));
+    if (it == index.end() && column_number(name) > 0) {
+      if (column_number(name) > names.size())
+        fail(source, header_line, names.size(),
+             "column " + name + ": the header has " + std::to_string(names.size()) + " columns");
+      return column_number(name) - 1;
+    }
     if (it == index.end()) {
       constexpr std::size_t kListed = 20;  // a header of 100,000 names is not listed whole
       std::string known;
@@ -284,7 +308,7 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   }
   const double angle = o.angle_unit == AngleUnit::deg ? kRadPerDeg : 1.0;
 
-  Table t{source, {}, {}, 0, ',', 0, 0, {}};
+  Table t{source, {}, {}, {}, 0, ',', 0, 0, {}};
   // The header: the first line that holds every named column, among the first kHeaderSearch (an
   // export may open with its title, its settings or a spreadsheet's "sep=;"); when none does, the
   // first line that is not blank, and the message names the column it lacks.
@@ -318,8 +342,7 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   t.separator = result.separator;
   t.names = export_fields(line, result.separator, source, number);
   for (std::size_t i = 0; i < t.names.size(); ++i)
-    if (!t.names[i].empty() && !t.index.emplace(t.names[i], i).second)
-      fail(source, number, i, "header: column '" + files::excerpt(t.names[i]) + "' appears twice");
+    if (!t.names[i].empty() && !t.index.emplace(t.names[i], i).second) t.twice[t.names[i]].push_back(i);
   std::vector<std::size_t> joint_columns;
   for (const std::string& j : o.joints) joint_columns.push_back(t.column(j));
   const auto position = columns(t, o.position);

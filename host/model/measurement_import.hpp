@@ -4,6 +4,9 @@
 // The user names everything that cannot be guessed safely: which header names hold the joint
 // readings, the position and (optionally) the orientation; the unit of each (mm or m; deg or rad);
 // the Euler convention of the orientation; optionally the per-component standard deviations.
+// A column is named by its header name, or by its number, "#7" (1-based), where the header holds
+// a name twice (a motion-capture export's X, Y, Z of the rotation and of the position): a name
+// that appears twice is refused only when an option names it, the message giving both numbers.
 // The header is the first line holding every named column, among the first 100 lines: lines
 // before it (a title, the instrument's settings, a spreadsheet's "sep=;") are skipped. When no
 // line holds them all, the first line that is not blank is taken, and the message names the
@@ -61,7 +64,7 @@
 // or text after a closing quote is refused.
 //
 // Errors (InputError "FILE:LINE:COLUMN: what", COLUMN 1-based, the header name in the message):
-// a named column missing or named twice in the header, one header column named for two roles
+// a named column missing, or named by a name the header holds twice, or by a number past its last column, one header column named for two roles
 // (twice in --joints, or as a joint and a coordinate), more than kMaxRows data rows (dataset.hpp),
 // a row with the wrong number of fields, a
 // field that is not a finite number, an empty id, a standard deviation <= 0, a bad unit or convention name, a

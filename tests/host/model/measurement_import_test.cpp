@@ -98,7 +98,8 @@ TEST_CASE("tabs and points; errors name file, line and column") {
   CHECK(error_of("J 1,J 2,X,Y,Z\n1,2,3,oops,5\n", o) == "x.csv:2:4: column 'Y': 'oops' is not a number");
   CHECK(error_of("J 1,J 2,X,Y,Z\n1,2,3,4\n", o).starts_with("x.csv:2:5: expected 5 fields as in the header, found 4"));
   CHECK(error_of("J 1,J 2,X,Y\n1,2,3,4\n", o).starts_with("x.csv:1:5: no column named 'Z' in the header"));
-  CHECK(error_of("J 1,J 2,X,Y,Z,X\n", o) == "x.csv:1:6: header: column 'X' appears twice");
+  CHECK(error_of("J 1,J 2,X,Y,Z,X\n", o) ==
+        "x.csv:1:6: header: column 'X' appears 2 times (columns 3 and 6): name the one meant by its number, #3 or #6");
   CHECK(error_of("J 1,J 2,X,Y,Z\n1,2,3,4,inf\n", o) == "x.csv:2:5: column 'Z' is not finite");
   o.position_std = {"X", "Y", "J 1"};  // one column for two values: a typing slip, refused (issue #25)
   CHECK(error_of("J 1,J 2,X,Y,Z\n0,2,3,4,5\n", o) ==
@@ -355,4 +356,29 @@ TEST_CASE("a units row under the header (motion-capture exports) is checked agai
   // Only the row under the header is read as units.
   CHECK(error_of("J 1,J 2,X,Y,Z\n1,2,3,4,5\ndeg,deg,mm,mm,mm\n", o) ==
         "x.csv:3:1: column 'J 1': 'deg' is not a number");
+}
+
+TEST_CASE("columns by number (#7) where the header holds a name twice, as motion-capture exports write X, Y, Z") {
+  model::ImportOptions o = two_joint_options();
+  o.position = {"#6", "#7", "#8"};
+  o.quaternion = std::array<std::string, 4>{"#5", "#2", "#3", "#4"};
+  o.joints = {"J 1", "#10"};
+  // A name twice that no option names is no fault; the header is the first line with every name.
+  std::istringstream in("Take,1\nFrame,X,Y,Z,W,X,Y,Z,J 1,J 2\n0,0,0,0.7071,0.7071,1,2,3,4,5\n");
+  const model::ImportResult r = model::import_measurements(in, "x.csv", o);
+  CHECK(r.header_line == 2);
+  REQUIRE(r.data.rows.size() == 1);
+  CHECK(r.data.rows[0].position.x() == doctest::Approx(0.001));
+  CHECK(r.data.rows[0].q[1] == doctest::Approx(5 * kDeg));
+  CHECK(r.data.rows[0].orientation->z() == doctest::Approx(std::sqrt(0.5)));
+  o.position = {"X", "#7", "#8"};
+  CHECK(error_of("Frame,X,Y,Z,W,X,Y,Z,J 1,J 2\n", o) ==
+        "x.csv:1:6: header: column 'X' appears 2 times (columns 2 and 6): name the one meant by its number, #2 or #6");
+  o.position = {"#6", "#7", "#11"};
+  CHECK(error_of("Frame,X,Y,Z,W,X,Y,Z,J 1,J 2\n0,0,0,0.7071,0.7071,1,2,3,4,5\n", o) ==
+        "x.csv:1:11: column #11: the header has 10 columns");
+  o.position = {"#6", "#7", "#2"};  // one column for two values, by name or number alike
+  CHECK(error_of("Frame,X,Y,Z,W,X,Y,Z,J 1,J 2\n0,0,0,0.7071,0.7071,1,2,3,4,5\n", o)
+            .starts_with(
+                "x.csv:1:2: column 'X' is named twice: as value 3 of --position and as value x of --quaternion"));
 }
