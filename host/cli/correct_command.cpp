@@ -307,9 +307,11 @@ void add_correct_command(CLI::App& app, int& status) {
   auto* joints = cmd->add_option("--joints", a->joints, "joint targets (CSV: q1..qN, rad or m)");
   cmd->add_option("--poses", a->poses,
                   "Cartesian targets (CSV: x,y,z[,qw,qx,qy,qz][,q1..qN seed], m) -> readings by inverse kinematics");
-  cmd->add_option("--urscript", a->urscript,
-                  "a URScript program: movej/movel/movep/movec/servoj/servoc targets rewritten (literals, waypoint "
-                  "variables, get_inverse_kin), every other byte kept");
+  cmd->add_option(
+      "--urscript", a->urscript,
+      "a URScript program: movej/movel/movep/movec/servoj/servoc targets rewritten (literals, waypoint "
+      "variables, get_inverse_kin, pose_trans; targets computed when it runs left as written and named), every "
+      "other byte kept");
   cmd->add_option("--frame", a->frame,
                   "frame of --poses: base (the robot's, default) or device (the measuring device's)")
       ->check(CLI::IsMember({"base", "device"}))

@@ -361,9 +361,8 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
     if (const Call set = find_call(code.text, kSetTcp); set.at != std::string_view::npos)
       set_tcps.push_back({line, end, read_ref(code.text, skip_blanks(code.text, set.open), nullptr, "set_tcp")});
     const Call call = find_call(code.text, kCalls);
-    // movec's via point and its end are two targets, read in order.
-    std::size_t after = call.open - 1;
     // movec's via point and its end are two targets, read in order; one not known leaves both.
+    std::size_t after = call.open - 1;  // the '(' (unused without a call)
     std::vector<Site> read;
     try {
       for (int k = 0; call.at != std::string_view::npos && k < (call.name == "movec" ? 2 : 1); ++k) {

@@ -1,9 +1,9 @@
 // Universal Robots' URScript programs in and out (issues #24, #42): the targets of motion lines read
 // as joint or Cartesian targets, and the program written back with corrected targets.
 //
-// Read: every call movej(, movel(, movep(, movec(, servoj( or servoc( in the code of a line -- not inside a string
-// ("..." or '...', a backslash escaping the next character) nor behind a '#' -- whose first argument
-// is one of
+// Read: every call movej(, movel(, movep(, movec(, servoj( or servoc( in the code of a line -- not
+// inside a string ("..." or '...', a backslash escaping the next character) nor behind a '#' --
+// whose first argument is one of
 //   - a literal: [q1, ..., qN] (joint positions, rad) or p[x, y, z, rx, ry, rz] (a pose in the
 //     robot's base frame: m, and a rotation vector in rad);
 //   - a variable the program assigns a literal once and nowhere else (`global Waypoint_1_p=p[...]`,
@@ -19,7 +19,8 @@
 //     the reference of the joint-change limit) is SEED, and SEED rewritten with the corrected
 //     readings unless a motion takes it as its own joint target;
 // followed by ',' or ')'; movec's second argument (its end; the first is its via point) too, a
-// target of its own. One call per line is read (the first).
+// target of its own. One call per line is read (the first). Each set_tcp( is read too
+// (UrProgram::tcps: its pose when it is a literal or a variable assigned one once), never refused.
 //
 // Left as written, each named in UrProgram::left ("FILE:LINE:COLUMN: what"; correct says so on
 // standard error): a motion whose target is computed when the program runs -- any other
