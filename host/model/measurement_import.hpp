@@ -64,12 +64,12 @@
 // or text after a closing quote is refused.
 //
 // Errors (InputError "FILE:LINE:COLUMN: what", COLUMN 1-based, the header name in the message):
-// a named column missing, or named by a name the header holds twice, or by a number past its last column, one header column named for two roles
-// (twice in --joints, or as a joint and a coordinate), more than kMaxRows data rows (dataset.hpp),
-// a row with the wrong number of fields, a
-// field that is not a finite number, an empty id, a standard deviation <= 0, a bad unit or convention name, a
-// unit count that is neither 1 nor the joint count. A message about a row with an id ends with
-// "(id TEXT)".
+// a named column missing, or named by a name the header holds twice, or by a number past its
+// last column; one header column named for two roles (twice in --joints, or as a joint and a
+// coordinate); more than kMaxRows data rows (dataset.hpp); a row with the wrong number of fields;
+// a field that is not a finite number; an empty id; a standard deviation <= 0; a bad unit or
+// convention name; a unit count that is neither 1 nor the joint count; a units row that
+// disagrees (above). A message about a row with an id ends with "(id TEXT)".
 #pragma once
 
 #include <array>
