@@ -1,7 +1,9 @@
 #include "host/cli/correct_command.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <optional>
@@ -62,6 +64,30 @@ std::string aim_at_tcp(const CorrectArgs& a, model::RobotModel& nominal, model::
   nominal = model::tool_at_tcp(nominal);
   calibrated = model::tool_at_tcp(calibrated);
   return out.str();
+}
+
+// Cartesian targets in millimetres read as metres lie kilometres from the arm: when every target
+// with a seed reading (its own, or --seed) lies farther than kFarM from where the calibrated
+// model puts the aimed point at that seed, the table is refused up front, naming the likely
+// cause, where each target would otherwise be "out of reach" by kilometres.
+void refuse_targets_in_mm(const std::vector<correct::Target>& targets, const std::vector<double>& seed,
+                          const model::RobotModel& calibrated, bool device_frame, const std::string& source) {
+  constexpr double kFarM = 100.0;  // the largest arms reach 4 m
+  model::RobotModel arm = calibrated;
+  if (!device_frame) arm.base_T_frame0 = model::Transform{};
+  double nearest = std::numeric_limits<double>::infinity(), farthest = 0.0;
+  for (const correct::Target& t : targets) {
+    const std::vector<double>& q = t.q.empty() ? seed : t.q;
+    if (!t.cartesian || q.empty()) continue;
+    const double d = (model::forward_kinematics(arm, q).translation - t.pose.translation).norm();
+    nearest = std::min(nearest, d);
+    farthest = std::max(farthest, d);
+  }
+  if (std::isfinite(nearest) && nearest > kFarM)
+    throw model::InputError(source + ": every target lies " + model::shortest_number_text(std::round(nearest)) +
+                            " to " + model::shortest_number_text(std::round(farthest)) +
+                            " m from where the model puts the TCP at its seed readings, where an arm reaches a few "
+                            "metres: are the targets in millimetres? (--poses takes metres)");
 }
 
 // The motions a program leaves as written (urscript.hpp): named, at most 5, with the count.
@@ -243,6 +269,7 @@ int run_correct(const CorrectArgs& a) {
     const std::optional<correct::ParameterCovariance> covariance = correct::record_covariance(calibrated);
     const std::string aimed =
         a.urscript.empty() ? aim_at_tcp(a, nominal, calibrated) : aim_program(a, program, nominal, calibrated);
+    if (!a.poses.empty()) refuse_targets_in_mm(targets, a.seed, calibrated, a.frame == "device", source);
     correct::JointChangeLimit limit;
     limit.revolute_rad = a.max_change_deg * std::numbers::pi / 180.0;
     limit.prismatic_m = a.max_change_mm * 1e-3;

@@ -698,6 +698,8 @@ run(["predict", "--model", puma, "--joints", "targets.csv", "-o", "target_points
 points = [[float(v) for v in r] for r in list(csv.reader(open("target_points.csv")))[1:]]
 write_csv("poses.csv", ["x", "y", "z", "q1", "q2", "q3", "q4", "q5", "q6"], [r[6:9] + r[:6] for r in points])
 write_csv("far.csv", ["x", "y", "z", "q1", "q2", "q3", "q4", "q5", "q6"], [[v * 10 for v in r[6:9]] + r[:6] for r in points])
+write_csv("mm_targets.csv", ["x", "y", "z", "q1", "q2", "q3", "q4", "q5", "q6"],
+          [[v * 1000 for v in r[6:9]] + r[:6] for r in points])
 with open("program.script", "w") as f:
     f.write("def p():\n  # home\n  movej([0.1, -0.4, 0.3, 0.2, -0.5, 0.7], a=1.4, v=1.05)\n"
             "  servoj([0.2, -0.3, 0.2, 0.1, -0.6, 0.5], t=0.008)\nend\n")
@@ -729,6 +731,9 @@ case("correct:no calibration record", ["correct", "--model", puma, "--joints", "
 case("correct:two inputs", C + ["--joints", "targets.csv", "--poses", "poses.csv"], r"give one of --joints, --poses and --urscript")
 case("correct:joints as poses", C + ["--poses", "targets.csv"], r"joint targets \(no x,y,z\) given as --poses")
 case("correct:out of reach", C + ["--poses", "far.csv", "--frame", "device", "-o", "-"], r"far\.csv:2: not reached: out-of-reach")
+case("correct:targets in mm", C + ["--poses", "mm_targets.csv", "--frame", "device", "-o", "o11.csv"],
+     r"mm_targets\.csv: every target lies [0-9]+ to [0-9]+ m from where the model puts the TCP at its seed readings, "
+     r"where an arm reaches a few metres: are the targets in millimetres\? \(--poses takes metres\)")
 case("correct:URScript variable target", C + ["--urscript", "variable.script", "-o", "o6.script"],
      r"variable\.script:2:9: movej's target home_q is not assigned in this program")
 # PolyScope's waypoints: variables assigned a literal once, corrected where they are assigned (the
