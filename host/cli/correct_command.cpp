@@ -15,6 +15,7 @@
 #include "host/correct/target_table.hpp"
 #include "host/correct/urscript.hpp"
 #include "host/files/output_file.hpp"
+#include "host/identify/plausibility.hpp"
 #include "host/model/model_file.hpp"
 #include "host/model/number_text.hpp"
 #include "host/model/reading_coverage.hpp"
@@ -88,6 +89,26 @@ void refuse_targets_in_mm(const std::vector<correct::Target>& targets, const std
                             " to " + model::shortest_number_text(std::round(farthest)) +
                             " m from where the model puts the TCP at its seed readings, where an arm reaches a few "
                             "metres: are the targets in millimetres? (--poses takes metres)");
+}
+
+// Joint readings in degrees (or millimetres) where the model takes radians (metres): every target's
+// readings, or every seed, far beyond the joints' limits and inside them divided by 57.3 (1000)
+// -- plausibility.hpp's check on the data, held against the targets: refused up front, where
+// each target would otherwise end at a joint limit or turn a joint by thousands of degrees.
+void refuse_readings_in_degrees(const std::vector<correct::Target>& targets, const model::RobotModel& model,
+                                const std::string& source) {
+  std::vector<std::vector<double>> readings;
+  for (const correct::Target& t : targets)
+    if (!t.q.empty()) readings.push_back(t.q);
+  if (readings.empty()) return;
+  std::string found;
+  for (const identify::JointFinding& f : identify::joint_readings_outside(model, readings))
+    if (f.unit_mistake) found += (found.empty() ? "" : "; ") + f.text;
+  if (!found.empty())
+    throw model::InputError(source +
+                            ": the joint readings of the targets (or their seeds) are not in the model's "
+                            "units (rad, m): " +
+                            found);
 }
 
 // The motions a program leaves as written (urscript.hpp): named, at most 5, with the count.
@@ -269,6 +290,7 @@ int run_correct(const CorrectArgs& a) {
     const std::optional<correct::ParameterCovariance> covariance = correct::record_covariance(calibrated);
     const std::string aimed =
         a.urscript.empty() ? aim_at_tcp(a, nominal, calibrated) : aim_program(a, program, nominal, calibrated);
+    refuse_readings_in_degrees(targets, calibrated, source);
     if (!a.poses.empty()) refuse_targets_in_mm(targets, a.seed, calibrated, a.frame == "device", source);
     correct::JointChangeLimit limit;
     limit.revolute_rad = a.max_change_deg * std::numbers::pi / 180.0;

@@ -32,7 +32,11 @@ bool inside(double q, double lower, double upper) {
   return q >= lower - tolerance && q <= upper + tolerance;
 }
 
-void check_joints(const model::RobotModel& m, const model::Dataset& data, std::vector<std::string>& found) {
+}  // namespace
+
+std::vector<JointFinding> joint_readings_outside(const model::RobotModel& m,
+                                                 const std::vector<std::vector<double>>& readings) {
+  std::vector<JointFinding> found;
   for (std::size_t j = 0; j < m.joints.size(); ++j) {
     const model::Joint& joint = m.joints[j];
     const bool revolute = joint.type == core::JointType::revolute;
@@ -43,25 +47,29 @@ void check_joints(const model::RobotModel& m, const model::Dataset& data, std::v
     const double scale = revolute ? kDegreesPerRadian : 1000.0;
     int outside = 0, scaled_inside = 0;
     double largest = 0.0;
-    for (const model::Measurement& r : data.rows) {
-      const double q = r.q[j];
+    for (const std::vector<double>& r : readings) {
+      const double q = r[j];
       largest = std::max(largest, std::abs(q));
       if (!inside(q, lower, upper)) ++outside;
       if (inside(q / scale, lower, upper)) ++scaled_inside;
     }
     if (outside == 0) continue;
-    std::string what = "joint " + std::to_string(j + 1) + " (" + joint.name + "): " + std::to_string(outside) + " of " +
-                       std::to_string(data.rows.size()) + " readings outside " + (limited ? "its limits [" : "[") +
-                       number(lower) + ", " + number(upper) + (revolute ? "] rad" : "] m") + " (largest magnitude " +
-                       number(largest) + ")";
+    JointFinding f;
+    f.text = "joint " + std::to_string(j + 1) + " (" + joint.name + "): " + std::to_string(outside) + " of " +
+             std::to_string(readings.size()) + " readings outside " + (limited ? "its limits [" : "[") + number(lower) +
+             ", " + number(upper) + (revolute ? "] rad" : "] m") + " (largest magnitude " + number(largest) + ")";
     // Degrees or millimetres reach far beyond the range, not just past it (a zero a quarter turn
     // off puts a few readings past a limit, and they too fit when divided by 57.3).
-    if (scaled_inside == static_cast<int>(data.rows.size()) &&
-        largest > 2.0 * std::max(std::abs(lower), std::abs(upper)))
-      what += revolute ? ": likely degrees given as radians" : ": likely millimetres given as metres";
-    found.push_back(what);
+    f.unit_mistake = scaled_inside == static_cast<int>(readings.size()) &&
+                     largest > 2.0 * std::max(std::abs(lower), std::abs(upper));
+    if (f.unit_mistake)
+      f.text += revolute ? ": likely degrees given as radians" : ": likely millimetres given as metres";
+    found.push_back(std::move(f));
   }
+  return found;
 }
+
+namespace {
 
 struct Predicted {
   std::vector<model::Vector3> position_m;
@@ -264,7 +272,9 @@ std::vector<std::string> implausibilities(const model::RobotModel& nominal, cons
                                           const PlausibilityOptions& options) {
   std::vector<std::string> found;
   if (data.joint_count != nominal.joint_count()) return found;  // check_joint_count says so
-  check_joints(nominal, data, found);
+  std::vector<std::vector<double>> readings;
+  for (const model::Measurement& r : data.rows) readings.push_back(r.q);
+  for (JointFinding& f : joint_readings_outside(nominal, readings)) found.push_back(std::move(f.text));
   FrameCheck frame = frame_check(nominal, data);
   const Predicted p = predict(nominal, data, frame.measured_point_offset);
   check_far_points(data, p, found);

@@ -44,6 +44,16 @@ struct PlausibilityOptions {
 std::vector<std::string> implausibilities(const model::RobotModel& nominal, const model::Dataset& data,
                                           const PlausibilityOptions& options = {});
 
+// The `joints` check above on joint readings alone (a dataset's, or `correct`'s targets): one
+// finding per joint with readings outside its limits; unit_mistake when they all fit divided by
+// 57.3 (degrees) or 1000 (millimetres) and reach more than twice the range.
+struct JointFinding {
+  std::string text;
+  bool unit_mistake = false;
+};
+std::vector<JointFinding> joint_readings_outside(const model::RobotModel& model,
+                                                 const std::vector<std::vector<double>>& readings);
+
 // Without a model (import without --model): the measured points' median distance from their
 // median point above kMaxSpread_m (50 m; the largest arms reach 4 m, so a 1 m workspace in
 // millimetres read as metres).

@@ -698,6 +698,7 @@ run(["predict", "--model", puma, "--joints", "targets.csv", "-o", "target_points
 points = [[float(v) for v in r] for r in list(csv.reader(open("target_points.csv")))[1:]]
 write_csv("poses.csv", ["x", "y", "z", "q1", "q2", "q3", "q4", "q5", "q6"], [r[6:9] + r[:6] for r in points])
 write_csv("far.csv", ["x", "y", "z", "q1", "q2", "q3", "q4", "q5", "q6"], [[v * 10 for v in r[6:9]] + r[:6] for r in points])
+write_csv("deg_targets.csv", ["q1", "q2", "q3", "q4", "q5", "q6"], [[30, -60, 90, -45, -30, 40], [10, -80, 100, -30, -60, 20]])
 write_csv("mm_targets.csv", ["x", "y", "z", "q1", "q2", "q3", "q4", "q5", "q6"],
           [[v * 1000 for v in r[6:9]] + r[:6] for r in points])
 with open("program.script", "w") as f:
@@ -731,6 +732,10 @@ case("correct:no calibration record", ["correct", "--model", puma, "--joints", "
 case("correct:two inputs", C + ["--joints", "targets.csv", "--poses", "poses.csv"], r"give one of --joints, --poses and --urscript")
 case("correct:joints as poses", C + ["--poses", "targets.csv"], r"joint targets \(no x,y,z\) given as --poses")
 case("correct:out of reach", C + ["--poses", "far.csv", "--frame", "device", "-o", "-"], r"far\.csv:2: not reached: out-of-reach")
+case("correct:joint targets in degrees", C + ["--joints", "deg_targets.csv", "-o", "o12.csv"],
+     r"deg_targets\.csv: the joint readings of the targets \(or their seeds\) are not in the model's units \(rad, m\): "
+     r"joint 1 \(waist\): 2 of 2 readings outside its limits \[-2\.793, 2\.793\] rad \(largest magnitude 30\): likely "
+     r"degrees given as radians")
 case("correct:targets in mm", C + ["--poses", "mm_targets.csv", "--frame", "device", "-o", "o11.csv"],
      r"mm_targets\.csv: every target lies [0-9]+ to [0-9]+ m from where the model puts the TCP at its seed readings, "
      r"where an arm reaches a few metres: are the targets in millimetres\? \(--poses takes metres\)")
