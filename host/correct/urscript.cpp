@@ -205,6 +205,7 @@ struct Site {
   std::size_t end = 0;  // the line's end in the text
   Ref target;
   std::optional<Ref> seed, frame;
+  bool inverse = false;  // get_inverse_kin's: the target must be a pose
 };
 
 const std::string kNotKnown =
@@ -215,13 +216,14 @@ const std::string kNotKnown =
 // ends it.
 Site read_target(const std::string& call, std::string_view code, std::size_t at, const LineAt& line,
                  std::size_t line_end, std::size_t& after) {
-  Site site{call, line, line_end, {}, std::nullopt, std::nullopt};
+  Site site{call, line, line_end, {}, std::nullopt, std::nullopt, false};
   const std::size_t word = name_end(code, at);
   const std::size_t paren = skip_blanks(code, word);
   const std::string_view name = code.substr(at, word - at);
   const bool called = paren < code.size() && code[paren] == '(';
   const bool inverse = called && name == "get_inverse_kin", in_frame = called && name == "pose_trans";
   const std::string target_what = inverse ? "get_inverse_kin" : in_frame ? "pose_trans" : call;
+  site.inverse = inverse;
   if (inverse || in_frame) at = skip_blanks(code, paren + 1);
   if (in_frame) {
     site.frame = read_ref(code, at, &line, "pose_trans");
@@ -459,7 +461,7 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
     m.literal = resolve(site, site.target, site.call);
     const UrLiteral& target = program.literals[m.literal];
     m.target.cartesian = m.target.orientation = target.pose;
-    if (target.pose || site.frame) {
+    if (target.pose || site.frame || site.inverse) {
       m.target.pose = pose_or_fail(target, what);
     } else if (static_cast<int>(target.numbers.size()) != joint_count) {
       LineAt{source, target.line, 0}.fail(column_of(target), what + ": " + std::to_string(target.numbers.size()) +

@@ -324,6 +324,10 @@ TEST_CASE("URScript as PolyScope writes it: waypoint variables and get_inverse_k
             .find("p.script:2:32: get_inverse_kin's qnear w holds a pose, not the model's 6 joint positions") == 0);
   CHECK(refused("w = [1, 2, 3, 4, d2r(5), 6]\nmovej(w)\n").find("p.script:1:17: column w value 5: 'd2r(5)'") == 0);
   CHECK(refused("w = [1, 2, 3]\nmovej(w)\n").find("p.script:1:5: w: 3 joint values, the model has 6 joints") == 0);
+  // get_inverse_kin of joint positions (the fuzzer's finding: they were taken as a joint target
+  // whose readings the qnear then replaced).
+  CHECK(refused("w = " + q + "\nmovej(get_inverse_kin(w, qnear=" + q + "))\nmovel(w)\n")
+            .find("p.script:1:5: w: a pose p[x, y, z, rx, ry, rz] has 6 values, this one is a list [...]") == 0);
   CHECK(left("movej(w + 1)\n").find("p.script:1:9: movej's target goes on past its literal or name") == 0);
   CHECK(refused("w = " + p + "\nmovej(get_inverse_kin(w, " + q + ", 1e-10, 1e-10))\n") == "accepted");
   // The TCPs a program sets: a literal, a variable assigned one once; anything else is unknown,
