@@ -436,6 +436,7 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
     return program.literals.size() - 1;
   };
   std::map<std::size_t, std::optional<model::Transform>> frame_of;  // the frame a literal's pose is in
+  std::map<std::string, const Site&> frame_used;                    // each variable named as a frame, at its first use
   const auto locate_all = [&](const Site& site) {
     locate(site, site.target, site.frame ? "pose_trans" : site.call);
     if (site.frame) locate(site, *site.frame, "pose_trans");
@@ -475,6 +476,7 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
       m.base_T_frame =
           pose_or_fail(read(locate(site, *site.frame, "pose_trans"), *site.frame, "pose_trans"), frame_what);
       m.target.pose = *m.base_T_frame * m.target.pose;
+      if (!site.frame->literal) frame_used.emplace(site.frame->name, site);
     }
     // A variable's pose written back in one frame: every motion naming it must see it in that one.
     const auto [first, inserted] = frame_of.emplace(m.literal, m.base_T_frame);
@@ -499,6 +501,13 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
     }
     program.motions.push_back(std::move(m));
   }
+  // A frame is kept as written: a variable that is a frame and a target too would be rewritten
+  // under the motions in its frame, moving them by its own correction.
+  for (const auto& [name, site] : frame_used)
+    if (literal_of.count(name) != 0)
+      site.line.fail(site.frame->at, name +
+                                         " is the frame of this pose_trans and a target corrected elsewhere: its "
+                                         "rewritten value would move the motions in its frame");
   std::stable_sort(program.left.begin(), program.left.end(),
                    [](const UrLeft& a, const UrLeft& b) { return a.line < b.line; });
   // The TCPs the program sets: a pose literal, or a variable assigned one once; else unknown.

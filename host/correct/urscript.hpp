@@ -37,8 +37,10 @@
 // else), a string not closed on its line, a joint list whose length is not the model's joint
 // count, a pose without six values, a seed that is a pose, a value that is not a plain finite
 // number (d2r(90), a variable inside the list), a pose's rotation vector longer than a turn (2 pi
-// rad: degrees, most likely), a variable's pose named in two frames, a movec with one argument,
-// more than kMaxTargets motions. A literal assigned to a variable no motion names is not read.
+// rad: degrees, most likely), a variable's pose named in two frames, a variable that is a
+// pose_trans frame and a target too (its rewritten value would move the motions in its frame),
+// get_inverse_kin of joint positions, a movec with one argument, more than kMaxTargets motions. A literal assigned to a
+// variable no motion names is not read.
 //
 // Written: the program's bytes unchanged but for each target value's own bytes, which become the
 // new value (its shortest exact decimal; a value that did not change keeps its spelling). So the

@@ -409,6 +409,9 @@ TEST_CASE("URScript from offline programming: pose_trans(FRAME, POSE) corrected 
   CHECK(refused("w = " + l + "\nmovel(pose_trans(" + f + ", w))\nmovel(pose_trans(p[0, 0, 0, 0, 0, 0], w))\n")
             .find("w is a target in two pose_trans frames") != std::string::npos);
   CHECK(refused("w = " + l + "\nmovel(pose_trans(" + f + ", w))\nmovep(pose_trans(" + f + ", w))\n") == "accepted");
+  // A frame kept as written cannot be a target corrected elsewhere.
+  CHECK(refused("r = " + f + "\nmovel(r)\nmovel(pose_trans(r, " + l + "))\n")
+            .find("p.script:3:18: r is the frame of this pose_trans and a target corrected elsewhere") == 0);
 }
 
 TEST_CASE("URScript from a file: a byte-order mark is kept, the rest read as without it") {
