@@ -339,9 +339,8 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
   std::map<std::string, std::vector<Assignment>> assigned;
   std::vector<Site> sites;
   struct SetTcp {
-    LineAt line;
-    std::size_t end = 0;
-    std::optional<Ref> pose;
+    int line = 0;
+    std::optional<Site> argument;  // a literal or a variable, read as a motion's target is
   };
   std::vector<SetTcp> set_tcps;
   int number = 0;
@@ -360,8 +359,12 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
       a->end = end;
       assigned[a->name].push_back(std::move(*a));
     }
-    if (const Call set = find_call(code.text, kSetTcp); set.at != std::string_view::npos)
-      set_tcps.push_back({line, end, read_ref(code.text, skip_blanks(code.text, set.open), nullptr, "set_tcp")});
+    if (const Call set = find_call(code.text, kSetTcp); set.at != std::string_view::npos) {
+      const std::optional<Ref> pose = read_ref(code.text, skip_blanks(code.text, set.open), nullptr, "set_tcp");
+      set_tcps.push_back(
+          {number, pose ? std::optional<Site>(Site{"set_tcp", line, end, *pose, std::nullopt, std::nullopt, false})
+                        : std::nullopt});
+    }
     const Call call = find_call(code.text, kCalls);
     // movec's via point and its end are two targets, read in order; one not known leaves both.
     std::size_t after = call.open - 1;  // the '(' (unused without a call)
@@ -513,20 +516,16 @@ UrProgram parse_urscript(std::string text, const std::string& source, int joint_
   // The TCPs the program sets: a pose literal, or a variable assigned one once; else unknown.
   for (const SetTcp& set : set_tcps) {
     UrTcp& tcp = program.tcps.emplace_back();
-    tcp.line = set.line.number;
+    tcp.line = set.line;
+    if (!set.argument) continue;
     try {
-      std::optional<UrLiteral> literal;
-      if (set.pose && set.pose->literal) literal = read_literal(program.text, *set.pose, set.line, set.end, "set_tcp");
-      if (set.pose && !set.pose->literal) {
-        const auto it = assigned.find(set.pose->name);
-        if (it != assigned.end() && it->second.size() == 1 && it->second[0].value) {
-          const Assignment& a = it->second[0];
-          literal = read_literal(program.text, *a.value, LineAt{source, a.line, a.start}, a.end, a.name);
-        }
-      }
-      if (literal && literal->pose && literal->numbers.size() == 6) tcp.flange_T_tcp = pose_of(literal->numbers);
+      const Ref& ref = set.argument->target;
+      const UrLiteral literal = read(locate(*set.argument, ref, "set_tcp"), ref, "set_tcp");
+      if (literal.pose && literal.numbers.size() == 6) tcp.flange_T_tcp = pose_of(literal.numbers);
+    } catch (const Unknown&) {
+      // a variable not assigned a literal once: a TCP not known before the program runs
     } catch (const model::InputError&) {
-      // a value that is no number: a TCP not known before the program runs
+      // a value that is no number: the same
     }
   }
   return program;

@@ -101,6 +101,19 @@ std::vector<std::string> named_columns(const ImportOptions& o) {
   return names;
 }
 
+// The number a field spells, a decimal comma read as a point and a leading '+' allowed; nothing
+// when it is none (empty, a word, trailing text).
+std::optional<double> plain_number(std::string text) {
+  std::replace(text.begin(), text.end(), ',', '.');
+  const char* first = text.data();
+  const char* last = text.data() + text.size();
+  if (first != last && *first == '+') ++first;
+  double v = 0.0;
+  const auto [end, ec] = std::from_chars(first, last, v);
+  if (text.empty() || ec != std::errc() || end != last) return std::nullopt;
+  return v;
+}
+
 // A column named by its number, "#7" (1-based; a header may hold a name twice: a motion-capture
 // export's X, Y, Z of the rotation and of the position); 0 when the name is no such number.
 std::size_t column_number(const std::string& name) {
@@ -169,20 +182,15 @@ struct Table {
   }
 
   double number(const std::vector<std::string>& fields, std::size_t c, int line) {
-    std::string text = fields[c];
+    const std::string& text = fields[c];
     decimal_mark(text, c, line);
-    std::replace(text.begin(), text.end(), ',', '.');
-    double v = 0.0;
-    const char* first = text.data();
-    const char* last = text.data() + text.size();
-    if (first != last && *first == '+') ++first;
-    const auto [end, ec] = std::from_chars(first, last, v);
     if (text.empty()) fail_row(line, c, "column '" + names[c] + "' is empty");
-    if (ec != std::errc() || end != last)
+    const std::optional<double> v = plain_number(text);
+    if (!v)
       fail_row(line, c,
                "column '" + files::excerpt(names[c]) + "': '" + files::excerpt(fields[c]) + "' is not a number");
-    if (!std::isfinite(v)) fail_row(line, c, "column '" + names[c] + "' is not finite");
-    return v;
+    if (!std::isfinite(*v)) fail_row(line, c, "column '" + names[c] + "' is not finite");
+    return *v;
   }
 
   // Records the decimal mark of a number's text; refuses one with both marks, and a ','
@@ -238,6 +246,20 @@ EulerConvention parse_euler_convention(const std::string& text) {
   return c;
 }
 
+namespace {
+
+constexpr std::pair<const char*, JointUnit> kJointUnitNames[] = {
+    {"rad", JointUnit::rad}, {"deg", JointUnit::deg}, {"m", JointUnit::m}, {"mm", JointUnit::mm}};
+
+// A joint unit as the options spell it.
+const char* joint_unit_name(JointUnit unit) {
+  for (const auto& [name, u] : kJointUnitNames)
+    if (u == unit) return name;
+  return "?";
+}
+
+}  // namespace
+
 LengthUnit parse_length_unit(const std::string& text) {
   if (text == "m") return LengthUnit::m;
   if (text == "mm") return LengthUnit::mm;
@@ -251,8 +273,7 @@ AngleUnit parse_angle_unit(const std::string& text) {
 }
 
 JointUnit parse_joint_unit(const std::string& text) {
-  for (const auto& [name, unit] : {std::pair{"rad", JointUnit::rad}, std::pair{"deg", JointUnit::deg},
-                                   std::pair{"m", JointUnit::m}, std::pair{"mm", JointUnit::mm}})
+  for (const auto& [name, unit] : kJointUnitNames)
     if (text == name) return unit;
   throw InputError("joint unit '" + files::excerpt(text) + "': expected rad or deg (revolute), m or mm (prismatic)");
 }
@@ -269,10 +290,7 @@ void check_joint_units(const std::vector<JointUnit>& units, const RobotModel& mo
     if (angle != revolute)
       throw InputError("--joint-unit: joint " + std::to_string(j + 1) + " '" + model.joints[j].name + "' of '" +
                        model.name + "' is " + (revolute ? "revolute" : "prismatic") + " but its unit is " +
-                       (u == JointUnit::rad   ? "rad"
-                        : u == JointUnit::deg ? "deg"
-                        : u == JointUnit::m   ? "m"
-                                              : "mm") +
+                       joint_unit_name(u) +
                        (revolute ? " (a revolute joint reads rad or deg" : " (a prismatic joint reads m or mm") +
                        "; give one unit per joint, e.g. --joint-unit deg,deg,m,...)");
   }
@@ -387,11 +405,8 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   std::map<std::size_t, std::pair<std::string, std::string>> unit_of;  // column: unit, option
   const char* const length_name = o.position_unit == LengthUnit::mm ? "mm" : "m";
   const char* const angle_name = o.angle_unit == AngleUnit::deg ? "deg" : "rad";
-  for (std::size_t j = 0; j < joint_columns.size(); ++j) {
-    static constexpr const char* kJointNames[] = {"rad", "deg", "m", "mm"};
-    unit_of[joint_columns[j]] = {kJointNames[static_cast<int>(o.joint_units[o.joint_units.size() == 1 ? 0 : j])],
-                                 "--joint-unit"};
-  }
+  for (std::size_t j = 0; j < joint_columns.size(); ++j)
+    unit_of[joint_columns[j]] = {joint_unit_name(o.joint_units[o.joint_units.size() == 1 ? 0 : j]), "--joint-unit"};
   for (const auto* three : {&position_std, &angles, &angle_std})
     for (std::size_t k = 0; *three && k < 3; ++k)
       unit_of[(**three)[k]] = three == &position_std
@@ -405,41 +420,6 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   while (std::getline(in, line)) {
     ++number;
     if (trim_field(line, true).empty()) continue;
-    // A units row under the header (motion-capture and tracker exports: "mm", "deg"): no named
-    // column holds a number and one holds a unit word. Each unit it gives is held against the
-    // options: a file in mm imported as m is refused, naming both.
-    if (std::exchange(first_row, false)) {
-      const std::optional<std::vector<std::string>> fields = split_quoted_fields(line, result.separator);
-      const auto is_number = [](std::string f) {
-        std::replace(f.begin(), f.end(), ',', '.');
-        double v = 0.0;
-        const char* first = f.data() + (!f.empty() && f[0] == '+' ? 1 : 0);
-        const auto [end, ec] = std::from_chars(first, f.data() + f.size(), v);
-        return !f.empty() && ec == std::errc() && end == f.data() + f.size();
-      };
-      if (fields && fields->size() == t.names.size()) {
-        bool units = false, numbers = false;
-        for (const auto& [column, unit] : unit_of) {
-          const std::string cell = trim_field((*fields)[column]);
-          numbers = numbers || is_number(cell);
-          units = units || !unit_word(cell).empty();
-        }
-        if (units && !numbers) {
-          for (const auto& [column, unit] : unit_of) {
-            const std::string cell = trim_field((*fields)[column]);
-            const std::string word = unit_word(cell);
-            if (cell.empty() || word == unit.first) continue;
-            fail(source, number, column,
-                 "the units row under the header gives '" + files::excerpt(cell) + "' for column '" +
-                     files::excerpt(t.names[column]) + "', " + unit.second + " says " + unit.first +
-                     (word.empty() ? " (and '" + files::excerpt(cell) + "' is no unit kincal reads: m, mm, rad, deg)"
-                                   : ": give " + unit.second + " " + word + " if the file is in " + word));
-          }
-          result.units_line = number;
-          continue;
-        }
-      }
-    }
     if (result.data.rows.size() == kMaxRows) fail(source, number, 0, too_many_rows());
     const std::vector<std::string> fields = export_fields(line, result.separator, source, number);
     if (fields.size() != t.names.size())
@@ -450,6 +430,27 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
                     ? " (decimal commas in a ',' separated file must be quoted, \"-21,14\", or the file "
                       "separated by ';' or tabs)"
                     : ""));
+    // A units row under the header (motion-capture and tracker exports: "mm", "deg"): no named
+    // column holds a number and one holds a unit word. Each unit it gives is held against the
+    // options: a file in mm imported as m is refused, naming both.
+    if (std::exchange(first_row, false) &&
+        std::any_of(unit_of.begin(), unit_of.end(),
+                    [&](const auto& u) { return !unit_word(fields[u.first]).empty(); }) &&
+        std::none_of(unit_of.begin(), unit_of.end(),
+                     [&](const auto& u) { return plain_number(fields[u.first]).has_value(); })) {
+      for (const auto& [column, unit] : unit_of) {
+        const std::string& cell = fields[column];
+        const std::string word = unit_word(cell);
+        if (cell.empty() || word == unit.first) continue;
+        fail(source, number, column,
+             "the units row under the header gives '" + files::excerpt(cell) + "' for column '" +
+                 files::excerpt(t.names[column]) + "', " + unit.second + " says " + unit.first +
+                 (word.empty() ? " (and '" + files::excerpt(cell) + "' is no unit kincal reads: m, mm, rad, deg)"
+                               : ": give " + unit.second + " " + word + " if the file is in " + word));
+      }
+      result.units_line = number;
+      continue;
+    }
     Measurement m;
     m.line = number;
     if (o.id) {
