@@ -357,6 +357,63 @@ void register_base(RobotModel& start, const model::Dataset& data, std::vector<st
   notes.push_back(note.str());
 }
 
+// A frame tool whose orientation is far from the data's (a 6-DoF probe or a board mounted any way
+// round: tens of degrees, where the solver can settle with orientation and position pulling
+// apart): the turn of the tool that best maps the model's tool orientations onto the measured
+// ones at the registered base (the chordal mean of R_model^T R_measured, projected on the
+// rotations) is composed into the tool first. The tool's origin stays, so the base's registration
+// holds.
+void register_tool_turn(RobotModel& start, const model::Dataset& data, std::vector<std::string>& notes) {
+  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+  std::vector<std::pair<Eigen::Matrix3d, Eigen::Matrix3d>> pairs;  // model's, measured
+  for (const model::Measurement& row : data.rows)
+    if (row.orientation) {
+      pairs.emplace_back(model::forward_kinematics(start, row.q).rotation, row.orientation->toRotationMatrix());
+      sum += pairs.back().first.transpose() * pairs.back().second;
+    }
+  const auto rms_deg = [&](const Eigen::Matrix3d& turn) {
+    double sum2 = 0.0;
+    for (const auto& [model_r, measured] : pairs) {
+      const double a = Eigen::AngleAxisd(model_r * turn * measured.transpose()).angle();
+      sum2 += a * a;
+    }
+    return std::sqrt(sum2 / static_cast<double>(pairs.size())) * kDegPerRad;
+  };
+  if (pairs.size() < 2) return;
+  const double before = rms_deg(Eigen::Matrix3d::Identity());
+  if (before < 5.0) return;
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d turn = svd.matrixU() * svd.matrixV().transpose();
+  if (turn.determinant() < 0.0)
+    turn = svd.matrixU() * Eigen::Vector3d(1.0, 1.0, -1.0).asDiagonal() * svd.matrixV().transpose();
+  const double after = rms_deg(turn);
+  if (!(after < 0.5 * before)) return;
+  start.flange_T_tool.rotation = start.flange_T_tool.rotation * turn;
+  std::ostringstream note;
+  note.setf(std::ios::fixed);
+  note.precision(1);
+  note << "the model's tool frame was " << before << " deg RMS from the data's orientations; turned first by "
+       << Eigen::AngleAxisd(turn).angle() * kDegPerRad << " deg (" << after
+       << " deg RMS), the tool changes below are from there";
+  notes.push_back(note.str());
+}
+
+// Both registrations above, the tool's turn when the solve uses orientations and may turn the tool.
+void register_start(RobotModel& start, const model::Dataset& data, bool turn_tool, std::vector<std::string>& notes) {
+  register_base(start, data, notes);
+  if (turn_tool) register_tool_turn(start, data, notes);
+}
+
+// Whether the tool's orientation is the solve's to change: the data's orientations are used and
+// no --fixed entry holds a tool turn.
+bool tool_turn_free(const IdentifyOptions& options, bool orientation_used, int joint_count) {
+  if (!orientation_used) return false;
+  for (const std::string& entry : options.fixed)
+    for (const core::ParameterId& id : parameter_entry_ids(entry, joint_count))
+      if (id.kind >= core::ParameterKind::tool_rx && id.kind <= core::ParameterKind::tool_rz) return false;
+  return true;
+}
+
 // The nominal in the start's parameters, for a start that is not the nominal (cpa's fit): the
 // change of the start that best reproduces the nominal's tool poses (reparameterized and
 // registered as a nominal start would be) at the data's configurations, by the same solver. The
@@ -367,7 +424,8 @@ Eigen::VectorXd nominal_in_start(const RobotModel& nominal, const model::Dataset
                                  std::vector<std::string>& notes) {
   RobotModel reference = reparameterize_for_identification(nominal, options.parallel_tolerance_rad, nullptr);
   std::vector<std::string> unused;
-  if (registered) register_base(reference, data, unused);
+  if (registered)
+    register_start(reference, data, tool_turn_free(options, orientation_used, nominal.joint_count()), unused);
   model::Dataset poses = data;
   for (model::Measurement& row : poses.rows) {
     const Transform pose = model::forward_kinematics(reference, row.q);
@@ -563,7 +621,8 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
   }
   const bool base_free = std::none_of(options.fixed.begin(), options.fixed.end(),
                                       [](const std::string& f) { return f.starts_with("base"); });
-  if (base_free && options.requested.empty()) register_base(result.start, data, result.notes);
+  if (base_free && options.requested.empty())
+    register_start(result.start, data, tool_turn_free(options, result.orientation_used, n), result.notes);
   const Transform tool_before_estimate = result.start.flange_T_tool;  // the record's tool changes are from here
   result.start = with_estimated_measured_point(result.start, data, options, result.orientation_used, result.notes);
 
@@ -974,7 +1033,10 @@ IdentifyResult identify_registration(const RobotModel& nominal, const model::Dat
     if (model::is_motion_parameter(id.kind)) o.requested.push_back(model::parameter_name(id));
   RobotModel start = nominal;
   std::vector<std::string> notes;
-  register_base(start, data, notes);
+  const bool turn_tool =
+      calibrated.orientation_used && std::any_of(o.requested.begin(), o.requested.end(),
+                                                 [](const std::string& name) { return name.starts_with("tool_r"); });
+  register_start(start, data, turn_tool, notes);
   if (o.requested.empty()) {  // nothing of the registration free: the nominal as it is
     IdentifyResult r;
     r.model = r.start = start;
