@@ -100,6 +100,8 @@ std::string summary(const IdentifyArgs& a, const model::Dataset& data, const ide
   if (unexplained)
     for (const std::string& m : identify::frame_check(result.model, data).mistakes)
       *unexplained += "; against the calibrated model, " + m;
+  else if (const auto moved = identify::moved_against(result.model, data))
+    unexplained = "against the calibrated model, " + *moved;
   if (unexplained) std::cerr << "kincal identify: warning: " << *unexplained << '\n';
   if (result.residuals.has_orientation)
     if (const auto turned = identify::unexplained_orientations(result.residuals.rms_rad, result.orientation_sigma_rad))

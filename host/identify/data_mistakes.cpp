@@ -269,6 +269,35 @@ std::pair<double, std::size_t> best_split(const ToolPoses& poses, const std::vec
   return best;
 }
 
+// The sentence for a move found at sampled row `from` (best_split's), the parts fitting to `split`
+// m RMS where one registration leaves `one`: which moved -- the instrument (a registration of its
+// own, the same measured point) or the measured point on the arm (its own offset, the same
+// registration); each fits as well as both together where it is the cause. Neither alone: both
+// moved, or a wrong model's error.
+std::string move_finding(const ToolPoses& poses, const std::vector<model::Vector3>& measured,
+                         const model::Dataset& data, const std::vector<std::size_t>& rows, double split,
+                         std::size_t from, double one) {
+  const int first = data.rows.front().line, at = data.rows[rows[from]].line, before = data.rows[rows[from] - 1].line,
+            last = data.rows.back().line;
+  const double instrument = fitted_rms(poses, measured, false, {from, true, false});
+  const double point = fitted_rms(poses, measured, false, {from, false, true});
+  const bool point_moved = point < instrument && point <= kSameFit * split;
+  const bool instrument_moved = instrument <= point && instrument <= kSameFit * split;
+  const std::string what = point_moved        ? "an offset of their own from the tool"
+                           : instrument_moved ? "a registration of their own"
+                                              : "a registration and an offset from the tool of their own";
+  const std::string cause =
+      point_moved ? "the measured point moved on the arm during the session (a reflector re-seated in another "
+                    "nest, a marker knocked)"
+      : instrument_moved
+          ? "the instrument (or the robot's base) moved during the session"
+          : "the instrument and the measured point moved during the session (or a model far off the arm)";
+  return "the positions fit far better with " + what + " from about line " + std::to_string(at) +
+         " on: " + number(split * 1e3) + " mm RMS against " + number(one * 1e3) + " mm with one: likely " + cause +
+         "; calibrate with the rows of one part (lines " + std::to_string(first) + "-" + std::to_string(before) +
+         " or " + std::to_string(at) + "-" + std::to_string(last) + ")";
+}
+
 }  // namespace
 
 FrameCheck frame_check(const model::RobotModel& nominal, const model::Dataset& data) {
@@ -325,32 +354,20 @@ FrameCheck frame_check(const model::RobotModel& nominal, const model::Dataset& d
   // Two registrations absorb some of a wrong model's error too: the move's must fit the points to
   // an arm's accuracy (below kMistakeFloor_m), not merely better.
   const auto [split, from] = best_split(poses, measured, data, rows);
-  if (split * kMovedRatio < rotated && split < kMistakeFloor_m) {
-    const int first = data.rows.front().line, at = data.rows[rows[from]].line, before = data.rows[rows[from] - 1].line,
-              last = data.rows.back().line;
-    // Which moved: the instrument (a registration of its own, the same measured point) or the
-    // measured point on the arm (its own offset, the same registration); each fits as well as both
-    // together where it is the cause. Neither alone: both moved, or a wrong model's error.
-    const double instrument = fitted_rms(poses, measured, false, {from, true, false});
-    const double point = fitted_rms(poses, measured, false, {from, false, true});
-    const bool point_moved = point < instrument && point <= kSameFit * split;
-    const bool instrument_moved = instrument <= point && instrument <= kSameFit * split;
-    const std::string what = point_moved        ? "an offset of their own from the tool"
-                             : instrument_moved ? "a registration of their own"
-                                                : "a registration and an offset from the tool of their own";
-    const std::string cause =
-        point_moved ? "the measured point moved on the arm during the session (a reflector re-seated in another "
-                      "nest, a marker knocked)"
-        : instrument_moved
-            ? "the instrument (or the robot's base) moved during the session"
-            : "the instrument and the measured point moved during the session (or a model far off the arm)";
-    out.mistakes.push_back("the positions fit far better with " + what + " from about line " + std::to_string(at) +
-                           " on: " + number(split * 1e3) + " mm RMS against " + number(rotated * 1e3) +
-                           " mm with one: likely " + cause + "; calibrate with the rows of one part (lines " +
-                           std::to_string(first) + "-" + std::to_string(before) + " or " + std::to_string(at) + "-" +
-                           std::to_string(last) + ")");
-  }
+  if (split * kMovedRatio < rotated && split < kMistakeFloor_m)
+    out.mistakes.push_back(move_finding(poses, measured, data, rows, split, from, rotated));
   return out;
+}
+
+std::optional<std::string> moved_against(const model::RobotModel& calibrated, const model::Dataset& data) {
+  if (data.rows.size() < 2 * kSplitRows || data.joint_count != calibrated.joint_count()) return std::nullopt;
+  const std::vector<std::size_t> rows = sampled_rows(data.rows.size());
+  const std::vector<model::Vector3> measured = measured_points(data, rows);
+  const ToolPoses poses = tool_poses(calibrated, data, rows);
+  const double one = fitted(poses, measured, false).rms_m;
+  const auto [split, from] = best_split(poses, measured, data, rows);
+  if (!(split * kCalibratedMovedRatio < one)) return std::nullopt;
+  return move_finding(poses, measured, data, rows, split, from, one);
 }
 
 std::optional<std::string> unexplained_fit(double rms_m, double instrument_sigma_m) {
