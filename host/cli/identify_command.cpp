@@ -96,12 +96,14 @@ std::string summary(const IdentifyArgs& a, const model::Dataset& data, const ide
   std::optional<std::string> unexplained =
       identify::unexplained_fit(result.residuals.rms_m, result.median_instrument_sigma_m);
   // The data's checks again against the calibrated model: its geometry no longer hides a move of
-  // the instrument or the logs out of step that the nominal's millimetres did (a service arm).
-  if (unexplained)
-    for (const std::string& m : identify::frame_check(result.model, data).mistakes)
-      *unexplained += "; against the calibrated model, " + m;
-  else if (const auto moved = identify::moved_against(result.model, data))
-    unexplained = "against the calibrated model, " + *moved;
+  // the instrument or the logs out of step that the nominal's millimetres did (a service arm); and
+  // the move alone whatever the residual (data_mistakes.hpp: moved_against).
+  std::vector<std::string> found =
+      unexplained ? identify::frame_check(result.model, data).mistakes : std::vector<std::string>{};
+  if (found.empty())
+    if (const auto moved = identify::moved_against(result.model, data)) found.push_back(*moved);
+  for (const std::string& m : found)
+    unexplained = (unexplained ? *unexplained + "; " : std::string()) + "against the calibrated model, " + m;
   if (unexplained) std::cerr << "kincal identify: warning: " << *unexplained << '\n';
   if (result.residuals.has_orientation)
     if (const auto turned = identify::unexplained_orientations(result.residuals.rms_rad, result.orientation_sigma_rad))

@@ -36,10 +36,13 @@ int run_import(const ImportArgs& a) {
     if (!a.separator.empty()) {
       if (a.separator == "tab" || a.separator == "\\t") {
         o.separator = '\t';
-      } else if (a.separator.size() == 1) {
+      } else if (a.separator == "blanks" || a.separator == " ") {
+        o.separator = ' ';
+      } else if (a.separator.size() == 1 && a.separator != "\"") {
         o.separator = a.separator[0];
       } else {
-        throw model::InputError("--separator '" + a.separator + "': expected one character or 'tab'");
+        throw model::InputError("--separator '" + a.separator +
+                                "': expected one character (not a double quote), 'tab' or 'blanks'");
       }
     }
     o.joints = a.joints;
@@ -77,8 +80,10 @@ int run_import(const ImportArgs& a) {
     model::write_dataset(text, r.data);
     files::write_file_atomically(a.out, text.str());
     std::cout << "kincal import: " << r.data.rows.size() << " rows from " << r.data.source << " (separator '"
-              << (r.separator == '\t' ? std::string("tab") : std::string(1, r.separator)) << "', decimal "
-              << (r.decimal_comma ? "comma" : "point") << "), " << r.data.joint_count << " joints"
+              << (r.separator == '\t'  ? std::string("tab")
+                  : r.separator == ' ' ? std::string("blanks")
+                                       : std::string(1, r.separator))
+              << "', decimal " << (r.decimal_comma ? "comma" : "point") << "), " << r.data.joint_count << " joints"
               << (r.data.has_orientation ? ", position and orientation" : ", positions");
     if (o.position_std) std::cout << "; median position std " << r.median_position_std_m * 1e3 << " mm (covariance)";
     if (o.angle_std)
@@ -122,7 +127,9 @@ void add_import_command(CLI::App& app, int& status) {
   auto* cmd = app.add_subcommand("import", "Turn a measurement export (CSV) into a kincal dataset");
   cmd->add_option("export", a->in, "the measurement export (CSV with one header row; '-': standard input)")->required();
   cmd->add_option("--out,-o", a->out, "the dataset to write (kincal CSV, SI units)")->required();
-  cmd->add_option("--separator", a->separator, "field separator: one character or 'tab' (default: detected)");
+  cmd->add_option("--separator", a->separator,
+                  "field separator: one character, 'tab', or 'blanks' (columns aligned by runs of spaces or tabs) "
+                  "(default: detected; blanks only where no ';', tab or ',' splits the header)");
   cmd->add_option("--joints", a->joints, "header names of the joint readings, in the model's order")
       ->delimiter(',')
       ->required();

@@ -2,7 +2,8 @@
 // measurement exports (measurement_import.cpp): fields between separators, each trimmed of
 // spaces, tabs and carriage returns. The dataset's and an export's fields may be quoted as RFC
 // 4180 says (split_quoted_fields), which a text column (a row id or a spreadsheet's time stamp
-// that holds a comma) needs.
+// that holds a comma) needs; an export's columns may be aligned by runs of blanks instead
+// (split_blank_fields).
 #pragma once
 
 #include <optional>
@@ -70,6 +71,42 @@ inline std::optional<std::vector<std::string>> split_quoted_fields(const std::st
     fields.push_back(std::move(field));
     if (at >= line.size()) break;
     ++at;  // the separator
+  }
+  return fields;
+}
+
+// The fields of a whitespace-aligned line (columns padded by runs of spaces or tabs, as
+// numpy.savetxt, MATLAB and fixed-width reports write them): the fields between runs of blanks,
+// blanks before the first and after the last ignored, so no field is empty; a field in double
+// quotes may hold blanks ("" for a quote). nullopt when a quote is not closed or text follows a
+// closing quote.
+inline std::optional<std::vector<std::string>> split_blank_fields(const std::string& line) {
+  const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
+  std::vector<std::string> fields;
+  std::size_t at = 0;
+  while (true) {
+    while (at < line.size() && blank(line[at])) ++at;
+    if (at >= line.size()) break;
+    std::string field;
+    if (line[at] == '"') {
+      bool closed = false;
+      for (++at; at < line.size() && !closed; ++at) {
+        if (line[at] != '"') {
+          field += line[at];
+        } else if (at + 1 < line.size() && line[at + 1] == '"') {
+          field += '"';
+          ++at;
+        } else {
+          closed = true;
+        }
+      }
+      if (!closed || (at < line.size() && !blank(line[at]))) return std::nullopt;
+    } else {
+      const std::size_t begin = at;
+      while (at < line.size() && !blank(line[at])) ++at;
+      field = line.substr(begin, at - begin);
+    }
+    fields.push_back(std::move(field));
   }
   return fields;
 }

@@ -21,8 +21,16 @@ namespace {
 constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 constexpr int kHeaderSearch = 100;  // lines searched for the header
 
+// The fields of a line split by `separator`: ' ' stands for runs of blanks (split_blank_fields),
+// any other as RFC 4180 quotes them (split_quoted_fields).
+std::optional<std::vector<std::string>> line_fields(const std::string& line, char separator) {
+  return separator == ' ' ? split_blank_fields(line) : split_quoted_fields(line, separator);
+}
+
 // The one of ';', tab and ',' that splits the header into the most fields as RFC 4180 quotes them
-// (split_quoted_fields: a quoted name may hold any of them).
+// (split_quoted_fields: a quoted name may hold any of them); runs of blanks (' ') only when none of
+// them splits it at all (a whitespace-aligned export: no header of one column is imported, so the
+// blanks cannot be inside a name there).
 char detect_separator(const std::string& header) {
   char best = ',';
   std::size_t most = 1;  // one field: no separator, ","
@@ -33,6 +41,9 @@ char detect_separator(const std::string& header) {
       best = c;
     }
   }
+  if (most == 1)
+    if (const std::optional<std::vector<std::string>> fields = split_blank_fields(header); fields && fields->size() > 1)
+      best = ' ';
   return best;
 }
 
@@ -45,7 +56,7 @@ char detect_separator(const std::string& header) {
 // holds a comma. A quote left open (a field spanning lines) or text after a closing quote is
 // refused.
 std::vector<std::string> export_fields(const std::string& line, char separator, const std::string& source, int number) {
-  std::optional<std::vector<std::string>> fields = split_quoted_fields(line, separator);
+  std::optional<std::vector<std::string>> fields = line_fields(line, separator);
   if (!fields)
     fail(source, number, 0,
          "a double quote is not closed on this line, or text follows a closing quote (a quoted field may hold the "
@@ -123,10 +134,20 @@ std::size_t column_number(const std::string& name) {
   return ec == std::errc() && end == name.data() + name.size() ? n : 0;
 }
 
+// A header written as a comment, "# J1  J2  X ..." (numpy.savetxt, gnuplot-style data files): the
+// '#' and the blank after it are no column. A column named "#" (a row number) is followed by its
+// separator, not a blank, and is kept.
+void drop_comment_mark(std::string& line) {
+  const std::size_t at = line.find_first_not_of(" \t");
+  if (at != std::string::npos && line[at] == '#' && at + 1 < line.size() &&
+      (line[at + 1] == ' ' || line[at + 1] == '\t'))
+    line[at] = ' ';
+}
+
 // Whether a line, split by the given separator or the one detected on it, holds every name.
 bool holds_every(const std::string& line, char separator, const std::vector<std::string>& names) {
   std::optional<std::vector<std::string>> fields =
-      split_quoted_fields(line, separator != 0 ? separator : detect_separator(line));
+      line_fields(line, separator != 0 ? separator : detect_separator(line));
   if (!fields) return false;
   for (std::string& f : *fields) f = trim_field(f);
   return std::all_of(names.begin(), names.end(), [&](const std::string& name) {
@@ -337,6 +358,7 @@ ImportResult import_measurements(std::istream& in, const std::string& source, co
   bool found = false;
   while (!found && number < kHeaderSearch && std::getline(in, line)) {
     ++number;
+    drop_comment_mark(line);
     if (trim_field(line, true).empty()) continue;
     if (first_number == 0) {
       first_number = number;

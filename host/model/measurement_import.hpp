@@ -7,17 +7,19 @@
 // A column is named by its header name, or by its number, "#7" (1-based), where the header holds
 // a name twice (a motion-capture export's X, Y, Z of the rotation and of the position): a name
 // that appears twice is refused only when an option names it, the message giving both numbers.
-// The header is the first line holding every named column, among the first 100 lines: lines
+// A header written as a comment ("# J1  J2  X ...", as numpy.savetxt writes it) is read without
+// the '#'. The header is the first line holding every named column, among the first 100 lines: lines
 // before it (a title, the instrument's settings, a spreadsheet's "sep=;") are skipped. When no
 // line holds them all, the first line that is not blank is taken, and the message names the
 // column it lacks.
 // Guessed only where no ambiguity exists: the separator (the header line's most frequent of ';',
-// tab and ',' outside double quotes; or given), and the decimal mark, from the numbers together:
-// a comma in a number is a decimal comma (in a ',' separated file it can only be there in a
-// quoted field, "-21,140068", as spreadsheets write it). Refused as ambiguous: a number with both
-// '.' and ',' (a thousands separator), a ',' separated file whose numbers use both marks, and a
-// ',' separated row with more fields than the header (unquoted decimal commas: the message says
-// so).
+// tab and ',' outside double quotes; runs of blanks when none of those splits it -- a whitespace-
+// aligned export, numpy.savetxt's or a fixed-width report's, whose header names cannot hold a blank
+// unless quoted and whose cells cannot be empty; or given), and the decimal mark, from the numbers
+// together: a comma in a number is a decimal comma (in a ',' separated file it can only be there in
+// a quoted field, "-21,140068", as spreadsheets write it). Refused as ambiguous: a number with both
+// '.' and ',' (a thousands separator), a ',' separated file whose numbers use both marks, and a ','
+// separated row with more fields than the header (unquoted decimal commas: the message says so).
 //
 // Euler conventions: "intrinsic-ABC" or "extrinsic-ABC" with ABC three axis letters (x, y, z, no
 // two neighbours equal), the angles given in the order of the letters:
@@ -102,7 +104,7 @@ JointUnit parse_joint_unit(const std::string& text);    // "rad", "deg", "m" or 
 Eigen::Matrix3d rotation_from_euler(const EulerConvention& convention, const Eigen::Vector3d& angles_rad);
 
 struct ImportOptions {
-  char separator = 0;                                  // 0: detect from the header line
+  char separator = 0;                                  // 0: detect from the header line; ' ': runs of blanks
   std::vector<std::string> joints;                     // header names, in the model's joint order
   std::vector<JointUnit> joint_units{JointUnit::rad};  // one for all joints, or one per joint
   std::array<std::string, 3> position;                 // x, y, z
@@ -118,7 +120,7 @@ struct ImportOptions {
 
 struct ImportResult {
   Dataset data;
-  char separator = ',';
+  char separator = ',';  // the one used (' ': runs of blanks)
   bool decimal_comma = false;
   double median_position_std_m = 0.0;  // over rows and components; 0 without std columns
   double median_angle_std_rad = 0.0;   // read, not written (see above)

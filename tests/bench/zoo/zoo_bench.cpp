@@ -52,7 +52,9 @@ using namespace zoo;
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
-constexpr int kHeldOut = 200, kTargets = 20;
+// 60 TCP targets: the corrected TCP's RMS over 20 (fewer where some need more than the joint-change
+// limit) drew the correct-over-prediction ratio by +-20 % per case, and the figure is the worst case.
+constexpr int kHeldOut = 200, kTargets = 60;
 constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
 
 struct Robot {

@@ -115,6 +115,52 @@ TEST_CASE("tabs and points; errors name file, line and column") {
   CHECK(error_of(rows, o) == "x.csv:" + std::to_string(model::kMaxRows + 2) + ":1: " + model::too_many_rows());
 }
 
+TEST_CASE("a whitespace-aligned export (numpy.savetxt, a fixed-width report): runs of blanks, detected or given") {
+  model::ImportOptions o = two_joint_options();
+  o.joints = {"J1", "J2"};
+  // Padded to the column's width, a leading blank and tabs among the spaces, a blank line.
+  const std::string aligned =
+      "# fixed-width report of a tracker session\n"
+      "     J1        J2          X           Y         Z\n"
+      "   1.500    -2.000     3.000       4.000  \t 5.000\n"
+      "\n"
+      "  10.250     0.000   -300.125    400.000   500.500   \n";
+  std::istringstream in(aligned);
+  const model::ImportResult r = model::import_measurements(in, "x.txt", o);
+  CHECK(r.separator == ' ');
+  CHECK(r.header_line == 2);
+  REQUIRE(r.data.rows.size() == 2);
+  CHECK(r.data.rows[0].q[1] == doctest::Approx(-2.0 * kDeg));
+  CHECK(r.data.rows[1].position.x() == doctest::Approx(-0.300125));
+  CHECK(r.data.rows[1].line == 5);
+  o.separator = ' ';  // given: the same
+  std::istringstream again(aligned);
+  CHECK(model::import_measurements(again, "x.txt", o).data.rows.size() == 2);
+  // Names with a blank stand in quotes; a cell left empty cannot be told from alignment: the row
+  // has fewer fields than the header, named.
+  o.joints = {"J 1", "J 2"};
+  std::istringstream quoted("\"J 1\"  \"J 2\"   X   Y   Z\n 1  2  3  4  5\n");
+  CHECK(model::import_measurements(quoted, "x.txt", o).data.rows[0].position.z() == doctest::Approx(0.005));
+  CHECK(error_of("\"J 1\" \"J 2\" X Y Z\n1 2  4 5\n", o)
+            .starts_with("x.csv:2:5: expected 5 fields as in the header, found 4"));
+  CHECK(error_of("\"J 1\" \"J 2\" X Y Z\n1 2 \"3 4 5\n", o).starts_with("x.csv:2:1: a double quote is not closed"));
+  // A comma in a number of such a file is a decimal comma, as in a ';' separated one.
+  o.joints = {"J1", "J2"};
+  std::istringstream commas("J1 J2 X Y Z\n1,5 2 3 4 5\n");
+  const model::ImportResult c = model::import_measurements(commas, "x.txt", o);
+  CHECK(c.decimal_comma);
+  CHECK(c.data.rows[0].q[0] == doctest::Approx(1.5 * kDeg));
+  // numpy.savetxt's header is a comment, "# J1 J2 ...": the mark is no column; a column named "#"
+  // (a row number) is one.
+  std::istringstream numpy("# J1  J2  X  Y  Z\n 1.0  2.0  3.0  4.0  5.0\n");
+  CHECK(model::import_measurements(numpy, "x.txt", o).data.rows[0].position.z() == doctest::Approx(0.005));
+  std::istringstream numbered("#;J1;J2;X;Y;Z\n7;1;2;3;4;5\n");
+  CHECK(model::import_measurements(numbered, "x.csv", o).data.rows[0].position.z() == doctest::Approx(0.005));
+  // A header a ';', tab or ',' splits is never split at its blanks.
+  std::istringstream semicolons("J1 ;J2; X ;Y;Z\n1;2;3;4;5\n");
+  CHECK(model::import_measurements(semicolons, "x.csv", o).separator == ';');
+}
+
 TEST_CASE("the real UR10 laser-tracker export, read as it is") {
   const model::ImportResult r = kincal::realdata::import_ur10(KINCAL_REALDATA_DIR);
   CHECK(r.separator == ';');
