@@ -136,6 +136,7 @@ TEST_CASE("a whitespace-aligned export (numpy.savetxt, a fixed-width report): ru
   o.separator = ' ';  // given: the same
   std::istringstream again(aligned);
   CHECK(model::import_measurements(again, "x.txt", o).data.rows.size() == 2);
+  o.separator = 0;
   // Names with a blank stand in quotes; a cell left empty cannot be told from alignment: the row
   // has fewer fields than the header, named.
   o.joints = {"J 1", "J 2"};
