@@ -36,6 +36,23 @@ inline std::vector<std::string> split_fields(const std::string& line, char separ
   return fields;
 }
 
+// The field in double quotes that starts at line[at]: its text ("" standing for one quote) into
+// `field`, `at` past the closing quote; false when the quote is not closed on the line.
+inline bool read_quoted_field(const std::string& line, std::size_t& at, std::string& field) {
+  for (++at; at < line.size(); ++at) {
+    if (line[at] != '"') {
+      field += line[at];
+    } else if (at + 1 < line.size() && line[at + 1] == '"') {
+      field += '"';
+      ++at;
+    } else {
+      ++at;
+      return true;
+    }
+  }
+  return false;
+}
+
 // RFC 4180 fields of `line`: a field that starts (after blanks) with a double quote runs to the
 // matching quote, "" inside it standing for one quote, and may hold separators; other fields as
 // split_fields(). nullopt when a quote is not closed or text follows a closing quote.
@@ -47,18 +64,7 @@ inline std::optional<std::vector<std::string>> split_quoted_fields(const std::st
     while (at < line.size() && (line[at] == ' ' || line[at] == '\t')) ++at;
     std::string field;
     if (at < line.size() && line[at] == '"') {
-      bool closed = false;
-      for (++at; at < line.size() && !closed; ++at) {
-        if (line[at] != '"') {
-          field += line[at];
-        } else if (at + 1 < line.size() && line[at + 1] == '"') {
-          field += '"';
-          ++at;
-        } else {
-          closed = true;
-        }
-      }
-      if (!closed) return std::nullopt;
+      if (!read_quoted_field(line, at, field)) return std::nullopt;
       while (at < line.size() && line[at] != separator) {
         if (line[at] != ' ' && line[at] != '\t' && line[at] != '\r') return std::nullopt;
         ++at;
@@ -89,18 +95,7 @@ inline std::optional<std::vector<std::string>> split_blank_fields(const std::str
     if (at >= line.size()) break;
     std::string field;
     if (line[at] == '"') {
-      bool closed = false;
-      for (++at; at < line.size() && !closed; ++at) {
-        if (line[at] != '"') {
-          field += line[at];
-        } else if (at + 1 < line.size() && line[at + 1] == '"') {
-          field += '"';
-          ++at;
-        } else {
-          closed = true;
-        }
-      }
-      if (!closed || (at < line.size() && !blank(line[at]))) return std::nullopt;
+      if (!read_quoted_field(line, at, field) || (at < line.size() && !blank(line[at]))) return std::nullopt;
     } else {
       const std::size_t begin = at;
       while (at < line.size() && !blank(line[at])) ++at;
