@@ -11,9 +11,9 @@
 #include <sstream>
 
 #include <Eigen/QR>
-#include <Eigen/SVD>
 
 #include "host/identify/statistics.hpp"
+#include "host/model/isometry.hpp"
 
 namespace kincal::identify {
 
@@ -596,16 +596,7 @@ SweepAnalysis analyse_sweeps(const model::Dataset& data, std::span<const std::op
     }
   }
   result.tool_home.translation = sum / static_cast<double>(count);
-  if (use_orientation) {
-    Eigen::JacobiSVD<Eigen::Matrix3d> svd(rotation_sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    Eigen::Matrix3d r = svd.matrixU() * svd.matrixV().transpose();
-    if (r.determinant() < 0) {
-      Eigen::Matrix3d u = svd.matrixU();
-      u.col(2) *= -1.0;
-      r = u * svd.matrixV().transpose();
-    }
-    result.tool_home.rotation = r;
-  }
+  if (use_orientation) result.tool_home.rotation = model::nearest_rotation(rotation_sum);
   return result;
 }
 

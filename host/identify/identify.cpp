@@ -19,6 +19,7 @@
 #include "host/identify/sag.hpp"
 #include "host/identify/statistics.hpp"
 #include "host/model/axes.hpp"
+#include "host/model/isometry.hpp"
 #include "host/model/reading_coverage.hpp"
 
 namespace kincal::identify {
@@ -382,10 +383,7 @@ void register_tool_turn(RobotModel& start, const model::Dataset& data, std::vect
   if (pairs.size() < 2) return;
   const double before = rms_deg(Eigen::Matrix3d::Identity());
   if (before < 5.0) return;
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d turn = svd.matrixU() * svd.matrixV().transpose();
-  if (turn.determinant() < 0.0)
-    turn = svd.matrixU() * Eigen::Vector3d(1.0, 1.0, -1.0).asDiagonal() * svd.matrixV().transpose();
+  const Eigen::Matrix3d turn = model::nearest_rotation(sum);
   const double after = rms_deg(turn);
   if (!(after < 0.5 * before)) return;
   start.flange_T_tool.rotation = start.flange_T_tool.rotation * turn;
