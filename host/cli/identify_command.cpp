@@ -101,7 +101,9 @@ std::string summary(const IdentifyArgs& a, const model::Dataset& data, const ide
   std::vector<std::string> found =
       unexplained ? identify::frame_check(result.model, data).mistakes : std::vector<std::string>{};
   if (found.empty())
-    if (const auto moved = identify::moved_against(result.model, data)) found.push_back(*moved);
+    if (const auto moved = identify::moved_against(result.model, data, unexplained.has_value(),
+                                                   static_cast<int>(result.identifiability.identified.size())))
+      found.push_back(*moved);
   for (const std::string& m : found)
     unexplained = (unexplained ? *unexplained + "; " : std::string()) + "against the calibrated model, " + m;
   if (unexplained) std::cerr << "kincal identify: warning: " << *unexplained << '\n';

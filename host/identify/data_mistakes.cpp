@@ -10,6 +10,8 @@
 
 #include <Eigen/SVD>
 
+#include "host/identify/statistics.hpp"
+
 namespace kincal::identify {
 
 std::string finding_number(double v) {
@@ -359,14 +361,25 @@ FrameCheck frame_check(const model::RobotModel& nominal, const model::Dataset& d
   return out;
 }
 
-std::optional<std::string> moved_against(const model::RobotModel& calibrated, const model::Dataset& data) {
+std::optional<std::string> moved_against(const model::RobotModel& calibrated, const model::Dataset& data,
+                                         bool fit_unexplained, int identified_parameters) {
   if (data.rows.size() < 2 * kSplitRows || data.joint_count != calibrated.joint_count()) return std::nullopt;
   const std::vector<std::size_t> rows = sampled_rows(data.rows.size());
   const std::vector<model::Vector3> measured = measured_points(data, rows);
   const ToolPoses poses = tool_poses(calibrated, data, rows);
   const double one = fitted(poses, measured, false).rms_m;
   const auto [split, from] = best_split(poses, measured, data, rows);
-  if (!(split * kCalibratedMovedRatio < one)) return std::nullopt;
+  // The F test of the second part's 9 parameters: the sums of squares are the rows' count times
+  // the RMS squared, the count cancels.
+  const auto significant = [&, split = split] {
+    const double rest = 3.0 * static_cast<double>(rows.size()) - identified_parameters - 9.0;
+    if (!(rest >= 1.0) || !(split > 0.0)) return false;
+    const double f = ((one * one - split * split) / 9.0) / (split * split / rest);
+    return 1.0 - fisher_cdf(f, 9.0, rest) < kMoveSignificance;
+  };
+  const bool found =
+      split * kCalibratedMovedRatio < one || (fit_unexplained && split * kUnexplainedMovedRatio < one && significant());
+  if (!found) return std::nullopt;
   return move_finding(poses, measured, data, rows, split, from, one);
 }
 

@@ -18,6 +18,7 @@
 #include "host/identify/data_mistakes.hpp"
 #include "host/identify/identify.hpp"
 #include "host/identify/plausibility.hpp"
+#include "host/model/dataset.hpp"
 #include "host/model/model_file.hpp"
 #include "host/sim/robot.hpp"
 #include "tests/host/identify/simulation.hpp"
@@ -34,6 +35,9 @@ bool mentions(const std::vector<std::string>& found, const std::string& text) {
     if (f.find(text) != std::string::npos) return true;
   return false;
 }
+
+// The parameters a calibration identified: what moved_against's significance test counts.
+int identified(const identify::IdentifyResult& r) { return static_cast<int>(r.identifiability.identified.size()); }
 
 // A truth with `error` sized geometry errors and a measured point 50-150 mm off the nominal tool,
 // measured in a device frame placed anywhere: rows of `count` random configurations.
@@ -199,10 +203,10 @@ TEST_CASE("a precise arm's tracker nudged under the floor: found against the cal
     for (std::size_t i = from; i < data.rows.size(); ++i)
       moved.rows[i].position = centre + turn * (data.rows[i].position - centre) + Eigen::Vector3d(0.003, 0.0, -0.004);
     const identify::IdentifyResult clean = identify::identify(nominal, data, identify::IdentifyOptions{});
-    CHECK_FALSE(identify::moved_against(clean.model, data));
+    CHECK_FALSE(identify::moved_against(clean.model, data, false, identified(clean)));
     const identify::IdentifyResult r = identify::identify(nominal, moved, identify::IdentifyOptions{});
     MESSAGE(name << ": calibrated on the moved rows to " << r.residuals.rms_m * 1e3 << " mm RMS");
-    const std::optional<std::string> found = identify::moved_against(r.model, moved);
+    const std::optional<std::string> found = identify::moved_against(r.model, moved, false, identified(r));
     REQUIRE(found);
     CHECK(mentions({*found}, "moved during the session"));
     int near = 0;
@@ -210,6 +214,33 @@ TEST_CASE("a precise arm's tracker nudged under the floor: found against the cal
       near += mentions({*found}, "from about line " + std::to_string(data.rows[from].line + d) + " on") ? 1 : 0;
     CHECK(near == 1);
   }
+}
+
+TEST_CASE("a reflector re-seated for the last 8 of 20 rows, absorbed by a calibration with scales: named") {
+  // The zoo's draw 8, ur10/tracker-point/scaled/20/marker-moved (its independent simulator's rows):
+  // a UR10 with a joint's reading off its scale, a reflector 70 mm off the flange re-seated 40 mm
+  // away for the last 8 of 20 rows. Calibrated with every joint's scale (model selection's choice
+  // there), 33 parameters absorb most of the re-seat and leave 14 mm RMS: unexplained. A second
+  // part fits the calibrated model 2.4 times better -- under kCalibratedMovedRatio, which decides
+  // alone where a fit looks right, so it was not named -- and its 9 parameters are significant
+  // against the 27 degrees of freedom left. The same rows without the re-seat give nothing.
+  const std::string dir = KINCAL_TEST_DATA_DIR;
+  model::RobotModel nominal = model::load_model(std::string(KINCAL_ROBOTS_DIR) + "/ur10.urdf", {"", "tool0"});
+  for (model::Joint& j : nominal.joints) j.scale = 1.0;
+  const model::Dataset clean_rows = model::read_dataset(dir + "/ur10_marker_clean.csv");
+  const model::Dataset moved = model::read_dataset(dir + "/ur10_marker_reseated.csv");
+  const identify::IdentifyResult clean = identify::identify(nominal, clean_rows, identify::IdentifyOptions{});
+  const identify::IdentifyResult r = identify::identify(nominal, moved, identify::IdentifyOptions{});
+  MESSAGE("calibrated to " << clean.residuals.rms_m * 1e3 << " mm RMS, with the re-seat " << r.residuals.rms_m * 1e3
+                           << " mm");
+  CHECK_FALSE(identify::moved_against(clean.model, clean_rows, false, identified(clean)));
+  REQUIRE(identify::unexplained_fit(r.residuals.rms_m, 0.0));
+  CHECK_FALSE(identify::moved_against(r.model, moved, false, identified(r)));
+  const std::optional<std::string> found = identify::moved_against(r.model, moved, true, identified(r));
+  REQUIRE(found);
+  MESSAGE(*found);
+  CHECK(mentions({*found}, "the measured point moved on the arm during the session"));
+  CHECK(mentions({*found}, "from about line 14 on"));
 }
 
 TEST_CASE("single-joint sweeps of an arm far off its drawing: no move, no shift is found") {
