@@ -36,7 +36,12 @@ with open(kincal, "rb") as f:
 env = dict(os.environ)
 prefix = []
 if sanitized:
-    env["ASAN_OPTIONS"] = (env.get("ASAN_OPTIONS", "") + f":hard_rss_limit_mb={MEMORY_MB}").lstrip(":")
+    # The limit is for the program's own memory: ASan's default 256 MB quarantine of freed blocks
+    # pinned 1.7 GB of RSS on identify:inverse rotations accepted (40 rows, model selection's churn of
+    # Eigen matrices; 79 MB at most in Release, 0.74 GB with a 64 MB quarantine), which still catches
+    # a use after free of any block among the last 64 MB freed.
+    limits = f":hard_rss_limit_mb={MEMORY_MB}:quarantine_size_mb=64"
+    env["ASAN_OPTIONS"] = (env.get("ASAN_OPTIONS", "") + limits).lstrip(":")
 elif shutil.which("prlimit"):
     prefix = ["prlimit", f"--as={MEMORY_MB << 20}"]
 
@@ -143,8 +148,11 @@ case("identify:millimetres", ident + ["--data", "mm.csv", "--out", "o.yaml"], r"
 case("identify:xyzw", ident + ["--data", "xyzw.csv", "--out", "o.yaml"], r"likely quaternions in x,y,z,w order")
 case("identify:inverse rotations", ident + ["--data", "inverse.csv", "--out", "o.yaml"], r"likely each quaternion the inverse rotation")
 case("identify:jpl", ident + ["--data", "jpl.csv", "--out", "o.yaml"], r"likely JPL quaternions")
+# 5 s in Release; under ASan 90 s alone and 185 s beside two other cases (model selection on orientations
+# that fit no tool), so its limit is the hang's, not the others' 300 s.
 case("identify:inverse rotations accepted", ident + ["--data", "inverse.csv", "--out", "o.yaml", "--accept-implausible"],
-     r"warning: the calibrated model leaves [0-9.]+ deg RMS in orientation.*the positions' fit stands", rc_ok=True)
+     r"warning: the calibrated model leaves [0-9.]+ deg RMS in orientation.*the positions' fit stands", rc_ok=True,
+     timeout=900)
 case("identify:inches", ident + ["--data", "inches.csv", "--out", "o.yaml"], r"39\.[0-9]+ times as far.*likely inches given as metres")
 case("identify:joint reversed", ident + ["--data", "reversed.csv", "--out", "o.yaml"],
      r"joint 3 \([a-z0-9_]+\) read with its sign reversed.*likely the controller counts joint 3 the other way round")
