@@ -113,7 +113,7 @@ FrameCheck frame_check(const model::RobotModel& nominal, const model::Dataset& d
 // check no longer decides whether something is wrong, only names what: a move then need fit only
 // kUnexplainedMovedRatio times better, where the second part's registration and offset (9
 // parameters) are significant at kMoveSignificance by an F test against the calibration's residual
-// degrees of freedom (3 rows - `identified_parameters`; none left: no finding). A measured point
+// degrees of freedom (3 a row - `identified_parameters`; none left: no finding). A measured point
 // re-seated 40 mm away for the last 8 of 20 rows of a UR10 with a joint scale error: the 33
 // parameters absorbed most of it (14 mm RMS left), a second part fits 2.4 times better, F(9, 18) =
 // 9.5 (p 3e-5); the real UR10's rows without a move never reach an unexplained fit.
