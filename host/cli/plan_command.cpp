@@ -69,7 +69,10 @@ std::string summary(const PlanArgs& a, const model::RobotModel& m, const identif
   const identify::PlanOptions defaults;
   std::ostringstream out;
   out << "# kincal plan: " << a.count << " configurations of " << m.name << " for " << r.identified.size()
-      << " identifiable parameters (" << r.held_fixed.size() << " held fixed)\n"
+      << " identifiable parameters (" << r.held_fixed.size() << " held fixed"
+      << (r.gravity ? "; the geometry, each joint's gravity compliance and gravity's direction: the model's masses"
+                    : "")
+      << ")\n"
       << "# criterion: "
       << (r.criterion == identify::PlanCriterion::prediction
               ? "prediction (the mean predicted position variance over the candidates)"

@@ -6,11 +6,13 @@
 #include <limits>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <random>
 
 #include <Eigen/Cholesky>
 
 #include "host/identify/identify.hpp"
+#include "host/identify/model_selection.hpp"
 #include "host/identify/prior.hpp"
 
 namespace kincal::identify {
@@ -19,7 +21,7 @@ namespace {
 
 using model::InputError;
 
-struct Candidate {
+struct PoolCandidate {
   std::vector<double> q;
   Eigen::MatrixXd j;  // scaled, whitened rows (3 or 6) x P
   Eigen::MatrixXd v;  // the covariance of its rows' model error, whitened (rows x rows)
@@ -45,7 +47,7 @@ double trace_product(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) { retur
 // alike).
 struct PlanMatrices {
   Eigen::MatrixXd info, noise;
-  void add(const Candidate& c, double sign) {
+  void add(const PoolCandidate& c, double sign) {
     info += sign * c.j.transpose() * c.j;
     noise += sign * c.j.transpose() * c.v * c.j;
   }
@@ -84,7 +86,7 @@ class ExchangeGain {
     abn_ = a * inverse_ * reduced_.noise;
     base_ = trace_product(bab_, reduced_.noise);
   }
-  double operator()(const Candidate& c) const {
+  double operator()(const PoolCandidate& c) const {
     const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(c.j.rows(), c.j.rows());
     if (moment_ == nullptr) return log_det(identity + c.j * ldlt_.solve(c.j.transpose()));
     if (direct_) {
@@ -119,7 +121,7 @@ class ExchangeGain {
 };
 
 // The plan without candidate c, with the ridge.
-PlanMatrices without(const PlanMatrices& plan, const Candidate& c) {
+PlanMatrices without(const PlanMatrices& plan, const PoolCandidate& c) {
   PlanMatrices reduced = plan;
   reduced.add(c, -1.0);
   reduced.info += Eigen::MatrixXd::Identity(plan.info.rows(), plan.info.cols()) * kRidge;
@@ -130,7 +132,7 @@ PlanMatrices without(const PlanMatrices& plan, const Candidate& c) {
 // D-optimal), sweep by sweep until no exchange improves it by more than 1e-9 relative (at most 20
 // sweeps); `plan` holds the set's matrices, kept up to date. A sweep tries for each configuration
 // the whole pool while N x pool <= kExchangeBudget, else a random kExchangeBudget / N of it.
-void exchange(const std::vector<Candidate>& pool, const Eigen::MatrixXd* moment, const PlanOptions& options,
+void exchange(const std::vector<PoolCandidate>& pool, const Eigen::MatrixXd* moment, const PlanOptions& options,
               int first_sweep, std::mt19937_64& rng, std::vector<std::size_t>& set, PlanMatrices& plan) {
   std::vector<bool> in_set(pool.size(), false);
   for (std::size_t k : set) in_set[k] = true;
@@ -187,9 +189,9 @@ Eigen::MatrixXd joint_error(const model::RobotModel& m, const std::vector<double
 
 // The rows' weights identify would give them, 1 / s_p and 1 / s_o: the pool's mean spreads of
 // the joints' error per axis (ones without a revolute joint).
-Eigen::VectorXd row_weights(const model::RobotModel& m, const std::vector<Candidate>& pool, int rows) {
+Eigen::VectorXd row_weights(const model::RobotModel& m, const std::vector<PoolCandidate>& pool, int rows) {
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(rows);
-  for (const Candidate& c : pool) {
+  for (const PoolCandidate& c : pool) {
     const Eigen::MatrixXd k = joint_error(m, c.q, rows);
     if (k.size() == 0) return Eigen::VectorXd::Ones(rows);
     sum += k.rowwise().squaredNorm();
@@ -202,7 +204,7 @@ Eigen::VectorXd row_weights(const model::RobotModel& m, const std::vector<Candid
 
 // A candidate's rows weighted by w, and its whitened model-error covariance (identity without a
 // revolute joint: every row alike).
-void whiten(const model::RobotModel& m, const Eigen::VectorXd& w, Candidate& c) {
+void whiten(const model::RobotModel& m, const Eigen::VectorXd& w, PoolCandidate& c) {
   c.j = w.asDiagonal() * c.j;
   const Eigen::MatrixXd k = joint_error(m, c.q, static_cast<int>(w.size()));
   if (k.size() == 0) {
@@ -243,7 +245,7 @@ PlanResult plan_configurations(const model::RobotModel& m, const PlanOptions& op
   // Candidates: the given ones or random draws, split into those meeting every constraint (the
   // pool) and those rejected (kept, a random pool's up to `pool` of them, for the active test).
   std::array<int, kConstraints.size()> rejected_by{};
-  std::vector<Candidate> pool, rejected;
+  std::vector<PoolCandidate> pool, rejected;
   std::vector<unsigned> rejected_mask;
   std::vector<std::size_t> pool_source;  // index into options.candidates
   int considered = 0;
@@ -314,14 +316,29 @@ PlanResult plan_configurations(const model::RobotModel& m, const PlanOptions& op
                      " candidate configurations meet the constraints, " + std::to_string(options.count) +
                      " are asked for" + (alone.empty() ? " (" + counts + ")" : alone));
   }
-  // Pool and identifiable parameters.
-  const RobotModel start = reparameterize_for_identification(m, 0.1, nullptr);
-  const ParameterIds candidates = candidate_parameters(start);
-  Eigen::MatrixXd all(static_cast<Eigen::Index>(pool.size()) * rows, static_cast<Eigen::Index>(candidates.size()));
-  for (std::size_t k = 0; k < pool.size(); ++k)
-    all.middleRows(static_cast<Eigen::Index>(k) * rows, rows) =
-        model::parameter_jacobian(start, pool[k].q, candidates).topRows(rows);
-  const Identifiability ident = analyze_identifiability(all, candidates);
+  // Pool and identifiable parameters: the geometry+gravity candidate's when the model has masses
+  // and the plan's equations carry them (plan.hpp), else the geometry's.
+  struct Parameters {
+    RobotModel start;
+    ParameterIds candidates;
+    Eigen::MatrixXd all;  // the pool's Jacobian rows
+    Identifiability ident;
+  };
+  const auto identifiable = [&](const RobotModel& planned) {
+    Parameters out{reparameterize_for_identification(planned, 0.1, nullptr), {}, {}, {}};
+    out.candidates = candidate_parameters(out.start);
+    out.all.resize(static_cast<Eigen::Index>(pool.size()) * rows, static_cast<Eigen::Index>(out.candidates.size()));
+    for (std::size_t k = 0; k < pool.size(); ++k)
+      out.all.middleRows(static_cast<Eigen::Index>(k) * rows, rows) =
+          model::parameter_jacobian(out.start, pool[k].q, out.candidates).topRows(rows);
+    out.ident = analyze_identifiability(out.all, out.candidates);
+    return out;
+  };
+  const std::optional<RobotModel> with_gravity = options.gravity ? gravity_model(m) : std::nullopt;
+  Parameters planned = identifiable(with_gravity ? *with_gravity : m);
+  result.gravity = with_gravity && options.count * rows >= static_cast<int>(planned.ident.identified.size());
+  if (with_gravity && !result.gravity) planned = identifiable(m);
+  const auto& [start, candidates, all, ident] = planned;
   result.identified = ident.identified;
   result.held_fixed = ident.held_fixed;
   const auto p = static_cast<Eigen::Index>(ident.identified.size());
@@ -351,13 +368,13 @@ PlanResult plan_configurations(const model::RobotModel& m, const PlanOptions& op
     pool[k].j = scaled(all.middleRows(static_cast<Eigen::Index>(k) * rows, rows));
     whiten(m, w, pool[k]);
   }
-  for (Candidate& r : rejected) {
+  for (PoolCandidate& r : rejected) {
     r.j = scaled(model::parameter_jacobian(start, r.q, candidates).topRows(rows));
     whiten(m, w, r);
   }
   // The pool's mean of P^T P: what the prediction criterion averages over.
   Eigen::MatrixXd moment = Eigen::MatrixXd::Zero(p, p);
-  for (const Candidate& c : pool) moment += c.j.topRows(3).transpose() * c.j.topRows(3);
+  for (const PoolCandidate& c : pool) moment += c.j.topRows(3).transpose() * c.j.topRows(3);
   moment /= static_cast<double>(pool.size());
   // identify's priors (options.prior) in the plan's units, where a row's noise is
   // the joints' error over its weight: 1 / (sigma * scale)^2 times sigma_j^2, the joints' error

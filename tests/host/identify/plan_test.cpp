@@ -2,6 +2,7 @@
 // configurations, no planned configuration violating a constraint over random constraint sets
 // (checked here from the kinematics, not through violated_constraints), infeasible sets refused
 // naming the constraint, and the constraints file's errors naming the key and line.
+#include "host/identify/model_selection.hpp"
 #include "host/identify/plan.hpp"
 #include "host/identify/identify.hpp"
 #include "host/identify/plan_constraints.hpp"
@@ -371,11 +372,12 @@ namespace {
 // planner's scaling and updates: rows weighted by the pool's mean spreads of the joints' error
 // (every UR10 joint is revolute), V = K K^T at each planned configuration, A the pool's mean of
 // P^T P, L identify's default priors against a model error of 0.25 mm;
-// sqrt(tr(A (M + L)^-1 (N + L) (M + L)^-1)).
+// sqrt(tr(A (M + L)^-1 (N + L) (M + L)^-1)). The UR10 has masses: the parameters are those of
+// identify's geometry+gravity candidate.
 double prediction_rms_of(const model::RobotModel& m, const identify::ParameterIds& ids,
                          const std::vector<std::vector<double>>& pool, const std::vector<std::vector<double>>& plan,
                          int rows) {
-  const model::RobotModel start = identify::reparameterize_for_identification(m, 0.1, nullptr);
+  const model::RobotModel start = identify::reparameterize_for_identification(*identify::gravity_model(m), 0.1, nullptr);
   double position = 0.0, orientation = 0.0;
   for (const auto& q : pool) {
     const Eigen::MatrixXd k = model::joint_jacobian(m, q);
@@ -416,6 +418,7 @@ TEST_CASE("the prediction criterion: its value recomputed, and no single exchang
   o.candidates = random_configurations(m, 80, rng);
   const identify::PlanResult r = identify::plan_configurations(m, o);
   CHECK(r.criterion == identify::PlanCriterion::prediction);
+  CHECK(r.gravity);
   const double rms = prediction_rms_of(m, r.identified, o.candidates, r.configurations, 6);
   CHECK(r.prediction_rms == doctest::Approx(rms).epsilon(1e-6));
   CHECK(r.prediction_rms < r.random_prediction_rms);
