@@ -72,8 +72,11 @@ std::string summary(const PlanArgs& a, const model::RobotModel& m, const identif
       << " identifiable parameters (" << r.held_fixed.size() << " held fixed"
       << (r.gravity ? "; the geometry, each joint's gravity compliance and gravity's direction: the model's masses"
                     : "")
-      << ")\n"
-      << "# criterion: "
+      << ")\n";
+  if (r.gravity_needs > 0)
+    out << "# the geometry alone: the gravity compliances the model's masses call for need at least " << r.gravity_needs
+        << " configurations\n";
+  out << "# criterion: "
       << (r.criterion == identify::PlanCriterion::prediction
               ? "prediction (the mean predicted position variance over the candidates)"
               : "d-optimal (O1)");

@@ -334,10 +334,14 @@ PlanResult plan_configurations(const model::RobotModel& m, const PlanOptions& op
     out.ident = analyze_identifiability(out.all, out.candidates);
     return out;
   };
-  const std::optional<RobotModel> with_gravity = options.gravity ? gravity_model(m) : std::nullopt;
+  const bool for_gravity = options.gravity && options.criterion == PlanCriterion::prediction;
+  const std::optional<RobotModel> with_gravity = for_gravity ? gravity_model(m) : std::nullopt;
   Parameters planned = identifiable(with_gravity ? *with_gravity : m);
   result.gravity = with_gravity && options.count * rows >= static_cast<int>(planned.ident.identified.size());
-  if (with_gravity && !result.gravity) planned = identifiable(m);
+  if (with_gravity && !result.gravity) {
+    result.gravity_needs = (static_cast<int>(planned.ident.identified.size()) + rows - 1) / rows;
+    planned = identifiable(m);
+  }
   const auto& [start, candidates, all, ident] = planned;
   result.identified = ident.identified;
   result.held_fixed = ident.held_fixed;

@@ -36,12 +36,16 @@
 // parameters' confidence ellipsoid (volume O1^-P) whatever the parameters do to the tool. Both
 // use the identifiable parameters (chosen as `kincal identify` chooses them), each column scaled
 // by its RMS over the pool. When the model's links have masses and it declares no compliance
-// (options.gravity), the parameters are those of identify's geometry+gravity candidate (a gravity
+// (options.gravity, the prediction criterion), the parameters are those of identify's
+// geometry+gravity candidate (a gravity
 // compliance on each joint gravity loads, gravity's direction; model_selection.hpp) where the
 // plan's equations are as many as those parameters (else the geometry's), which model
 // selection chooses on real arms: on the shared UR10 (30 of 995 candidates, seeds 1..5) a plan made
 // for it predicts 0.416 to 0.424 mm held out with that model, one made for the geometry alone
-// 0.431 to 0.458, and with the geometry alone 0.463 to 0.469 against 0.465 to 0.477.
+// 0.431 to 0.458, and with the geometry alone 0.463 to 0.469 against 0.465 to 0.477. D-optimal
+// plans stay with the geometry: O1 weighs the compliances like any parameter, whatever they do to
+// the tool, and its plans for them predicted worse (0.4785 mm held out with the defaults, seeds
+// 1..5, against 0.4520 made for the geometry).
 // Method: Fedorov exchange over the pool, starting from a random set of distinct candidates:
 // first D-optimal (the rank-3, or 6, determinant update), then, for `prediction`, from that plan
 // under the prediction criterion (its Woodbury update, plan.cpp), each until no exchange improves
@@ -82,7 +86,7 @@ struct PlanOptions {
   int random_sets = 50;      // random plans to compare with
   bool orientation = false;  // pose measurements (the tool must be a frame)
   PlanCriterion criterion = PlanCriterion::prediction;
-  bool gravity = true;  // plan for the geometry+gravity candidate when it exists (above)
+  bool gravity = true;  // prediction: plan for the geometry+gravity candidate when it exists (above)
   // The priors identify will put on the parameters (prior.hpp; default: its default widths) and
   // the model error expected per position axis (m) that they weigh against.
   PriorOptions prior;
@@ -119,7 +123,10 @@ struct PlanResult {
   int considered = 0;                          // candidates given or drawn
   int feasible = 0;                            // of them, those meeting every constraint (the exchange's pool)
   std::vector<ConstraintOutcome> constraints;  // the model's joint limits and those given
-  bool gravity = false;  // planned for the geometry+gravity candidate's parameters
+  bool gravity = false;                        // planned for the geometry+gravity candidate's parameters
+  // The geometry+gravity candidate exists but its parameters outnumber the plan's equations: the
+  // configurations it would need (0: not left out).
+  int gravity_needs = 0;
   ParameterIds identified;
   std::vector<HeldFixed> held_fixed;
   PlanCriterion criterion = PlanCriterion::prediction;

@@ -2,9 +2,9 @@
 // configurations, no planned configuration violating a constraint over random constraint sets
 // (checked here from the kinematics, not through violated_constraints), infeasible sets refused
 // naming the constraint, and the constraints file's errors naming the key and line.
-#include "host/identify/model_selection.hpp"
 #include "host/identify/plan.hpp"
 #include "host/identify/identify.hpp"
+#include "host/identify/model_selection.hpp"
 #include "host/identify/plan_constraints.hpp"
 #include "host/model/model_file.hpp"
 
@@ -372,12 +372,13 @@ namespace {
 // planner's scaling and updates: rows weighted by the pool's mean spreads of the joints' error
 // (every UR10 joint is revolute), V = K K^T at each planned configuration, A the pool's mean of
 // P^T P, L identify's default priors against a model error of 0.25 mm;
-// sqrt(tr(A (M + L)^-1 (N + L) (M + L)^-1)). The UR10 has masses: the parameters are those of
-// identify's geometry+gravity candidate.
+// sqrt(tr(A (M + L)^-1 (N + L) (M + L)^-1)). gravity: the parameters are those of identify's
+// geometry+gravity candidate (the UR10 has masses).
 double prediction_rms_of(const model::RobotModel& m, const identify::ParameterIds& ids,
                          const std::vector<std::vector<double>>& pool, const std::vector<std::vector<double>>& plan,
-                         int rows) {
-  const model::RobotModel start = identify::reparameterize_for_identification(*identify::gravity_model(m), 0.1, nullptr);
+                         int rows, bool gravity) {
+  const model::RobotModel start =
+      identify::reparameterize_for_identification(gravity ? *identify::gravity_model(m) : m, 0.1, nullptr);
   double position = 0.0, orientation = 0.0;
   for (const auto& q : pool) {
     const Eigen::MatrixXd k = model::joint_jacobian(m, q);
@@ -419,7 +420,7 @@ TEST_CASE("the prediction criterion: its value recomputed, and no single exchang
   const identify::PlanResult r = identify::plan_configurations(m, o);
   CHECK(r.criterion == identify::PlanCriterion::prediction);
   CHECK(r.gravity);
-  const double rms = prediction_rms_of(m, r.identified, o.candidates, r.configurations, 6);
+  const double rms = prediction_rms_of(m, r.identified, o.candidates, r.configurations, 6, r.gravity);
   CHECK(r.prediction_rms == doctest::Approx(rms).epsilon(1e-6));
   CHECK(r.prediction_rms < r.random_prediction_rms);
   // The rotation rows' weight: the joints' lever arm over the candidates.
@@ -437,15 +438,17 @@ TEST_CASE("the prediction criterion: its value recomputed, and no single exchang
       if (std::find(r.chosen.begin(), r.chosen.end(), c) != r.chosen.end()) continue;
       std::vector<std::vector<double>> exchanged = r.configurations;
       exchanged[i] = o.candidates[c];
-      worse += prediction_rms_of(m, r.identified, o.candidates, exchanged, 6) < rms * (1.0 - 1e-6) ? 1 : 0;
+      worse += prediction_rms_of(m, r.identified, o.candidates, exchanged, 6, r.gravity) < rms * (1.0 - 1e-6) ? 1 : 0;
     }
   CHECK(worse == 0);
   // The D-optimal plan of the same candidates predicts worse by this criterion.
   o.criterion = identify::PlanCriterion::d_optimal;
   const identify::PlanResult d = identify::plan_configurations(m, o);
   CHECK(d.criterion == identify::PlanCriterion::d_optimal);
-  CHECK(d.prediction_rms ==
-        doctest::Approx(prediction_rms_of(m, d.identified, o.candidates, d.configurations, 6)).epsilon(1e-6));
+  CHECK_FALSE(d.gravity);  // O1 plans for the geometry (plan.hpp)
+  CHECK(
+      d.prediction_rms ==
+      doctest::Approx(prediction_rms_of(m, d.identified, o.candidates, d.configurations, 6, d.gravity)).epsilon(1e-6));
   CHECK(d.prediction_rms > r.prediction_rms);
 }
 
@@ -465,6 +468,35 @@ TEST_CASE("the prediction criterion with as few configurations as the parameters
   REQUIRE(r.configurations.size() == static_cast<std::size_t>(o.count));
   CHECK(r.lever_m == 0.0);
   CHECK(std::isfinite(r.prediction_rms));
-  CHECK(r.prediction_rms ==
-        doctest::Approx(prediction_rms_of(m, r.identified, o.candidates, r.configurations, 3)).epsilon(1e-6));
+  CHECK(
+      r.prediction_rms ==
+      doctest::Approx(prediction_rms_of(m, r.identified, o.candidates, r.configurations, 3, r.gravity)).epsilon(1e-6));
+}
+
+TEST_CASE("a model with masses is planned for the gravity compliances when the plan's equations carry them") {
+  const model::RobotModel m = ur10();
+  std::mt19937_64 rng(3);
+  identify::PlanOptions o;
+  o.random_sets = 5;
+  o.candidates = random_configurations(m, 120, rng);
+  o.count = 40;
+  const identify::PlanResult loaded = identify::plan_configurations(m, o);
+  CHECK(loaded.gravity);
+  CHECK(loaded.gravity_needs == 0);
+  const auto compliance = [](const identify::ParameterIds& ids) {
+    return std::count_if(ids.begin(), ids.end(),
+                         [](const core::ParameterId& id) { return id.kind == model::kJointCompliance; });
+  };
+  CHECK(compliance(loaded.identified) > 0);
+  // Too few configurations for them: the geometry alone, never a refusal, and what gravity needs.
+  const auto p = static_cast<int>(loaded.identified.size());
+  o.count = p / 3 - 1;
+  const identify::PlanResult geometry = identify::plan_configurations(m, o);
+  CHECK_FALSE(geometry.gravity);
+  CHECK(geometry.gravity_needs == (p + 2) / 3);
+  CHECK(compliance(geometry.identified) == 0);
+  // Asked not to: the geometry.
+  o.count = 40;
+  o.gravity = false;
+  CHECK_FALSE(identify::plan_configurations(m, o).gravity);
 }
