@@ -452,44 +452,37 @@ TEST_CASE("the prediction criterion: its value recomputed, and no single exchang
   CHECK(d.prediction_rms > r.prediction_rms);
 }
 
-TEST_CASE("the prediction criterion with as few configurations as the parameters allow") {
+TEST_CASE("as few configurations as the parameters allow; with masses, the gravity terms when they fit") {
   // Positions only: 3 rows a configuration, so a plan without one of its configurations has fewer
-  // rows than parameters (the exchange's direct evaluation).
+  // rows than parameters (the exchange's direct evaluation). The UR10 has masses: planned for the
+  // gravity compliances when the plan's equations carry them, else the geometry alone.
   const model::RobotModel m = ur10();
   std::mt19937_64 rng(5);
   identify::PlanOptions o;
   o.random_sets = 10;
   o.candidates = random_configurations(m, 60, rng);
   o.count = 40;
-  const auto p = static_cast<int>(identify::plan_configurations(m, o).identified.size());
+  const identify::PlanResult loaded = identify::plan_configurations(m, o);
+  const auto compliance = [](const identify::ParameterIds& ids) {
+    return std::count_if(ids.begin(), ids.end(),
+                         [](const kincal::core::ParameterId& id) { return id.kind == model::kJointCompliance; });
+  };
+  CHECK(loaded.gravity);
+  CHECK(loaded.gravity_needs == 0);
+  CHECK(compliance(loaded.identified) > 0);
+  const auto p = static_cast<int>(loaded.identified.size());
   o.count = (p + 2) / 3;
   CAPTURE(p);
   const identify::PlanResult r = identify::plan_configurations(m, o);
   REQUIRE(r.configurations.size() == static_cast<std::size_t>(o.count));
+  CHECK(r.gravity);
   CHECK(r.lever_m == 0.0);
   CHECK(std::isfinite(r.prediction_rms));
   CHECK(
       r.prediction_rms ==
       doctest::Approx(prediction_rms_of(m, r.identified, o.candidates, r.configurations, 3, r.gravity)).epsilon(1e-6));
-}
-
-TEST_CASE("a model with masses is planned for the gravity compliances when the plan's equations carry them") {
-  const model::RobotModel m = ur10();
-  std::mt19937_64 rng(3);
-  identify::PlanOptions o;
-  o.random_sets = 5;
-  o.candidates = random_configurations(m, 120, rng);
-  o.count = 40;
-  const identify::PlanResult loaded = identify::plan_configurations(m, o);
-  CHECK(loaded.gravity);
-  CHECK(loaded.gravity_needs == 0);
-  const auto compliance = [](const identify::ParameterIds& ids) {
-    return std::count_if(ids.begin(), ids.end(),
-                         [](const core::ParameterId& id) { return id.kind == model::kJointCompliance; });
-  };
-  CHECK(compliance(loaded.identified) > 0);
-  // Too few configurations for them: the geometry alone, never a refusal, and what gravity needs.
-  const auto p = static_cast<int>(loaded.identified.size());
+  // Too few configurations for the gravity terms: the geometry alone, never a refusal, and what
+  // gravity needs.
   o.count = p / 3 - 1;
   const identify::PlanResult geometry = identify::plan_configurations(m, o);
   CHECK_FALSE(geometry.gravity);
