@@ -37,12 +37,12 @@
 // use the identifiable parameters (chosen as `kincal identify` chooses them), each column scaled
 // by its RMS over the pool. When the model's links have masses and it declares no compliance
 // (options.gravity, the prediction criterion), the parameters are those of identify's
-// geometry+gravity candidate (a gravity
-// compliance on each joint gravity loads, gravity's direction; model_selection.hpp) where the
-// plan's equations are as many as those parameters (else the geometry's), which model
-// selection chooses on real arms: on the shared UR10 (30 of 995 candidates, seeds 1..5) a plan made
-// for it predicts 0.416 to 0.424 mm held out with that model, one made for the geometry alone
-// 0.431 to 0.458, and with the geometry alone 0.463 to 0.469 against 0.465 to 0.477. D-optimal
+// geometry+gravity candidate (a gravity compliance on each joint gravity loads, gravity's
+// direction; model_selection.hpp) where the plan's equations are as many as those parameters
+// (else the geometry's), which model selection chooses on real arms: on the shared UR10 (30 of
+// 995 candidates, seeds 1..5) a plan made for it predicts 0.416 to 0.424 mm held out with that
+// model, one made for the geometry alone 0.431 to 0.458, and with the geometry alone 0.463 to
+// 0.469 against 0.465 to 0.477. D-optimal
 // plans stay with the geometry: O1 weighs the compliances like any parameter, whatever they do to
 // the tool, and its plans for them predicted worse (0.4785 mm held out with the defaults, seeds
 // 1..5, against 0.4520 made for the geometry).

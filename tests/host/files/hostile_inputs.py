@@ -37,8 +37,8 @@ env = dict(os.environ)
 prefix = []
 if sanitized:
     # The limit is for the program's own memory: ASan's default 256 MB quarantine of freed blocks
-    # pinned 1.7 GB of RSS on identify:inverse rotations accepted (40 rows, model selection's churn of
-    # Eigen matrices; 79 MB at most in Release, 0.74 GB with a 64 MB quarantine), which still catches
+    # pinned 1.7 GB of RSS on identify:inverse rotations accepted (40 rows; what allocates so much is
+    # not found; 79 MB at most in Release, 0.74 GB with a 64 MB quarantine), which still catches
     # a use after free of any block among the last 64 MB freed.
     limits = f":hard_rss_limit_mb={MEMORY_MB}:quarantine_size_mb=64"
     env["ASAN_OPTIONS"] = (env.get("ASAN_OPTIONS", "") + limits).lstrip(":")
