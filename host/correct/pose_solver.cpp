@@ -206,33 +206,66 @@ Outcome not_reached(const Problem& p, const State& s) {
   return Outcome::not_converged;
 }
 
-}  // namespace
-
-Solution solve_pose(const model::RobotModel& model, const model::Transform& goal, bool orientation,
-                    std::span<const double> seed, const SolveOptions& o, std::span<const double> reference) {
+// One solve's setup: the sizes checked, and S.
+Problem problem(const model::RobotModel& model, const model::Transform& goal, bool orientation,
+                std::span<const double> seed, const SolveOptions& o, std::span<const double> reference) {
   const int n = model.joint_count();
   if (static_cast<int>(seed.size()) != n || (!reference.empty() && static_cast<int>(reference.size()) != n))
     throw std::invalid_argument("solve_pose: the seed has " + std::to_string(seed.size()) + " readings" +
                                 (reference.empty() ? "" : ", the reference " + std::to_string(reference.size())) +
                                 ", for a model of " + std::to_string(n) + " joints");
-  if (reference.empty()) reference = seed;
   Problem p{model, goal, orientation, o, Eigen::VectorXd::Ones(n)};
   for (int i = 0; i < n; ++i)
     if (model.joints[static_cast<std::size_t>(i)].type == core::JointType::prismatic)
       p.scale(i) = o.prismatic_m_per_rad;
-  State s;
-  s.q = moved(p, std::vector<double>(seed.begin(), seed.end()), Eigen::VectorXd::Zero(n));
-  s.at = evaluate(model, goal, orientation, s.q, o.rotation_weight_m);
+  return p;
+}
+
+// The goal's solve from s (its readings within the limits), the walk toward the reference and the
+// outcome (header).
+Solution finish(const Problem& p, State& s, std::span<const double> reference, int iterations) {
   Solution out;
-  descend(p, s, o.max_iterations, out.iterations);
+  out.iterations = iterations;
+  s.at = evaluate(p.model, p.goal, p.orientation, s.q, p.o.rotation_weight_m);
+  descend(p, s, p.o.max_iterations, out.iterations);
   // A goal with as many rows as joints has isolated solutions (but exactly at a singularity): no
   // walk (its SVD would cost as much as the solve).
-  if (reached(s.at, o) && p.rows() < n) approach(p, s, reference, out.iterations);
+  if (reached(s.at, p.o) && p.rows() < p.scale.size()) approach(p, s, reference, out.iterations);
   out.q = s.q;
   out.residual_m = s.at.e.head<3>().norm();
   out.residual_rad = s.at.e.tail<3>().norm();
-  out.outcome = reached(s.at, o) ? Outcome::reached : not_reached(p, s);
+  out.outcome = reached(s.at, p.o) ? Outcome::reached : not_reached(p, s);
   return out;
+}
+
+}  // namespace
+
+Solution solve_pose(const model::RobotModel& model, const model::Transform& goal, bool orientation,
+                    std::span<const double> seed, const SolveOptions& o, std::span<const double> reference) {
+  const Problem p = problem(model, goal, orientation, seed, o, reference);
+  State s;
+  s.q = moved(p, std::vector<double>(seed.begin(), seed.end()), Eigen::VectorXd::Zero(p.scale.size()));
+  return finish(p, s, reference.empty() ? seed : reference, 0);
+}
+
+Solution solve_pose_along(const model::RobotModel& model, const model::Transform& goal, bool orientation,
+                          std::span<const double> reference, const SolveOptions& o, int steps) {
+  const Problem p = problem(model, goal, orientation, reference, o, {});
+  State s;
+  s.q = moved(p, std::vector<double>(reference.begin(), reference.end()), Eigen::VectorXd::Zero(p.scale.size()));
+  const model::Transform start = model::forward_kinematics(model, s.q);
+  const Eigen::AngleAxisd turn(Eigen::Matrix3d(goal.rotation * start.rotation.transpose()));
+  int iterations = 0;
+  for (int k = 1; k < steps; ++k) {
+    const double f = static_cast<double>(k) / steps;
+    model::Transform on_path;
+    on_path.translation = start.translation + f * (goal.translation - start.translation);
+    on_path.rotation = Eigen::AngleAxisd(f * turn.angle(), turn.axis()).toRotationMatrix() * start.rotation;
+    const Problem step{model, on_path, orientation, o, p.scale};
+    s.at = evaluate(model, on_path, orientation, s.q, o.rotation_weight_m);
+    descend(step, s, o.max_iterations, iterations);
+  }
+  return finish(p, s, reference, iterations);
 }
 
 }  // namespace kincal::correct

@@ -91,6 +91,17 @@ Solution solve_pose(const model::RobotModel& model, const model::Transform& goal
                     std::span<const double> seed, const SolveOptions& options = {},
                     std::span<const double> reference = {});
 
+// The goal followed from the reference: the goal moved in `steps` equal steps from the tool's pose
+// at the reference readings (clamped into the limits; position along the line, rotation about one
+// axis) to `goal`, each solved from the readings of the step before, then the goal itself as
+// solve_pose does (walk, outcome). A local solve from the reference can land on another branch:
+// next to a stretched elbow a Gauss-Newton step for a millimetre's correction crosses the
+// singularity onto the mirrored elbow, tens of degrees away (the zoo's draw 5,
+// kr16_2/tracker-6dof/coupled/100: 6.8 deg where the true arm needs 0.12); steps of a fraction of the
+// correction keep the branch the reference is on. Cost: about `steps` times a solve's.
+Solution solve_pose_along(const model::RobotModel& model, const model::Transform& goal, bool orientation,
+                          std::span<const double> reference, const SolveOptions& options = {}, int steps = 20);
+
 // The twist e(q) of the top comment (6 rows; the rotation rows exact, not first-order).
 Eigen::Matrix<double, 6, 1> pose_residual(const model::Transform& goal, const model::Transform& at);
 

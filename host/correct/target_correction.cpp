@@ -103,10 +103,10 @@ void TargetCorrector::judge_by_spread(TargetResult& r, bool with_base, bool orie
 void TargetCorrector::limit_change(TargetResult& r, const std::vector<double>& reference, const model::RobotModel& arm,
                                    const model::Transform& goal, bool with_base, bool orientation) const {
   JointChange c = largest_change(r.solution.q, reference);
-  if (c.over_limit > 1.0 && r.solution.outcome == Outcome::reached) {
-    // The nearest readings are the smallest change in the solves' 2-norm; a redundant arm can
-    // share a change that puts one joint just past the limit among the others: the goal again,
-    // every joint held within its limit of the reference (the solver's joint limits), from there.
+  if (c.over_limit > 1.0 || r.solution.outcome != Outcome::reached) {
+    // The goal again, every joint held within its limit of the reference (the solver's joint
+    // limits): followed from the reference (the branch it is on), else, for a goal reached past the
+    // limit, from those readings (a redundant arm shares a change that put one joint just past it).
     model::RobotModel within = arm;
     bool box = true;
     for (std::size_t i = 0; i < within.joints.size() && i < reference.size(); ++i) {
@@ -117,21 +117,25 @@ void TargetCorrector::limit_change(TargetResult& r, const std::vector<double>& r
       j.upper = std::min(j.upper, reference[i] + l);
       box = box && j.lower <= j.upper;
     }
-    if (box) {
-      // Held within the limit, a goal the unbounded solve met may be missed by what the model
-      // cannot tell (near a singularity, a hundredth of a degree of its error is a tenth of a
-      // degree of a joint): judged by the spread as any solve is.
+    // Held within the limit, a goal the unbounded solve met may be missed by what the model cannot
+    // tell (near a singularity, a hundredth of a degree of its error is a tenth of a degree of a
+    // joint): judged by the spread as any solve is.
+    const auto take = [&](Solution solution) {
       TargetResult again = r;
-      again.solution = solve_pose(within, goal, orientation, r.solution.q, cartesian_.options(), reference);
+      again.solution = std::move(solution);
       again.short_of.reset();
       judge_by_spread(again, with_base, orientation);
       const JointChange a = largest_change(again.solution.q, reference);
-      if (again.solution.outcome == Outcome::reached && a.over_limit <= 1.0) {
-        again.refined = r.refined || r.platform_step_used;  // a joint target's readings: the Newton solve's now
-        r = std::move(again);
-        c = a;
-      }
-    }
+      if (again.solution.outcome != Outcome::reached || a.over_limit > 1.0) return false;
+      again.refined = r.refined || r.platform_step_used;  // a joint target's readings: the Newton solve's now
+      r = std::move(again);
+      c = a;
+      return true;
+    };
+    const SolveOptions& options = cartesian_.options();
+    if (box && !take(solve_pose_along(within, goal, orientation, reference, options)) &&
+        r.solution.outcome == Outcome::reached)
+      take(solve_pose(within, goal, orientation, r.solution.q, options, reference));
   }
   r.change_over_limit = c.over_limit;
   r.change_joint = c.joint;

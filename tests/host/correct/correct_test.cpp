@@ -264,6 +264,52 @@ TEST_CASE("solve_pose: of the readings that reach a goal, the ones nearest the r
   CHECK_THROWS_AS(correct::solve_pose(m, goal, false, seed, {}, std::vector<double>{0.0}), std::invalid_argument);
 }
 
+TEST_CASE("solve_pose_along: the goal followed from the reference, where the way is plain the solve's readings") {
+  const model::RobotModel m = robot("puma560.yaml");
+  const std::vector<double> reference = {0.1, -0.4, 0.3, 0.2, -0.5, 0.7};
+  model::Transform goal = model::forward_kinematics(m, reference);
+  goal.translation += model::Vector3(2e-3, -1e-3, 3e-3);
+  goal.rotation = Eigen::AngleAxisd(3e-3, model::Vector3(0.6, 0.0, 0.8)) * goal.rotation;
+  for (const bool orientation : {true, false}) {
+    const correct::Solution along = correct::solve_pose_along(m, goal, orientation, reference);
+    const correct::Solution direct = correct::solve_pose(m, goal, orientation, reference);
+    REQUIRE(along.outcome == correct::Outcome::reached);
+    REQUIRE(direct.outcome == correct::Outcome::reached);
+    CHECK(along.residual_m <= 1e-7);
+    CHECK(along.iterations > direct.iterations);  // the steps on the way
+    for (std::size_t j = 0; j < reference.size(); ++j) CHECK(along.q[j] == doctest::Approx(direct.q[j]).epsilon(1e-6));
+  }
+  CHECK_THROWS_AS(correct::solve_pose_along(m, goal, true, std::vector<double>{0.0}), std::invalid_argument);
+}
+
+TEST_CASE("target corrector: a solve landed on the mirrored elbow is followed again from the target's seed") {
+  // The zoo's draw 5, kr16_2/tracker-6dof/coupled/100, targets.csv:120: the controller's readings
+  // for the target (where the calibrated solve starts) lie just past the stretched elbow, and the
+  // calibrated solve from them reached the mirrored elbow, 6.75 deg from the seed: refused, where
+  // the true arm reaches the target turning joint 3 by 0.12 deg (q3 0.011776 rad).
+  const model::RobotModel loaded =
+      model::load_model(std::string(KINCAL_CORRECT_TEST_DIR) + "/kr16_coupled_stretched.yaml");
+  const model::RobotModel calibrated = model::tool_at_tcp(loaded);
+  const model::RobotModel nominal = model::tool_at_tcp(correct::nominal_from_record(loaded));
+  const std::vector<double> seed = {2.85667317209, -1.4326681106,   0.00971802035018,
+                                    4.91645386579, -0.836853358308, 2.01550899208};
+  model::Transform pose;
+  pose.translation = model::Vector3(0.132389664456, 3.56857318413, 0.522916241749);
+  pose.rotation =
+      Eigen::Quaterniond(0.647118708486, -0.401047832779, 0.133022532502, 0.634588858079).toRotationMatrix();
+  const correct::CartesianSolver solver(nominal, calibrated, correct::TargetFrame::device);
+  const correct::Solution controller = solver.solve_nominal(pose, true, seed);
+  REQUIRE(controller.outcome == correct::Outcome::reached);
+  const correct::Solution mirrored = solver.solve_calibrated(pose, true, controller.q, seed);
+  REQUIRE(mirrored.outcome == correct::Outcome::reached);
+  CHECK(std::abs(mirrored.q[2] - seed[2]) > 6.0 * std::numbers::pi / 180.0);  // the case as it was
+  correct::TargetCorrector corrector(nominal, calibrated, correct::TargetFrame::device, std::nullopt);
+  const correct::TargetResult r = corrector.correct({{120, true, seed, pose, true}}, {}, "targets.csv").front();
+  REQUIRE(r.solution.outcome == correct::Outcome::reached);
+  CHECK(r.change < 0.2 * std::numbers::pi / 180.0);
+  CHECK(std::abs(r.solution.q[2] - 0.011776) < 1e-4);
+}
+
 TEST_CASE("target corrector: a target whose smallest correction exceeds the limit is refused and named") {
   model::RobotModel start = robot("puma560.yaml");
   start.base_T_frame0 = model::Transform{};
