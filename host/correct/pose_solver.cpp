@@ -256,14 +256,17 @@ Solution solve_pose_along(const model::RobotModel& model, const model::Transform
   const model::Transform start = model::forward_kinematics(model, s.q);
   const Eigen::AngleAxisd turn(Eigen::Matrix3d(goal.rotation * start.rotation.transpose()));
   int iterations = 0;
-  for (int k = 1; k < steps; ++k) {
+  // No way to follow to a goal past any tool point's reach; a step's solve needs only a few
+  // iterations (the next one starts where it stopped).
+  const bool beyond = (model.base_T_frame0.inverse() * goal).translation.norm() > reach_bound(model);
+  for (int k = 1; k < steps && !beyond; ++k) {
     const double f = static_cast<double>(k) / steps;
     model::Transform on_path;
     on_path.translation = start.translation + f * (goal.translation - start.translation);
     on_path.rotation = Eigen::AngleAxisd(f * turn.angle(), turn.axis()).toRotationMatrix() * start.rotation;
     const Problem step{model, on_path, orientation, o, p.scale};
     s.at = evaluate(model, on_path, orientation, s.q, o.rotation_weight_m);
-    descend(step, s, o.max_iterations, iterations);
+    descend(step, s, std::min(o.max_iterations, 10), iterations);
   }
   return finish(p, s, reference, iterations);
 }

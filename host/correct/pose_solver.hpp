@@ -94,11 +94,13 @@ Solution solve_pose(const model::RobotModel& model, const model::Transform& goal
 // The goal followed from the reference: the goal moved in `steps` equal steps from the tool's pose
 // at the reference readings (clamped into the limits; position along the line, rotation about one
 // axis) to `goal`, each solved from the readings of the step before, then the goal itself as
-// solve_pose does (walk, outcome). A local solve from the reference can land on another branch:
-// next to a stretched elbow a Gauss-Newton step for a millimetre's correction crosses the
-// singularity onto the mirrored elbow, tens of degrees away (the zoo's draw 5,
-// kr16_2/tracker-6dof/coupled/100: 6.8 deg where the true arm needs 0.12); steps of a fraction of the
-// correction keep the branch the reference is on. Cost: about `steps` times a solve's.
+// solve_pose does (walk, outcome). A local solve ends on the branch its start leads to: started
+// from readings just past a stretched elbow (the controller's readings for a target next to the
+// stretch), it reaches the mirrored elbow, degrees from the reference (the zoo's draw 5,
+// kr16_2/tracker-6dof/coupled/100: joint 3 6.75 deg where the true arm needs 0.12); steps of a
+// fraction of the correction from the reference itself keep the branch the reference is on. A goal past any tool
+// point's reach (the out_of_reach bound above) is solved directly. Cost: up to `steps` times 10 iterations more than a
+// solve's.
 Solution solve_pose_along(const model::RobotModel& model, const model::Transform& goal, bool orientation,
                           std::span<const double> reference, const SolveOptions& options = {}, int steps = 20);
 
