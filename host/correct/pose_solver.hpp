@@ -98,9 +98,9 @@ Solution solve_pose(const model::RobotModel& model, const model::Transform& goal
 // from readings just past a stretched elbow (the controller's readings for a target next to the
 // stretch), it reaches the mirrored elbow, degrees from the reference (the zoo's draw 5,
 // kr16_2/tracker-6dof/coupled/100: joint 3 6.75 deg where the true arm needs 0.12); steps of a
-// fraction of the correction from the reference itself keep the branch the reference is on. A goal past any tool
-// point's reach (the out_of_reach bound above) is solved directly. Cost: up to `steps` times 10 iterations more than a
-// solve's.
+// fraction of the correction from the reference itself keep the branch the reference is on. A goal
+// past any tool point's reach (the out_of_reach bound above) is solved directly. Cost: up to
+// `steps` times 10 iterations more than a solve's.
 Solution solve_pose_along(const model::RobotModel& model, const model::Transform& goal, bool orientation,
                           std::span<const double> reference, const SolveOptions& options = {}, int steps = 20);
 

@@ -12,18 +12,18 @@
 // The joint-change limit (issue #42): a calibration moves a tool by millimetres and tenths of a
 // degree, so its correction moves joints by about as much. The solves return the readings nearest
 // the reference that reach the target (pose_solver.hpp: the smallest change, a prismatic joint's
-// metres weighed against radians as the limits are), so a redundant arm's turns that cancel at
-// the tool never arise. Where the solve turns a joint past the limit or does not reach the goal,
-// the goal is solved again with every joint held within the limit of the reference: followed from
-// the reference (pose_solver.hpp's solve_pose_along: a local solve can land on another branch, next
-// to a stretched elbow the mirrored one), and for a goal reached past the limit also from those
-// readings (a redundant arm shares the change among its joints). A target whose correction still changes a joint by
-// more than the limit from its reference -- a model that does not fit the arm, another branch, a target near a
-// singularity where millimetres take tens of degrees -- is refused, never "reached": outcome
-// joint_change_limit, the readings left as the reference, the residual theirs, and the joint and
-// its change named in the result. The reference: a joint target's own readings; a Cartesian
-// target's own seed reading (what the user's controller goes to) when it has one, else the
-// controller's (nominal) solution from the seed before it.
+// metres weighed against radians as the limits are), so a redundant arm's turns that cancel at the
+// tool never arise. Where the solve turns a joint past the limit or does not reach the goal, the
+// goal is solved again with every joint held within the limit of the reference: followed from the
+// reference (pose_solver.hpp's solve_pose_along: a local solve can land on another branch, next to
+// a stretched elbow the mirrored one), and for a goal reached past the limit also from those
+// readings (a redundant arm shares the change among its joints). A target whose correction still
+// changes a joint by more than the limit from its reference -- a model that does not fit the arm,
+// another branch, a target near a singularity where millimetres take tens of degrees -- is refused,
+// never "reached": outcome joint_change_limit, the readings left as the reference, the residual
+// theirs, and the joint and its change named in the result. The reference: a joint target's own
+// readings; a Cartesian target's own seed reading (what the user's controller goes to) when it has
+// one, else the controller's (nominal) solution from the seed before it.
 //
 // Reached within the prediction's spread: a goal at the edge of what the calibrated model reaches
 // (a stretched elbow, a joint at its limit) may be missed by the model by hundredths of a
