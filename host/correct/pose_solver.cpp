@@ -43,6 +43,11 @@ double reach_bound(const model::RobotModel& model) {
   return reach;
 }
 
+// The goal farther from frame 0's origin than reach_bound: out of reach whatever the readings.
+bool beyond_reach(const model::RobotModel& model, const model::Transform& goal) {
+  return (model.base_T_frame0.inverse() * goal).translation.norm() > reach_bound(model);
+}
+
 }  // namespace
 
 const char* outcome_name(Outcome outcome) {
@@ -192,8 +197,7 @@ void approach(const Problem& p, State& s, std::span<const double> reference, int
 
 // The outcome of a solve that did not reach the goal (header).
 Outcome not_reached(const Problem& p, const State& s) {
-  if ((p.model.base_T_frame0.inverse() * p.goal).translation.norm() > reach_bound(p.model))
-    return Outcome::out_of_reach;
+  if (beyond_reach(p.model, p.goal)) return Outcome::out_of_reach;
   if (std::find(s.held.begin(), s.held.end(), true) != s.held.end()) return Outcome::joint_limit;
   // How much of the residual the joints can still move along, first order: |Js^T W e| against
   // its largest possible value |W^1/2 Js| |W^1/2 e|. Near 0: a stationary point off the goal.
@@ -204,6 +208,11 @@ Outcome not_reached(const Problem& p, const State& s) {
     return (p.goal.translation - origin).norm() > tool_distance ? Outcome::out_of_reach : Outcome::singularity;
   }
   return Outcome::not_converged;
+}
+
+// Readings clamped into the limits: where a solve starts.
+std::vector<double> clamped(const Problem& p, std::span<const double> q) {
+  return moved(p, std::vector<double>(q.begin(), q.end()), Eigen::VectorXd::Zero(p.scale.size()));
 }
 
 // One solve's setup: the sizes checked, and S.
@@ -244,7 +253,7 @@ Solution solve_pose(const model::RobotModel& model, const model::Transform& goal
                     std::span<const double> seed, const SolveOptions& o, std::span<const double> reference) {
   const Problem p = problem(model, goal, orientation, seed, o, reference);
   State s;
-  s.q = moved(p, std::vector<double>(seed.begin(), seed.end()), Eigen::VectorXd::Zero(p.scale.size()));
+  s.q = clamped(p, seed);
   return finish(p, s, reference.empty() ? seed : reference, 0);
 }
 
@@ -252,13 +261,13 @@ Solution solve_pose_along(const model::RobotModel& model, const model::Transform
                           std::span<const double> reference, const SolveOptions& o, int steps) {
   const Problem p = problem(model, goal, orientation, reference, o, {});
   State s;
-  s.q = moved(p, std::vector<double>(reference.begin(), reference.end()), Eigen::VectorXd::Zero(p.scale.size()));
+  s.q = clamped(p, reference);
   const model::Transform start = model::forward_kinematics(model, s.q);
   const Eigen::AngleAxisd turn(Eigen::Matrix3d(goal.rotation * start.rotation.transpose()));
   int iterations = 0;
   // No way to follow to a goal past any tool point's reach; a step's solve needs only a few
   // iterations (the next one starts where it stopped).
-  const bool beyond = (model.base_T_frame0.inverse() * goal).translation.norm() > reach_bound(model);
+  const bool beyond = beyond_reach(model, goal);
   for (int k = 1; k < steps && !beyond; ++k) {
     const double f = static_cast<double>(k) / steps;
     model::Transform on_path;

@@ -42,10 +42,9 @@
 // (else the geometry's), which model selection chooses on real arms: on the shared UR10 (30 of
 // 995 candidates, seeds 1..5) a plan made for it predicts 0.416 to 0.424 mm held out with that
 // model, one made for the geometry alone 0.431 to 0.458, and with the geometry alone 0.463 to
-// 0.469 against 0.465 to 0.477. D-optimal
-// plans stay with the geometry: O1 weighs the compliances like any parameter, whatever they do to
-// the tool, and its plans for them predicted worse (0.4785 mm held out with the defaults, seeds
-// 1..5, against 0.4520 made for the geometry).
+// 0.469 against 0.465 to 0.477. D-optimal plans stay with the geometry: O1 weighs the compliances
+// like any parameter, whatever they do to the tool, and its plans for them predicted worse (0.4785
+// mm held out with the defaults, seeds 1..5, against 0.4520 made for the geometry).
 // Method: Fedorov exchange over the pool, starting from a random set of distinct candidates:
 // first D-optimal (the rank-3, or 6, determinant update), then, for `prediction`, from that plan
 // under the prediction criterion (its Woodbury update, plan.cpp), each until no exchange improves
