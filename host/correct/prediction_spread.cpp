@@ -2,20 +2,43 @@
 
 #include <cmath>
 
+#include <Eigen/Eigenvalues>
+
 namespace kincal::correct {
 
 std::optional<ParameterCovariance> record_covariance(const model::RobotModel& calibrated) {
   if (!calibrated.calibration) return std::nullopt;
+  const model::CalibrationRecord& record = *calibrated.calibration;
+  const std::size_t n = record.parameters.size();
+  const bool correlated = !record.correlations.empty();
+  for (std::size_t k = 0; correlated && k < record.correlations.size(); ++k)
+    if (record.correlations.size() + 1 != n || record.correlations[k].size() != k + 1)
+      throw model::InputError("calibration: correlations are not one row per parameter after the first");
+  // The correlation matrix, unit diagonal; the identity where the record has none.
+  Eigen::MatrixXd correlation = Eigen::MatrixXd::Identity(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+  for (std::size_t k = 0; correlated && k + 1 < n; ++k)
+    for (std::size_t l = 0; l <= k; ++l) {
+      const auto i = static_cast<Eigen::Index>(k + 1), j = static_cast<Eigen::Index>(l);
+      correlation(i, j) = correlation(j, i) = record.correlations[k][l];
+    }
+  if (correlated && n > 0 &&
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(correlation).eigenvalues().minCoeff() < -1e-9)
+    throw model::InputError("calibration: correlations are not those of a covariance (not positive semi-definite)");
   ParameterCovariance out;
-  std::vector<double> variance;
-  for (const model::ParameterReport& p : calibrated.calibration->parameters) {
+  std::vector<Eigen::Index> kept;
+  std::vector<double> sd;
+  for (std::size_t k = 0; k < n; ++k) {
+    const model::ParameterReport& p = record.parameters[k];
     if (!(p.stddev > 0.0)) continue;
     out.ids.push_back(model::parse_parameter_name(p.name, calibrated.joint_count()));
-    variance.push_back(p.stddev * p.stddev);
+    kept.push_back(static_cast<Eigen::Index>(k));
+    sd.push_back(p.stddev);
   }
-  if (out.ids.empty()) return std::nullopt;
-  out.covariance =
-      Eigen::Map<const Eigen::VectorXd>(variance.data(), static_cast<Eigen::Index>(variance.size())).asDiagonal();
+  out.model_error_m = record.model_error_m.value_or(0.0);
+  out.model_error_rad = record.model_error_rad.value_or(0.0);
+  if (out.ids.empty() && out.model_error_m == 0.0 && out.model_error_rad == 0.0) return std::nullopt;
+  const Eigen::VectorXd s = Eigen::Map<const Eigen::VectorXd>(sd.data(), static_cast<Eigen::Index>(sd.size()));
+  out.covariance = s.asDiagonal() * correlation(kept, kept) * s.asDiagonal();
   return out;
 }
 
@@ -29,13 +52,16 @@ PoseSpread predicted_spread(const model::RobotModel& model, const ParameterCovar
     ids.push_back(covariance.ids[k]);
     columns.push_back(static_cast<Eigen::Index>(k));
   }
+  Eigen::Matrix<double, 6, 6> pose = Eigen::Matrix<double, 6, 6>::Zero();
+  if (!ids.empty()) {
+    const Eigen::MatrixXd e = model::parameter_jacobian(model, q, ids);
+    pose = e * covariance.covariance(columns, columns) * e.transpose();
+  }
+  const double p2 = covariance.model_error_m * covariance.model_error_m;
+  const double o2 = covariance.model_error_rad * covariance.model_error_rad;
   PoseSpread out;
-  if (ids.empty()) return out;
-  const Eigen::MatrixXd e = model::parameter_jacobian(model, q, ids);
-  const Eigen::MatrixXd c = covariance.covariance(columns, columns);
-  const Eigen::Matrix<double, 6, 6> pose = e * c * e.transpose();
-  out.position_m = std::sqrt(std::max(0.0, pose.topLeftCorner<3, 3>().trace()));
-  out.orientation_rad = std::sqrt(std::max(0.0, pose.bottomRightCorner<3, 3>().trace()));
+  out.position_m = std::sqrt(std::max(0.0, pose.topLeftCorner<3, 3>().trace()) + 3.0 * p2);
+  out.orientation_rad = std::sqrt(std::max(0.0, pose.bottomRightCorner<3, 3>().trace()) + 3.0 * o2);
   return out;
 }
 

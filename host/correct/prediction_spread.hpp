@@ -1,16 +1,17 @@
 // How well the calibrated model knows where a corrected target puts the tool (issue #24): the
-// parameters' covariance propagated to the tool pose at the corrected readings,
-//   C_pose = E C_par E^T,   E = parameter_jacobian(model, q, ids)   (6 x parameters, twists)
+// parameters' covariance propagated to the tool pose at the corrected readings, plus the model
+// error no parameter explains (identify's s_p, s_o per axis),
+//   C_pose = E C_par E^T + diag(s_p^2 I, s_o^2 I),   E = parameter_jacobian(model, q, ids)
 // reported as the RMS length of the position error, sqrt(trace of its 3 x 3 block), and the same
-// for the rotation vector. What it leaves out: the model error no parameter explains (identify's
-// s_p, s_o; about 0.45 mm on a real UR10) and the controller's repeatability.
+// for the rotation vector. What it leaves out: the controller's repeatability.
 //
 // Where the covariance comes from: a model file carries each identified parameter's 1-sigma
-// standard deviation (calibration: parameters: stddev), not their correlations, so
-// record_covariance() gives the diagonal covariance. A calibration's parameters are correlated,
-// so this is a rough scale, not the spread (on the UR10 tracker example it says 0.4-0.5 mm);
-// identify::IdentifyResult::covariance has the whole matrix, and library callers that hold one
-// pass it. Base parameters move the device frame, not
+// standard deviation and their correlations (calibration: parameters, correlations), and the model
+// error where identify could tell it from the instrument's noise (model_error_m, model_error_rad);
+// record_covariance() builds the whole covariance from them. A record without correlations (written
+// before they were) gives the diagonal one: a rough scale, not the spread -- a calibration's
+// parameters are correlated, and on the zoo's torso_lift_6r/camera-board/service/40 the diagonal
+// said 0.7 mm where the model predicts to 0.06. Base parameters move the device frame, not
 // the arm: with_base = false leaves them out (targets in the robot's base frame, joint targets).
 #pragma once
 
@@ -26,12 +27,15 @@ namespace kincal::correct {
 
 struct ParameterCovariance {
   std::vector<core::ParameterId> ids;
-  Eigen::MatrixXd covariance;  // SI, ids.size() square
+  Eigen::MatrixXd covariance;    // SI, ids.size() square
+  double model_error_m = 0.0;    // s_p, per axis
+  double model_error_rad = 0.0;  // s_o, per axis of the rotation vector
 };
 
-// The diagonal covariance of the model's calibration record; nullopt without a record or when
-// no parameter has a standard deviation above 0. Throws model::InputError for a parameter name
-// the model does not have.
+// The covariance of the model's calibration record (see the top); nullopt without a record or
+// when no parameter has a standard deviation above 0 and no model error is recorded. Throws
+// model::InputError for a parameter name the model does not have, or correlations that are not
+// one row per parameter after the first or not a covariance's (not positive semi-definite).
 std::optional<ParameterCovariance> record_covariance(const model::RobotModel& calibrated);
 
 struct PoseSpread {

@@ -888,6 +888,20 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
       const int t = static_cast<int>(id.kind) - static_cast<int>(core::ParameterKind::tool_x);
       record.parameters.push_back({model::parameter_name(id), tool ? tool_change(t) : out.change(k), out.stddev(k)});
     }
+    for (int k = 1; k < p; ++k) {
+      std::vector<double> row;
+      for (int l = 0; l < k; ++l) {
+        const double s = out.stddev(k) * out.stddev(l);
+        row.push_back(s > 0.0 ? std::clamp(out.covariance(k, l) / s, -1.0, 1.0) : 0.0);
+      }
+      record.correlations.push_back(std::move(row));
+    }
+    // s_p and s_o are the model error only beside a known instrument noise; else they are the noise.
+    if (out.all_covariance || out.sigma_m > 0.0) record.model_error_m = out.model_error_position_m;
+    const bool pose_covariance = std::all_of(data.rows.begin(), data.rows.end(),
+                                             [](const model::Measurement& m) { return m.pose_covariance.has_value(); });
+    if (out.orientation_used && (out.orientation_sigma_rad > 0.0 || pose_covariance))
+      record.model_error_rad = out.model_error_orientation_rad;
     for (const HeldFixed& h : out.identifiability.held_fixed) record.held_fixed.push_back(model::parameter_name(h.id));
     out.model.calibration = record;
   };

@@ -148,17 +148,18 @@ void finish_sag_result(IdentifyResult& r, const RobotModel& nominal) {
     if (model.joints[i].mass_kg == 0.0) model.joints[i].centre_of_mass_m.setZero();
   }
   if (!model.calibration) return;
-  std::vector<model::ParameterReport>& record = model.calibration->parameters;
+  model::CalibrationRecord& record = *model.calibration;
   for (std::size_t i = 0; i < model.joints.size(); ++i) {
     const std::string name = model::parameter_name({model::kJointCompliance, static_cast<std::uint8_t>(i)});
-    const auto entry =
-        std::find_if(record.begin(), record.end(), [&](const model::ParameterReport& p) { return p.name == name; });
+    const auto entry = std::find_if(record.parameters.begin(), record.parameters.end(),
+                                    [&](const model::ParameterReport& p) { return p.name == name; });
     if (!model.joints[i].compliance) {
-      if (entry != record.end()) record.erase(entry);
-    } else if (entry != record.end()) {
+      if (entry != record.parameters.end())
+        record.erase_parameter(static_cast<std::size_t>(entry - record.parameters.begin()));
+    } else if (entry != record.parameters.end()) {
       entry->value = *model.joints[i].compliance;
     } else {
-      record.push_back({name, *model.joints[i].compliance, 0.0});
+      record.add_parameter({name, *model.joints[i].compliance, 0.0});
     }
   }
 }

@@ -13,6 +13,7 @@
 #include <iostream>
 #include <limits>
 #include <numbers>
+#include <set>
 #include <sstream>
 
 #include <Eigen/SVD>
@@ -202,7 +203,7 @@ void check_loaded_compliances(const Reader& r, const YAML::Node& joints, const R
 CalibrationRecord read_calibration(const Reader& r, const YAML::Node& node, int joint_count) {
   r.only_keys(node, "calibration",
               {"method", "data", "measurements", "rms_residual_m", "validation_rms_m", "held_fixed", "parameters",
-               "reading_ranges"});
+               "reading_ranges", "correlations", "model_error_m", "model_error_rad"});
   CalibrationRecord c;
   if (node["method"]) c.method = r.text(node["method"], "calibration method");
   if (node["data"]) c.data = r.text(node["data"], "calibration data");
@@ -235,16 +236,38 @@ CalibrationRecord read_calibration(const Reader& r, const YAML::Node& node, int 
   }
   if (node["parameters"]) {
     if (!node["parameters"].IsSequence()) r.fail(node["parameters"], "calibration parameters must be a list");
+    std::set<std::string> names;
     for (const auto& n : node["parameters"]) {
       r.only_keys(n, "calibration parameter", {"name", "change", "stddev"});
       ParameterReport p;
       p.name = r.text(n["name"], "parameter name");
+      if (!names.insert(p.name).second)
+        r.fail(n["name"], "calibration parameter '" + files::excerpt(p.name) + "' named twice");
       if (n["change"]) p.value = r.number(n["change"], "change");
       if (n["stddev"])
         p.stddev = r.bounded(n["stddev"], "stddev", 0.0, std::numeric_limits<double>::max(), "(a standard deviation)");
       c.parameters.push_back(p);
     }
   }
+  if (const YAML::Node& rows = node["correlations"]) {
+    const std::size_t n = c.parameters.size();
+    if (!rows.IsSequence() || rows.size() + 1 != std::max<std::size_t>(n, 1))
+      r.fail(rows, "correlations must be a list of one row per parameter after the first (" +
+                       std::to_string(n > 0 ? n - 1 : 0) + ")");
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      const YAML::Node& row = rows[k];
+      if (!row.IsSequence() || row.size() != k + 1)
+        r.fail(row, "correlations row " + std::to_string(k + 1) + " must list " + std::to_string(k + 1) +
+                        " correlations (parameter " + std::to_string(k + 2) + "'s with each before it)");
+      std::vector<double> values;
+      for (const auto& v : row) values.push_back(r.bounded(v, "correlation", -1.0, 1.0, "(a correlation)"));
+      c.correlations.push_back(std::move(values));
+    }
+  }
+  if (node["model_error_m"])
+    c.model_error_m = r.bounded(node["model_error_m"], "model_error_m", 0.0, kMaxLength_m, "(a model error)");
+  if (node["model_error_rad"])
+    c.model_error_rad = r.bounded(node["model_error_rad"], "model_error_rad", 0.0, std::numbers::pi, "(a model error)");
   return c;
 }
 
@@ -597,7 +620,20 @@ std::string write_model(const RobotModel& model) {
       out << YAML::Key << "change" << YAML::Value << shortest_number_text(p.value);
       out << YAML::Key << "stddev" << YAML::Value << shortest_number_text(p.stddev) << YAML::EndMap;
     }
-    out << YAML::EndSeq << YAML::EndMap;
+    out << YAML::EndSeq;
+    if (!c.correlations.empty()) {
+      out << YAML::Key << "correlations" << YAML::Value << YAML::BeginSeq;
+      for (const std::vector<double>& row : c.correlations) {
+        out << YAML::Flow << YAML::BeginSeq;
+        for (const double v : row) out << shortest_number_text(v);
+        out << YAML::EndSeq;
+      }
+      out << YAML::EndSeq;
+    }
+    if (c.model_error_m) out << YAML::Key << "model_error_m" << YAML::Value << shortest_number_text(*c.model_error_m);
+    if (c.model_error_rad)
+      out << YAML::Key << "model_error_rad" << YAML::Value << shortest_number_text(*c.model_error_rad);
+    out << YAML::EndMap;
   }
   out << YAML::EndMap;
   std::string text =

@@ -71,8 +71,11 @@
 //        only where the joint carries a mass (its link, a later link or a payload has one: else
 //        gravity loads it with nothing and the compliance cannot act)
 //   gravity                                            |g| <= kMaxGravity_mps2
-//   calibration (a record): measurements a whole count; rms, validation rms, stddev >= 0;
-//        reading_ranges one [lowest, highest] per joint, lowest <= highest
+//   calibration (a record): measurements a whole count; rms, validation rms, stddev >= 0; each
+//        parameter named once; reading_ranges one [lowest, highest] per joint, lowest <= highest;
+//        correlations one row per parameter after the first, row k of k entries in [-1, 1]
+//        (whether they form a covariance is judged where one is built: correct's
+//        record_covariance); model_error_m in [0, kMaxLength_m], model_error_rad in [0, pi]
 // A file without 'angles:' is in radians: an angle beyond its range there is refused with the
 // advice to say 'angles: deg' (alpha: 90 is a degree file missing its key). Everything
 // `kincal identify` and `discover` write is inside these ranges. The file

@@ -677,4 +677,19 @@ Vector3 rpy_from_rotation(const Matrix3& r) {
   return {std::atan2(roll_only(2, 1) - roll_only(1, 2), roll_only(1, 1) + roll_only(2, 2)), pitch, yaw};
 }
 
+void CalibrationRecord::erase_parameter(std::size_t k) {
+  if (!correlations.empty()) {
+    // Parameter j > 0 has row j - 1; its entry for parameter k < j is at k.
+    for (std::size_t j = k + 1; j < parameters.size(); ++j)
+      correlations[j - 1].erase(correlations[j - 1].begin() + static_cast<std::ptrdiff_t>(k));
+    correlations.erase(correlations.begin() + static_cast<std::ptrdiff_t>(k > 0 ? k - 1 : 0));
+  }
+  parameters.erase(parameters.begin() + static_cast<std::ptrdiff_t>(k));
+}
+
+void CalibrationRecord::add_parameter(const ParameterReport& p) {
+  if (!correlations.empty()) correlations.emplace_back(parameters.size(), 0.0);
+  parameters.push_back(p);
+}
+
 }  // namespace kincal::model

@@ -141,6 +141,18 @@ struct CalibrationRecord {
   // Per joint, the lowest and highest reading in the data (SI); empty: not recorded. Equal: the
   // joint never moved, and the model holds at that reading (reading_coverage.hpp).
   std::vector<std::array<double, 2>> reading_ranges;
+  // The parameters' correlations, the strict lower triangle in the order of `parameters`: row k
+  // holds parameter k+2's correlations with parameters 1..k+1 (empty: not recorded). With the
+  // stddevs they give the covariance that correct's predicted spread propagates.
+  std::vector<std::vector<double>> correlations;
+  // The model error identify told apart from a known instrument noise (s_p per axis, s_o per
+  // axis of the rotation vector): what a prediction misses beyond its parameters' spread.
+  std::optional<double> model_error_m, model_error_rad;
+
+  // Removes parameter k, or appends one uncorrelated with the others, keeping the correlations'
+  // rows (where recorded) one per parameter after the first.
+  void erase_parameter(std::size_t k);
+  void add_parameter(const ParameterReport& p);
 };
 
 struct RobotModel {

@@ -359,11 +359,16 @@ void judge_correct(const Chain& chain, const CaseData& d, const std::string& dir
   const std::vector<std::string> outcome = read_csv_fields(dir + "/corrected.csv")["outcome"];
   std::vector<Eigen::Vector3d> e;
   double largest = 0.0;
-  std::vector<Eigen::Vector3d> marker;  // predict's point at the corrected readings against the true one
-  std::vector<std::vector<double>> predicted;
-  const auto prediction = read_csv_columns(dir + "/pred_corrected.csv");
-  for (const char* axis : {"x", "y", "z"})
-    if (prediction.count(axis)) predicted.push_back(prediction.at(axis));
+  // predict's point and TCP at the corrected readings against the true ones
+  std::vector<Eigen::Vector3d> marker, model_tcp;
+  const auto points = [&](const std::string& file) {
+    std::vector<std::vector<double>> p;
+    const auto prediction = read_csv_columns(dir + "/" + file);
+    for (const char* axis : {"x", "y", "z"})
+      if (prediction.count(axis) && prediction.at(axis).size() == d.targets.size()) p.push_back(prediction.at(axis));
+    return p;
+  };
+  const auto predicted = points("pred_corrected.csv"), predicted_tcp = points("pred_corrected_tcp.csv");
   int refused = 0, within = 0;
   double need = 0.0;  // the largest true change over the limit of a refused target
   for (std::size_t t = 0; t < d.targets.size(); ++t) {
@@ -383,9 +388,12 @@ void judge_correct(const Chain& chain, const CaseData& d, const std::string& dir
     }
     const Pose goal = d.truth.device_T_root * forward(chain, ChainErrors(chain.joints.size()), d.targets[t]);
     e.push_back(tcp(chain, d.truth, q) - goal.translation());
-    if (predicted.size() == 3 && predicted[0].size() == d.targets.size())
+    if (predicted.size() == 3)
       marker.push_back(Eigen::Vector3d(predicted[0][t], predicted[1][t], predicted[2][t]) -
                        measured_truth(chain, d.truth, q).translation());
+    if (predicted_tcp.size() == 3)
+      model_tcp.push_back(Eigen::Vector3d(predicted_tcp[0][t], predicted_tcp[1][t], predicted_tcp[2][t]) -
+                          tcp(chain, d.truth, q));
   }
   r.correct_mm = rms_mm(e);
   r.joint_change_deg = largest;
@@ -394,7 +402,8 @@ void judge_correct(const Chain& chain, const CaseData& d, const std::string& dir
   if (!marker.empty()) {
     std::ostringstream note;
     note << std::fixed << std::setprecision(4) << "at the corrected readings: TCP " << r.correct_mm
-         << " mm, the model's error at the measured point " << rms_mm(marker) << " mm";
+         << " mm, the model's error there " << rms_mm(model_tcp) << " mm, at the measured point "
+         << rms_mm(marker) << " mm";
     r.notes.push_back(note.str());
   }
   if (refused == 0) return;
@@ -479,6 +488,9 @@ CaseResult run_clean(const Context& ctx, const CaseSpec& c, const CaseData& d, c
     // correction's error at the TCP is compared with (issue #42).
     run_on_output({k, "predict", "--model", "m.yaml", "--joints", "corrected.csv", "-o", "pred_corrected.csv"}, dir,
                   "predict-corrected", r);
+    run_on_output({k, "predict", "--model", "m.yaml", "--joints", "corrected.csv", "--at", "tcp", "-o",
+                   "pred_corrected_tcp.csv"},
+                  dir, "predict-corrected-tcp", r);
     judge_correct(chain, d, dir, r);
   }
   run_on_output({k, "export", "--format", "joint-offsets", "--model", "m.yaml", "-o", "offsets.csv"}, dir,

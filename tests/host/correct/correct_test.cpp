@@ -518,6 +518,65 @@ TEST_CASE("nominal_from_record undoes the recorded changes; the spread is the co
   CHECK(correct::predicted_spread(calibrated, *covariance, q, true).orientation_rad > 0.0);
 }
 
+TEST_CASE("the spread: the recorded correlations and model error propagated; a record they cannot be is refused") {
+  const model::RobotModel start = robot("puma560.yaml");
+  const std::vector<core::ParameterId> ids = {
+      {core::ParameterKind::link_a, 1}, {core::ParameterKind::link_theta, 2}, {core::ParameterKind::link_d, 3}};
+  model::RobotModel calibrated = start;
+  calibrated.calibration = model::CalibrationRecord{};
+  model::CalibrationRecord& record = *calibrated.calibration;
+  const double stddev[3] = {2e-5, 3e-5, 4e-5};
+  for (std::size_t k = 0; k < ids.size(); ++k)
+    record.parameters.push_back({model::parameter_name(ids[k]), 0.0, stddev[k]});
+  record.correlations = {{-0.9}, {0.3, -0.2}};
+  Eigen::Matrix3d c;
+  c << 1.0, -0.9, 0.3, -0.9, 1.0, -0.2, 0.3, -0.2, 1.0;
+  const Eigen::Vector3d s(stddev[0], stddev[1], stddev[2]);
+  const Eigen::Matrix3d want = s.asDiagonal() * c * s.asDiagonal();
+  const std::vector<double> q = {0.1, -0.4, 0.3, 0.2, -0.5, 0.7};
+  const Eigen::MatrixXd e = model::parameter_jacobian(calibrated, q, ids);
+  const auto position = [&](const Eigen::Matrix3d& parameters, double model_error) {
+    return std::sqrt((e.topRows<3>() * parameters * e.topRows<3>().transpose()).trace() +
+                     3.0 * model_error * model_error);
+  };
+  {
+    const auto covariance = correct::record_covariance(calibrated);
+    REQUIRE(covariance);
+    CHECK((covariance->covariance - want).norm() < 1e-24);
+    CHECK(correct::predicted_spread(calibrated, *covariance, q, false).position_m ==
+          doctest::Approx(position(want, 0.0)));
+    // The correlation is what makes the spread differ from the diagonal's rough scale.
+    CHECK(std::abs(position(want, 0.0) - position(s.cwiseAbs2().asDiagonal(), 0.0)) > 0.05 * position(want, 0.0));
+  }
+  record.model_error_m = 1e-4;
+  record.model_error_rad = 2e-4;
+  {
+    const auto covariance = correct::record_covariance(calibrated);
+    REQUIRE(covariance);
+    const correct::PoseSpread spread = correct::predicted_spread(calibrated, *covariance, q, false);
+    CHECK(spread.position_m == doctest::Approx(position(want, 1e-4)));
+    const Eigen::Matrix3d o = e.bottomRows<3>() * want * e.bottomRows<3>().transpose();
+    CHECK(spread.orientation_rad == doctest::Approx(std::sqrt(o.trace() + 3.0 * 4e-8)));
+  }
+  // A parameter erased or added keeps the rows one per parameter after the first.
+  model::CalibrationRecord edited = record;
+  edited.erase_parameter(1);
+  REQUIRE(edited.correlations.size() == 1);
+  CHECK(edited.correlations[0] == std::vector<double>{0.3});
+  edited.add_parameter({"d5", 0.0, 1e-5});
+  CHECK(edited.correlations.back() == std::vector<double>{0.0, 0.0});
+  edited.erase_parameter(0);
+  CHECK(edited.correlations == std::vector<std::vector<double>>{{0.0}});
+  // Correlations no covariance has (1, 2 and 1, 3 nearly one, 2, 3 nearly minus one), or of the wrong
+  // shape: refused, naming what.
+  record.correlations = {{0.99}, {0.99, -0.99}};
+  CHECK_THROWS_WITH_AS(correct::record_covariance(calibrated), doctest::Contains("not positive semi-definite"),
+                       model::InputError);
+  record.correlations = {{0.5}};
+  CHECK_THROWS_WITH_AS(correct::record_covariance(calibrated), doctest::Contains("one row per parameter"),
+                       model::InputError);
+}
+
 TEST_CASE("joint offsets: the zero errors, exact when they are all the calibration found, partial otherwise") {
   const model::RobotModel start = robot("puma560.yaml");
   model::RobotModel zeros = start;

@@ -83,6 +83,18 @@ TEST_CASE("a light arm that does not sag, noise only: the gravity candidate's co
     }
   }
   CHECK(compliances == 4);  // shoulder, elbow and two wrist joints carry a gravity torque
+  // The record carries the whole covariance (correct's predicted spread): correlations with the
+  // stddevs give it back, and the model error where the instrument's noise was known apart.
+  const model::CalibrationRecord& record = *r.model.calibration;
+  REQUIRE(record.correlations.size() + 1 == record.parameters.size());
+  for (std::size_t k = 1; k < r.identifiability.identified.size(); ++k)
+    for (std::size_t l = 0; l < k; ++l) {
+      const auto i = static_cast<Eigen::Index>(k), j = static_cast<Eigen::Index>(l);
+      CHECK(record.correlations[k - 1][l] * r.stddev(i) * r.stddev(j) ==
+            doctest::Approx(r.covariance(i, j)).epsilon(1e-9).scale(1e-30));
+    }
+  CHECK(record.model_error_m.has_value() == (r.all_covariance || r.sigma_m > 0.0));
+  if (record.model_error_m) CHECK(*record.model_error_m == r.model_error_position_m);
   // The bound was active: the noise would have driven at least one negative.
   CHECK(at_bound >= 1);
   CHECK(identify::format_report(r).find("at its bound") != std::string::npos);

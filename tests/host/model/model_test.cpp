@@ -277,7 +277,10 @@ TEST_CASE("model files: read, write, read back") {
                                            {{"theta2", 1e-3, 2e-5}},
                                            {"theta1"},
                                            2e-4,
-                                           std::vector<std::array<double, 2>>(6, {-1.0 / 3.0, 0.1})};
+                                           std::vector<std::array<double, 2>>(6, {-1.0 / 3.0, 0.1}),
+                                           {},
+                                           std::nullopt,
+                                           std::nullopt};
   const RobotModel rb = model::parse_model(model::write_model(r), "r.yaml");
   for (int i = 0; i < 6; ++i) {
     const auto& a = r.joints[static_cast<std::size_t>(i)];
@@ -296,6 +299,38 @@ TEST_CASE("model files: read, write, read back") {
   CHECK(rb.calibration->parameters.at(0).name == "theta2");
   CHECK(rb.calibration->validation_rms_m.value() == 2e-4);
   CHECK(rb.calibration->reading_ranges == r.calibration->reading_ranges);
+  CHECK(rb.calibration->correlations.empty());
+  CHECK_FALSE(rb.calibration->model_error_m);
+
+  // The correlations and the model error read back bit for bit.
+  r.calibration->parameters = {{"theta2", 1e-3, 2e-5}, {"d3", -1e-4, 1e-6}, {"a4", 2e-4, 3e-6}};
+  r.calibration->correlations = {{-1.0 / 3.0}, {0.1, -0.7}};
+  r.calibration->model_error_m = 1.0 / 7.0 * 1e-3;
+  r.calibration->model_error_rad = 0.25;
+  const RobotModel rc = model::parse_model(model::write_model(r), "r.yaml");
+  CHECK(rc.calibration->correlations == r.calibration->correlations);
+  CHECK(rc.calibration->model_error_m == r.calibration->model_error_m);
+  CHECK(rc.calibration->model_error_rad == r.calibration->model_error_rad);
+  // What the record's reader refuses: rows not one per parameter after the first, a row of the
+  // wrong length, a correlation past one, a parameter named twice, a negative model error.
+  const std::string text = model::write_model(r);
+  const auto refused = [&](const std::string& from, const std::string& to) {
+    const std::size_t at = text.find(from);
+    REQUIRE(at != std::string::npos);
+    std::string changed = text;
+    changed.replace(at, from.size(), to);
+    try {
+      (void)model::parse_model(changed, "r.yaml");
+    } catch (const model::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  CHECK(refused("- [0.1, -0.7]", "").find("one row per parameter after the first (2)") != std::string::npos);
+  CHECK(refused("[0.1, -0.7]", "[0.1]").find("row 2 must list 2 correlations") != std::string::npos);
+  CHECK(refused("-0.7", "-1.2").find("(a correlation)") != std::string::npos);
+  CHECK(refused("name: d3", "name: theta2").find("'theta2' named twice") != std::string::npos);
+  CHECK(refused("model_error_rad: 0.25", "model_error_rad: -0.25").find("model_error_rad") != std::string::npos);
 
   for (const char* name : {"puma560.yaml", "ur5.yaml", "stanford_rrp.yaml", "arid_prrr.yaml"})
     CHECK(model::load_model(robot_file(name)).joint_count() >= 3);
