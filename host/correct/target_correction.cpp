@@ -134,8 +134,14 @@ void TargetCorrector::limit_change(TargetResult& r, const std::vector<double>& r
     };
     const SolveOptions& options = cartesian_.options();
     if (box && !take(solve_pose_along(within, goal, orientation, reference, options)) &&
-        r.solution.outcome == Outcome::reached)
-      take(solve_pose(within, goal, orientation, r.solution.q, options, reference));
+        r.solution.outcome == Outcome::reached &&
+        !take(solve_pose(within, goal, orientation, r.solution.q, options, reference))) {
+      // Refused: the change named is the smallest found, the goal followed from the reference
+      // without the box too (a solve landed on another branch would name that branch's change).
+      const Solution along = solve_pose_along(arm, goal, orientation, reference, options);
+      const JointChange a = largest_change(along.q, reference);
+      if (along.outcome == Outcome::reached && a.over_limit < c.over_limit) c = a;
+    }
   }
   r.change_over_limit = c.over_limit;
   r.change_joint = c.joint;

@@ -308,6 +308,14 @@ TEST_CASE("target corrector: a solve landed on the mirrored elbow is followed ag
   REQUIRE(r.solution.outcome == correct::Outcome::reached);
   CHECK(r.change < 0.2 * std::numbers::pi / 180.0);
   CHECK(std::abs(r.solution.q[2] - 0.011776) < 1e-4);
+  // Under a limit below that, the refusal names the smallest change found, not the mirrored elbow's.
+  correct::JointChangeLimit tight;
+  tight.revolute_rad = 0.05 * std::numbers::pi / 180.0;
+  correct::TargetCorrector refusing(nominal, calibrated, correct::TargetFrame::device, std::nullopt, {}, tight);
+  const correct::TargetResult refused = refusing.correct({{120, true, seed, pose, true}}, {}, "targets.csv").front();
+  CHECK(refused.solution.outcome == correct::Outcome::joint_change_limit);
+  CHECK(refused.change_joint == 2);
+  CHECK(refused.change < 0.2 * std::numbers::pi / 180.0);
 }
 
 TEST_CASE("target corrector: a target whose smallest correction exceeds the limit is refused and named") {
