@@ -287,7 +287,12 @@ int run_correct(const CorrectArgs& a) {
     correct::JointCorrectionOptions options;
     // The calibration's own tool says what the data measured: a point leaves the orientation free.
     options.orientation = !a.position_only && calibrated.tool == model::ToolKind::frame;
-    const std::optional<correct::ParameterCovariance> covariance = correct::record_covariance(calibrated);
+    std::optional<correct::ParameterCovariance> covariance;
+    try {
+      covariance = correct::record_covariance(calibrated);
+    } catch (const model::InputError& e) {
+      throw model::InputError(a.model.path + ": " + e.what());
+    }
     const std::string aimed =
         a.urscript.empty() ? aim_at_tcp(a, nominal, calibrated) : aim_program(a, program, nominal, calibrated);
     refuse_readings_in_degrees(targets, calibrated, source);
