@@ -11,11 +11,18 @@ std::optional<ParameterCovariance> record_covariance(const model::RobotModel& ca
   const model::CalibrationRecord& record = *calibrated.calibration;
   const std::size_t n = record.parameters.size();
   const bool correlated = !record.correlations.empty();
-  for (std::size_t k = 0; correlated && k < record.correlations.size(); ++k)
-    if (record.correlations.size() + 1 != n || record.correlations[k].size() != k + 1)
-      throw model::InputError("calibration: correlations are not one row per parameter after the first");
-  // The correlation matrix, unit diagonal; the identity where the record has none.
-  Eigen::MatrixXd correlation = Eigen::MatrixXd::Identity(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+  bool shaped = record.correlations.size() + 1 == n;
+  for (std::size_t k = 0; shaped && k < record.correlations.size(); ++k)
+    shaped = record.correlations[k].size() == k + 1;
+  if (correlated && !shaped)
+    throw model::InputError("calibration: correlations are not one row per parameter after the first");
+  // Every name must be the model's own (the file's reader takes each once) before the n x n
+  // matrix is built.
+  for (std::size_t k = 0; correlated && k < n; ++k)
+    (void)model::parse_parameter_name(record.parameters[k].name, calibrated.joint_count());
+  // The correlation matrix, unit diagonal (built only where the record has one).
+  Eigen::MatrixXd correlation;
+  if (correlated) correlation.setIdentity(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
   for (std::size_t k = 0; correlated && k + 1 < n; ++k)
     for (std::size_t l = 0; l <= k; ++l) {
       const auto i = static_cast<Eigen::Index>(k + 1), j = static_cast<Eigen::Index>(l);
@@ -38,7 +45,8 @@ std::optional<ParameterCovariance> record_covariance(const model::RobotModel& ca
   out.model_error_rad = record.model_error_rad.value_or(0.0);
   if (out.ids.empty() && out.model_error_m == 0.0 && out.model_error_rad == 0.0) return std::nullopt;
   const Eigen::VectorXd s = Eigen::Map<const Eigen::VectorXd>(sd.data(), static_cast<Eigen::Index>(sd.size()));
-  out.covariance = s.asDiagonal() * correlation(kept, kept) * s.asDiagonal();
+  out.covariance = correlated ? Eigen::MatrixXd(s.asDiagonal() * correlation(kept, kept) * s.asDiagonal())
+                              : Eigen::MatrixXd(s.cwiseAbs2().asDiagonal());
   return out;
 }
 
