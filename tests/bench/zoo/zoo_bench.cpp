@@ -402,8 +402,8 @@ void judge_correct(const Chain& chain, const CaseData& d, const std::string& dir
   if (!marker.empty()) {
     std::ostringstream note;
     note << std::fixed << std::setprecision(4) << "at the corrected readings: TCP " << r.correct_mm
-         << " mm, the model's error there " << rms_mm(model_tcp) << " mm, at the measured point "
-         << rms_mm(marker) << " mm";
+         << " mm, the model's error there " << rms_mm(model_tcp) << " mm, at the measured point " << rms_mm(marker)
+         << " mm";
     r.notes.push_back(note.str());
   }
   if (refused == 0) return;
@@ -488,9 +488,9 @@ CaseResult run_clean(const Context& ctx, const CaseSpec& c, const CaseData& d, c
     // correction's error at the TCP is compared with (issue #42).
     run_on_output({k, "predict", "--model", "m.yaml", "--joints", "corrected.csv", "-o", "pred_corrected.csv"}, dir,
                   "predict-corrected", r);
-    run_on_output({k, "predict", "--model", "m.yaml", "--joints", "corrected.csv", "--at", "tcp", "-o",
-                   "pred_corrected_tcp.csv"},
-                  dir, "predict-corrected-tcp", r);
+    run_on_output(
+        {k, "predict", "--model", "m.yaml", "--joints", "corrected.csv", "--at", "tcp", "-o", "pred_corrected_tcp.csv"},
+        dir, "predict-corrected-tcp", r);
     judge_correct(chain, d, dir, r);
   }
   run_on_output({k, "export", "--format", "joint-offsets", "--model", "m.yaml", "-o", "offsets.csv"}, dir,
