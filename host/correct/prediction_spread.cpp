@@ -6,35 +6,43 @@
 
 namespace kincal::correct {
 
-std::optional<ParameterCovariance> record_covariance(const model::RobotModel& calibrated) {
-  if (!calibrated.calibration) return std::nullopt;
+namespace {
+
+// The record's correlation matrix (unit diagonal, in the order of its parameters), checked: rows
+// one per parameter after the first, every name the model's own (the file's reader takes each
+// once, so n is bounded by the model's parameters before the n x n matrix is built), positive
+// semi-definite.
+Eigen::MatrixXd recorded_correlation(const model::RobotModel& calibrated) {
   const model::CalibrationRecord& record = *calibrated.calibration;
   const std::size_t n = record.parameters.size();
-  const bool correlated = !record.correlations.empty();
   bool shaped = record.correlations.size() + 1 == n;
   for (std::size_t k = 0; shaped && k < record.correlations.size(); ++k)
     shaped = record.correlations[k].size() == k + 1;
-  if (correlated && !shaped)
-    throw model::InputError("calibration: correlations are not one row per parameter after the first");
-  // Every name must be the model's own (the file's reader takes each once) before the n x n
-  // matrix is built.
-  for (std::size_t k = 0; correlated && k < n; ++k)
-    (void)model::parse_parameter_name(record.parameters[k].name, calibrated.joint_count());
-  // The correlation matrix, unit diagonal (built only where the record has one).
-  Eigen::MatrixXd correlation;
-  if (correlated) correlation.setIdentity(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
-  for (std::size_t k = 0; correlated && k + 1 < n; ++k)
+  if (!shaped) throw model::InputError("calibration: correlations are not one row per parameter after the first");
+  for (const model::ParameterReport& p : record.parameters)
+    (void)model::parse_parameter_name(p.name, calibrated.joint_count());
+  Eigen::MatrixXd correlation = Eigen::MatrixXd::Identity(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+  for (std::size_t k = 0; k + 1 < n; ++k)
     for (std::size_t l = 0; l <= k; ++l) {
       const auto i = static_cast<Eigen::Index>(k + 1), j = static_cast<Eigen::Index>(l);
       correlation(i, j) = correlation(j, i) = record.correlations[k][l];
     }
-  if (correlated && n > 0 &&
-      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(correlation).eigenvalues().minCoeff() < -1e-9)
+  if (Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(correlation).eigenvalues().minCoeff() < -1e-9)
     throw model::InputError("calibration: correlations are not those of a covariance (not positive semi-definite)");
+  return correlation;
+}
+
+}  // namespace
+
+std::optional<ParameterCovariance> record_covariance(const model::RobotModel& calibrated) {
+  if (!calibrated.calibration) return std::nullopt;
+  const model::CalibrationRecord& record = *calibrated.calibration;
+  const bool correlated = !record.correlations.empty();
+  const Eigen::MatrixXd correlation = correlated ? recorded_correlation(calibrated) : Eigen::MatrixXd();
   ParameterCovariance out;
   std::vector<Eigen::Index> kept;
   std::vector<double> sd;
-  for (std::size_t k = 0; k < n; ++k) {
+  for (std::size_t k = 0; k < record.parameters.size(); ++k) {
     const model::ParameterReport& p = record.parameters[k];
     if (!(p.stddev > 0.0)) continue;
     out.ids.push_back(model::parse_parameter_name(p.name, calibrated.joint_count()));
@@ -44,9 +52,11 @@ std::optional<ParameterCovariance> record_covariance(const model::RobotModel& ca
   out.model_error_m = record.model_error_m.value_or(0.0);
   out.model_error_rad = record.model_error_rad.value_or(0.0);
   if (out.ids.empty() && out.model_error_m == 0.0 && out.model_error_rad == 0.0) return std::nullopt;
-  const Eigen::VectorXd s = Eigen::Map<const Eigen::VectorXd>(sd.data(), static_cast<Eigen::Index>(sd.size()));
-  out.covariance = correlated ? Eigen::MatrixXd(s.asDiagonal() * correlation(kept, kept) * s.asDiagonal())
-                              : Eigen::MatrixXd(s.cwiseAbs2().asDiagonal());
+  const auto m = static_cast<Eigen::Index>(sd.size());
+  const Eigen::VectorXd s = Eigen::Map<const Eigen::VectorXd>(sd.data(), m);
+  // Without recorded correlations, the diagonal (see the header).
+  const Eigen::MatrixXd r = correlated ? Eigen::MatrixXd(correlation(kept, kept)) : Eigen::MatrixXd::Identity(m, m);
+  out.covariance = s.asDiagonal() * r * s.asDiagonal();
   return out;
 }
 

@@ -575,6 +575,8 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
   // Noise: the instrument's (from the data, or given) plus the model error (estimated).
   const bool all_covariance = std::all_of(data.rows.begin(), data.rows.end(),
                                           [](const model::Measurement& r) { return r.covariance.has_value(); });
+  const bool all_pose_covariance = std::all_of(
+      data.rows.begin(), data.rows.end(), [](const model::Measurement& r) { return r.pose_covariance.has_value(); });
   result.all_covariance = all_covariance;
   result.sigma_m = options.sigma_m > 0.0 ? options.sigma_m : 0.0;
   result.orientation_used = data.has_orientation && nominal.tool == model::ToolKind::frame;
@@ -898,9 +900,7 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
     }
     // s_p and s_o are the model error only beside a known instrument noise; else they are the noise.
     if (out.all_covariance || out.sigma_m > 0.0) record.model_error_m = out.model_error_position_m;
-    const bool pose_covariance = std::all_of(data.rows.begin(), data.rows.end(),
-                                             [](const model::Measurement& m) { return m.pose_covariance.has_value(); });
-    if (out.orientation_used && (out.orientation_sigma_rad > 0.0 || pose_covariance))
+    if (out.orientation_used && (out.orientation_sigma_rad > 0.0 || all_pose_covariance))
       record.model_error_rad = out.model_error_orientation_rad;
     for (const HeldFixed& h : out.identifiability.held_fixed) record.held_fixed.push_back(model::parameter_name(h.id));
     out.model.calibration = record;
