@@ -24,7 +24,9 @@
 //                                     the data (0.1 mm for a prismatic joint), over that load:
 //                                     sigma = 0.1 deg / max |G_i| in rad/(N m) (GravityLoads, at
 //                                     the start's masses; none where the data do not load the
-//                                     joint or no loads are given). A stiffness has no tolerance
+//                                     joint or no loads are given: identify gives them where the
+//                                     masses are identified too, sag.hpp's
+//                                     compliance_prior_loads). A stiffness has no tolerance
 //                                     a maker states, but a deflection has a size: an arm's
 //                                     joints sag by hundredths to tenths of a degree. Without it
 //                                     geometry+sag's compliances ran free on 20 rows (the zoo's
@@ -52,7 +54,6 @@
 // prior stays centred on the nominal (identify.cpp's nominal_in_start).
 #pragma once
 
-#include <limits>
 #include <numbers>
 #include <string>
 #include <utility>

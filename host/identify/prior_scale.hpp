@@ -15,8 +15,9 @@
 //   gravity direction  gravity_rx, gravity_ry
 //   joint compliance compliance<i>: each a class of its own, as a joint ratio (its width a
 //                    deflection at the joint's largest load: prior.hpp); the stiffness of one
-//                    joint's gear says nothing of another's, and one class for all let two joints
+//                    joint's gear says nothing of another's, and one class for all let two wrists
 //                    at their bound of 0 pull the UR10's loaded shoulder to a tenth of its width
+//                    (geometry+gravity, when its compliances had this prior too)
 //   joint ratio      scale<i>, coupling<i>_<i-1>: each a class of its own (automatic relevance
 //                    determination): a gear's ratio or a transmission's coupling is wrong on one
 //                    joint, not across a population of them, and one class for all let the data's
