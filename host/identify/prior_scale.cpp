@@ -219,9 +219,7 @@ PriorScales update_prior_scales(const Eigen::MatrixXd& information, const Eigen:
         c.reason = ScaleReason::barely_seen;
         continue;
       }
-      const double lowest = c.kind == PriorClass::joint_ratio   ? options.min_ratio_scale
-                            : c.kind == PriorClass::mass_centre ? options.min_centre_scale
-                                                                : options.min_scale;
+      const double lowest = c.kind == PriorClass::joint_ratio ? options.min_ratio_scale : options.min_scale;
       const double bounded = std::clamp(wanted[u], lowest, options.max_scale);
       c.reason = wanted[u] < lowest              ? ScaleReason::lower_bound
                  : wanted[u] > options.max_scale ? ScaleReason::upper_bound

@@ -62,13 +62,7 @@
 //                 word of a few noisy parameters; at a hundred times (100 mm, 50 deg) it no longer
 //                 constrains anything an arm could have, i.e. least squares; a joint ratio's
 //                 lower bound is min_ratio_scale, by default 1e-4 (1 ppm: a joint the data do
-//                 not call scaled is held at its nominal ratio); the mass centres' is
-//                 min_centre_scale, by default 1 (0.1 m): a centre of mass is known to its link's
-//                 size at best, and seen only through compliance x first moment, the evidence
-//                 shrank the class to its bound on every few-row case of the zoo's service arms,
-//                 holding each centre within 10 mm of its link frame's origin where the truth's
-//                 lie along the links (held at 0.1 m: the SIA10F's 40 tracker rows 1.42 -> 1.30
-//                 times the oracle held out, the IRB 6640's 20 rows 1.24 -> 1.12)
+//                 not call scaled is held at its nominal ratio)
 // Off with PriorOptions::estimate_scales = false (the fixed-width candidates of model selection)
 // or strength 0 (no prior).
 //
