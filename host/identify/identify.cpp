@@ -697,19 +697,13 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
 
   Parameterization param(result.start, ids);
   std::vector<double> delta(static_cast<std::size_t>(p), 0.0);
-  const GravityLoads loads = compliance_prior_loads(result.start, data);
-  const Eigen::VectorXd default_sigma = prior_sigmas(options.prior, ids, n, "prior", loads);
+  const Eigen::VectorXd default_sigma = prior_sigmas(options.prior, ids, n, "prior");
   result.prior_sigma = default_sigma;
-  result.prior_scales = initial_prior_scales(options.prior, ids, n, loads);
+  result.prior_scales = initial_prior_scales(options.prior, ids, n);
   result.prior_centre = Eigen::VectorXd::Zero(p);
   if (options.start == Start::cpa && options.prior.strength > 0.0)
     result.prior_centre = nominal_in_start(nominal, data, options, param, base_free && options.requested.empty(),
                                            result.orientation_used, result.notes);
-  // A compliance's prior is on the deflection itself, centred on a rigid joint whatever the start
-  // (a model file's value, the sag's first stage: prior.hpp).
-  for (int k = 0; k < p; ++k)
-    if (ids[static_cast<std::size_t>(k)].kind == model::kJointCompliance)
-      result.prior_centre(k) = -result.start.joints.at(ids[static_cast<std::size_t>(k)].link).compliance.value_or(0.0);
   Eigen::VectorXd prior_weight = prior_weights(options.prior, result.prior_sigma);
   const double negligible_position2 = 1e-6 * result.median_instrument_sigma_m * result.median_instrument_sigma_m;
 
