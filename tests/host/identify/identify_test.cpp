@@ -330,22 +330,6 @@ TEST_CASE("noise model: a model error far above the instrument's covariance is e
   CHECK(has(identify::format_report(r), "model error 0.3"));
 }
 
-// A few pose rows, barely more equations than parameters, the positions' noise recorded and the
-// orientations' unknown: the REML must count what the prior keeps the parameters from absorbing.
-// Counting the data alone, the orientation had almost no degree of freedom left and its model
-// error fell to 0 (the zoo's SIA10F, a 10-row fold: its positions were then sacrificed).
-TEST_CASE("noise model: a near-saturated pose fit keeps its orientation's model error") {
-  std::mt19937_64 rng(41);
-  const RobotModel nominal = robot("puma560.yaml");
-  const RobotModel truth = sim::perturbed(nominal, rng);
-  const model::Dataset d =
-      simulation::measure(truth, sim::random_configurations(nominal, 7, rng), rng, 5e-5, true, 2e-4, true);
-  const identify::IdentifyResult r = identify::identify(nominal, d, {});
-  INFO(identify::format_noise(r));
-  CHECK(r.model_error_orientation_rad > 0.3 * 2e-4);
-  CHECK(r.residuals.rms_m < 1e-3);
-}
-
 TEST_CASE("outlier rejection on a small set with systematic error is no worse than none") {
   // The simulated sagging sweep set: 36 readings; the rows the test would reject are the model's
   // error at the sweeps' ends, not blunders.
