@@ -65,7 +65,8 @@
 // parameters by a fit of its tool poses at the data's configurations is the prior's centre); the solve is the maximum a
 // posteriori estimate and the covariance the inverse of the posterior information J^T J + diag(1 / sigma^2) (over the
 // parameters not on a physical bound: at_bound). The noise
-// model's REML counts the prior rows as observations of known variance; the outlier test judges each row against the
+// model's REML counts the prior rows as observations of known variance (from the second noise pass on, once the
+// data have chosen the priors' widths: identify.cpp says why); the outlier test judges each row against the
 // data alone (the leverage of the data's own fit: a sweep's end that alone sees a direction keeps it). Exact
 // dependencies (identifiability.hpp) are still held fixed: the data cannot split them, so the
 // prior alone would. Each parameter's prior share of its posterior information is reported, and

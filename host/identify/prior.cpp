@@ -16,10 +16,14 @@ bool same_parameter(core::ParameterId a, core::ParameterId b) {
   return model::parameter_name(a) == model::parameter_name(b);
 }
 
-double default_sigma(const PriorOptions& o, core::ParameterId id) {
+double default_sigma(const PriorOptions& o, core::ParameterId id, const GravityLoads& loads) {
   using K = core::ParameterKind;
   if (id.kind == model::kJointScale) return o.scale;
-  if (id.kind == model::kJointCompliance) return o.compliance;
+  if (id.kind == model::kJointCompliance) {
+    const double load = id.link < loads.largest.size() ? loads.largest[id.link] : 0.0;
+    if (!(load > 0.0)) return std::numeric_limits<double>::infinity();
+    return (loads.prismatic.at(id.link) ? o.deflection_m : o.deflection_rad) / load;
+  }
   if (id.kind == model::kLinkMass) return o.mass_kg;
   if (model::is_mass_parameter(id.kind)) return o.centre_m;
   if (id.kind == model::kJointCoupling) return o.coupling;
@@ -52,9 +56,9 @@ double default_sigma(const PriorOptions& o, core::ParameterId id) {
 }  // namespace
 
 Eigen::VectorXd prior_sigmas(const PriorOptions& options, const ParameterIds& ids, int joint_count,
-                             const std::string& where) {
+                             const std::string& where, const GravityLoads& loads) {
   Eigen::VectorXd s(static_cast<Eigen::Index>(ids.size()));
-  for (std::size_t k = 0; k < ids.size(); ++k) s(static_cast<Eigen::Index>(k)) = default_sigma(options, ids[k]);
+  for (std::size_t k = 0; k < ids.size(); ++k) s(static_cast<Eigen::Index>(k)) = default_sigma(options, ids[k], loads);
   for (const auto& [name, sigma] : options.sigma) {
     core::ParameterId id{};
     try {

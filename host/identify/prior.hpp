@@ -20,8 +20,18 @@
 //   coupling<i>_<i-1>        0.01     a transmission's share of the upstream joint's motion
 //                                     (model_selection.hpp's geometry+couplings), 1 % like a
 //                                     ratio: the zoo's elbow couplings are 0.2-0.5 %
-//   compliance<i>            none     no scale a tolerance could name (the model file's value
-//                                     is a user's estimate, not a tolerance)
+//   compliance<i>            0.1 deg  a joint's deflection under gravity at its largest load over
+//                                     the data (0.1 mm for a prismatic joint), over that load:
+//                                     sigma = 0.1 deg / max |G_i| in rad/(N m) (GravityLoads, at
+//                                     the start's masses; none where the data do not load the
+//                                     joint or no loads are given: identify gives them where the
+//                                     masses are identified too, sag.hpp's
+//                                     compliance_prior_loads). A stiffness has no tolerance
+//                                     a maker states, but a deflection has a size: an arm's
+//                                     joints sag by hundredths to tenths of a degree. Without it
+//                                     geometry+sag's compliances ran free on 20 rows (the zoo's
+//                                     SIA10F by motion capture: a wrist's 8329 +- 8042 urad/Nm in
+//                                     the gauge's units, 1.67 x the oracle held out)
 //   mass<i>                  1 kg     geometry+sag's masses (model_selection.hpp, sag.hpp):
 //                                     in the gauge's units, where the start is 1 kg per link,
 //                                     so a width of the start's size; the data rescale it (below)
@@ -44,7 +54,6 @@
 // prior stays centred on the nominal (identify.cpp's nominal_in_start).
 #pragma once
 
-#include <limits>
 #include <numbers>
 #include <string>
 #include <utility>
@@ -66,7 +75,8 @@ struct PriorOptions {
   double tool_angle_rad = 5.0 * std::numbers::pi / 180.0;
   double scale = 0.01;
   double coupling = 0.01;
-  double compliance = std::numeric_limits<double>::infinity();
+  double deflection_rad = 0.1 * std::numbers::pi / 180.0;  // a compliance's width: its joint's deflection
+  double deflection_m = 1e-4;                              // ... a prismatic joint's
   double gravity_direction_rad = 1.0 * std::numbers::pi / 180.0;
   double mass_kg = 1.0;   // an identified link mass (geometry+sag's gauge units)
   double centre_m = 0.1;  // an identified centre of mass, per axis
@@ -81,11 +91,19 @@ struct PriorOptions {
   std::vector<std::pair<std::string, double>> sigma;
 };
 
+// Each joint's largest gravity load over the data at the start's masses (sag.hpp's
+// largest_gravity_loads: N m, a prismatic joint's N) and its kind: what turns a compliance's
+// default width, a deflection, into rad/(N m) or m/N. Empty: no compliance has a default prior.
+struct GravityLoads {
+  std::vector<double> largest;
+  std::vector<bool> prismatic;
+};
+
 // The prior sigma of each parameter (infinity: none), before `strength`. Throws
 // model::InputError for an unknown name in options.sigma (naming it and `where`) or a sigma that
 // is not positive.
 Eigen::VectorXd prior_sigmas(const PriorOptions& options, const ParameterIds& ids, int joint_count,
-                             const std::string& where);
+                             const std::string& where, const GravityLoads& loads = {});
 
 // The whitened prior weights strength / sigma (0 where there is no prior).
 Eigen::VectorXd prior_weights(const PriorOptions& options, const Eigen::VectorXd& sigmas);

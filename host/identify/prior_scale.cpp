@@ -18,12 +18,17 @@ PriorClass class_of_kind(core::ParameterKind kind) {
   if (kind == model::kLinkMass) return PriorClass::link_mass;
   if (model::is_mass_parameter(kind)) return PriorClass::mass_centre;
   if (model::is_gravity_direction_parameter(kind)) return PriorClass::gravity_direction;
+  if (kind == model::kJointCompliance) return PriorClass::joint_compliance;
   if (model::is_joint_map_parameter(kind)) return PriorClass::joint_ratio;
   if (kind == K::link_d || kind == K::link_a) return PriorClass::link_length;
   if (kind <= K::link_beta) return PriorClass::link_angle;
   if (kind <= K::base_rz) return PriorClass::registration;
   return PriorClass::measured_point;
 }
+
+// A class of one parameter, its width the evidence's closed form (prior_scale.hpp): a joint
+// ratio's or a compliance's, a property of its own joint.
+bool own_class(PriorClass kind) { return kind == PriorClass::joint_ratio || kind == PriorClass::joint_compliance; }
 
 // The class's default widths as the report prints them, times `scale`.
 std::string class_sigmas(const ClassScale& c, const PriorOptions& o, double scale) {
@@ -51,6 +56,12 @@ std::string class_sigmas(const ClassScale& c, const PriorOptions& o, double scal
       break;
     case PriorClass::gravity_direction:
       std::snprintf(text, sizeof text, "%.3g deg", o.gravity_direction_rad * f * kDeg);
+      break;
+    case PriorClass::joint_compliance:
+      if (c.prismatic)
+        std::snprintf(text, sizeof text, "%.3g mm at its load", o.deflection_m * f * 1e3);
+      else
+        std::snprintf(text, sizeof text, "%.3g deg at its load", o.deflection_rad * f * kDeg);
       break;
     default:
       std::snprintf(text, sizeof text, "%.3g %%",
@@ -96,16 +107,19 @@ const char* prior_class_name(PriorClass c) {
       return "mass centres";
     case PriorClass::gravity_direction:
       return "gravity direction";
+    case PriorClass::joint_compliance:
+      return "joint compliance";
     default:
       return "joint ratio";
   }
 }
 
-PriorScales initial_prior_scales(const PriorOptions& options, const ParameterIds& ids, int joint_count) {
+PriorScales initial_prior_scales(const PriorOptions& options, const ParameterIds& ids, int joint_count,
+                                 const GravityLoads& loads) {
   PriorScales s;
   PriorOptions defaults = options;
   defaults.sigma.clear();
-  const Eigen::VectorXd sigma = prior_sigmas(defaults, ids, joint_count, "prior");
+  const Eigen::VectorXd sigma = prior_sigmas(defaults, ids, joint_count, "prior", loads);
   std::vector<int> kind_of;  // each parameter's PriorClass, or -1 for none
   for (std::size_t k = 0; k < ids.size(); ++k) {
     const std::string name = model::parameter_name(ids[k]);
@@ -120,9 +134,11 @@ PriorScales initial_prior_scales(const PriorOptions& options, const ParameterIds
   for (int kind = 0; kind <= static_cast<int>(PriorClass::mass_centre); ++kind)
     for (std::size_t k = 0; k < ids.size(); ++k) {
       if (kind_of[k] != kind) continue;
-      const bool own = static_cast<PriorClass>(kind) == PriorClass::joint_ratio;
+      const bool own = own_class(static_cast<PriorClass>(kind));
       if (own || s.classes.empty() || s.classes.back().kind != static_cast<PriorClass>(kind))
-        s.classes.push_back({static_cast<PriorClass>(kind), own ? model::parameter_name(ids[k]) : ""});
+        s.classes.push_back({static_cast<PriorClass>(kind), own ? model::parameter_name(ids[k]) : "",
+                             ids[k].kind == model::kJointCompliance && ids[k].link < loads.prismatic.size() &&
+                                 loads.prismatic[ids[k].link]});
       ++s.classes.back().parameters;
       s.class_of[k] = static_cast<int>(s.classes.size()) - 1;
     }
@@ -161,7 +177,7 @@ PriorScales update_prior_scales(const Eigen::MatrixXd& information, const Eigen:
     return w2;
   };
   // gamma_c and, per class, the scale the evidence asks for at the scales `scale` (MacKay's
-  // fixed point's next step; a joint ratio's maximum in closed form, 0 for none).
+  // fixed point's next step; a class of one's maximum in closed form, 0 for none).
   std::vector<double> gamma, wanted;
   const auto evidence = [&](const std::vector<double>& scale, const LinearPosterior& post) {
     gamma.assign(classes, 0.0);
@@ -175,7 +191,7 @@ PriorScales update_prior_scales(const Eigen::MatrixXd& information, const Eigen:
       const double deviation = post.delta(k) - centre(k);
       gamma[u] += 1.0 - std::min(1.0, post.variance(k) / prior2);
       deviation2[u] += deviation * deviation / (b(k) * b(k));
-      if (next.classes[u].kind == PriorClass::joint_ratio) {
+      if (own_class(next.classes[u].kind)) {
         const double seen = 1.0 / std::max(post.variance(k), 1e-300) - 1.0 / prior2;       // s
         const double alone = seen > 0.0 ? deviation * (seen + 1.0 / prior2) / seen : 0.0;  // m - centre
         const double width2 = seen > 0.0 ? alone * alone - 1.0 / seen : 0.0;
@@ -183,8 +199,7 @@ PriorScales update_prior_scales(const Eigen::MatrixXd& information, const Eigen:
       }
     }
     for (std::size_t u = 0; u < classes; ++u)
-      if (next.classes[u].kind != PriorClass::joint_ratio)
-        wanted[u] = std::sqrt(deviation2[u] / std::max(gamma[u], 1e-12));
+      if (!own_class(next.classes[u].kind)) wanted[u] = std::sqrt(deviation2[u] / std::max(gamma[u], 1e-12));
   };
   const std::vector<double> ones(classes, 1.0);
   evidence(ones, linear_posterior(information, gradient, delta, centre, weights2(ones)));

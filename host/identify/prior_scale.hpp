@@ -12,7 +12,12 @@
 //   link angles      theta, alpha, beta of every link
 //   registration     base_* (the device-to-robot registration)
 //   measured point   tool_* (the measured point or the tool, known to a few millimetres at best)
-//   gravity direction  gravity_rx, gravity_ry (compliance<i> has no default prior, so no class)
+//   gravity direction  gravity_rx, gravity_ry
+//   joint compliance compliance<i>: each a class of its own, as a joint ratio (its width a
+//                    deflection at the joint's largest load: prior.hpp); the stiffness of one
+//                    joint's gear says nothing of another's, and one class for all let two wrists
+//                    at their bound of 0 pull the UR10's loaded shoulder to a tenth of its width
+//                    (geometry+gravity, when its compliances had this prior too)
 //   joint ratio      scale<i>, coupling<i>_<i-1>: each a class of its own (automatic relevance
 //                    determination): a gear's ratio or a transmission's coupling is wrong on one
 //                    joint, not across a population of them, and one class for all let the data's
@@ -83,6 +88,7 @@ enum class PriorClass {
   registration,
   measured_point,
   gravity_direction,
+  joint_compliance,
   joint_ratio,
   link_mass,
   mass_centre
@@ -93,8 +99,8 @@ enum class PriorClass {
 // determine alone counts (gamma just below 1), one they see as much as its prior does not.
 inline constexpr double kMinSeenParameters = 0.5;
 
-// "link lengths", "link angles", "registration", "measured point", "gravity direction", "joint ratio",
-// "link masses", "mass centres".
+// "link lengths", "link angles", "registration", "measured point", "gravity direction", "joint
+// compliance", "joint ratio", "link masses", "mass centres".
 const char* prior_class_name(PriorClass c);
 
 // How a class's scale was chosen.
@@ -102,7 +108,8 @@ enum class ScaleReason { evidence, lower_bound, upper_bound, barely_seen };
 
 struct ClassScale {
   PriorClass kind = PriorClass::link_length;
-  std::string parameter;         // a joint ratio's one parameter (scale3, coupling3_2); empty for the others
+  std::string parameter;         // a class of one's parameter (scale3, coupling3_2, compliance2); empty for the others
+  bool prismatic = false;        // a compliance's joint is prismatic: its width a length
   int parameters = 0;            // identified parameters of the class with a default prior
   double scale = 1.0;            // lambda_c: multiplies the class's default sigmas
   double determined = 0.0;       // gamma_c at the chosen scale
@@ -117,9 +124,10 @@ struct PriorScales {
   PriorOptions options;             // the default widths and bounds it scales (for the report)
 };
 
-// The classes of the identified parameters `ids` with every scale 1; estimated = false when the
-// stage is off (see above) or no parameter has a class.
-PriorScales initial_prior_scales(const PriorOptions& options, const ParameterIds& ids, int joint_count);
+// The classes of the identified parameters `ids` with every scale 1 (`loads` as prior_sigmas
+// takes them); estimated = false when the stage is off (see above) or no parameter has a class.
+PriorScales initial_prior_scales(const PriorOptions& options, const ParameterIds& ids, int joint_count,
+                                 const GravityLoads& loads = {});
 
 // The sigmas (SI, infinity: none) with each class's scale applied to `sigmas` (prior_sigmas').
 Eigen::VectorXd scaled_sigmas(const Eigen::VectorXd& sigmas, const PriorScales& scales);

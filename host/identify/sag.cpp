@@ -27,8 +27,8 @@ bool identifies_masses(const RobotModel& model) {
   return std::any_of(model.joints.begin(), model.joints.end(), [](const model::Joint& j) { return j.identify_mass; });
 }
 
-// Each joint's largest |G_i| (robot_model.hpp's gravity_forces: N m, or N for a prismatic joint)
-// over the data's poses.
+}  // namespace
+
 std::vector<double> largest_gravity_loads(const RobotModel& model, const model::Dataset& data) {
   std::vector<double> largest(model.joints.size(), 0.0);
   for (const model::Measurement& m : data.rows) {
@@ -40,7 +40,12 @@ std::vector<double> largest_gravity_loads(const RobotModel& model, const model::
   return largest;
 }
 
-}  // namespace
+GravityLoads compliance_prior_loads(const RobotModel& model, const model::Dataset& data) {
+  if (!identifies_masses(model)) return {};
+  GravityLoads loads{largest_gravity_loads(model, data), {}};
+  for (const model::Joint& j : model.joints) loads.prismatic.push_back(j.type == core::JointType::prismatic);
+  return loads;
+}
 
 bool needs_sag_start(const RobotModel& model, const IdentifyOptions& options) {
   const bool compliant = std::any_of(model.joints.begin(), model.joints.end(),
@@ -135,7 +140,9 @@ void finish_sag_result(IdentifyResult& r, const RobotModel& nominal) {
     if (id.kind != model::kJointCompliance) continue;
     std::optional<double>& start = r.start.joints.at(id.link).compliance;
     const std::optional<double>& own = nominal.joints.at(id.link).compliance;
-    r.change(static_cast<Eigen::Index>(k)) += start.value_or(0.0) - own.value_or(0.0);
+    const double from_own = start.value_or(0.0) - own.value_or(0.0);
+    r.change(static_cast<Eigen::Index>(k)) += from_own;
+    r.prior_centre(static_cast<Eigen::Index>(k)) += from_own;
     start = own;
   }
   RobotModel& model = r.model;

@@ -74,7 +74,8 @@
 //                                          _fixed_priors_ the same before
 //   realdata_ur10_sag_heldout_rms_mm_nN    ur10.yaml with its masses taken out, geometry+sag (its
 //                                          masses' priors, the default) on N training rows;
-//                                          _sag_free_masses_ the same without those priors (before),
+//                                          _sag_free_masses_ the same without those priors, nor
+//                                          the compliances' (before),
 //                                          realdata_ur10_sag_over_free_masses_nN the ratio
 //   sim_service_arm_heldout_over_noprior   a simulated service arm (tests/host/identify/simulation.hpp:
 //                                          8 joints with a prismatic torso, 3 mm / 0.5 deg errors,
@@ -269,14 +270,15 @@ void issue41_extrapolation(const model::RobotModel& nominal, const model::Datase
 
 // The arm's masses taken out of its model (as most public URDFs come): geometry+sag on the rows of
 // each training size, its masses and centres drawn toward the start by the priors whose widths
-// the evidence chooses (the default), and free (no prior on them: before).
+// the evidence chooses and each compliance toward a rigid joint (the default), and free (no prior
+// on them: before).
 void sag_without_masses(model::RobotModel nominal, const model::Dataset& all, const realdata::Split& split,
                         const model::Dataset& held_out) {
   nominal.payload.mass_kg = 0.0;
   for (model::Joint& j : nominal.joints) j.mass_kg = 0.0;
   const identify::Candidate c = identify::find_candidate(nominal, {}, "geometry+sag");
   identify::IdentifyOptions free = c.options;
-  simulation::free_masses(free.prior, nominal.joints.size());
+  simulation::free_sag_priors(free.prior, nominal.joints.size());
   for (int n : {30, 100, 300}) {
     const model::Dataset train =
         realdata::subset(all, std::vector<int>(split.train_order.begin(), split.train_order.begin() + n));

@@ -432,6 +432,54 @@ TEST_CASE("a joint ratio is a class of its own: its width in closed form, none w
   CHECK(has(text, "  coupling3_2 "));
 }
 
+TEST_CASE("a compliance's prior is a deflection at its joint's largest load, each joint a class of its own") {
+  // Joint 1 loaded to 100 N m, joint 2 not at all, joint 3 (prismatic) to 50 N.
+  const identify::ParameterIds ids{{model::kJointCompliance, 0},
+                                   {model::kJointCompliance, 1},
+                                   {model::kJointCompliance, 2},
+                                   {core::ParameterKind::link_a, 1}};
+  const identify::PriorOptions o;
+  const identify::GravityLoads loads{{100.0, 0.0, 50.0}, {false, false, true}};
+  // Without loads (a model with masses of its own: sag.hpp's compliance_prior_loads) no prior.
+  const Eigen::VectorXd without = identify::prior_sigmas(o, ids, 3, "test");
+  CHECK(std::isinf(without(0)));
+  CHECK(std::isinf(without(2)));
+  const Eigen::VectorXd sigma = identify::prior_sigmas(o, ids, 3, "test", loads);
+  CHECK(sigma(0) == doctest::Approx(o.deflection_rad / 100.0));
+  CHECK(std::isinf(sigma(1)));  // gravity does not load it: nothing to scale by
+  CHECK(sigma(2) == doctest::Approx(o.deflection_m / 50.0));
+  CHECK(sigma(3) == o.length_m);
+
+  const identify::PriorScales start = identify::initial_prior_scales(o, ids, 3, loads);
+  REQUIRE(start.classes.size() == 3);  // link lengths, then one class per loaded compliance
+  CHECK(start.classes[1].kind == identify::PriorClass::joint_compliance);
+  CHECK(start.classes[1].parameter == "compliance1");
+  CHECK(!start.classes[1].prismatic);
+  CHECK(start.classes[2].parameter == "compliance3");
+  CHECK(start.classes[2].prismatic);
+  CHECK(start.class_of == std::vector<int>{1, -1, 2, 0});
+
+  // Compliance 1 seen alone at 1 / (1e-7)^2 and 1e-5 from a rigid joint: the closed form's width;
+  // compliance 3 within its standard error of rigid: the classes' lower bound (not a ratio's).
+  Eigen::VectorXd seen(4);
+  seen << 1e14, 0.0, 1e14, 1e16;
+  Eigen::VectorXd delta(4);
+  delta << 1e-5, 0.0, 1e-8, 1e-3;
+  const Eigen::VectorXd none = Eigen::VectorXd::Zero(4);
+  const identify::PriorScales s =
+      identify::update_prior_scales(Eigen::MatrixXd(seen.asDiagonal()), none, delta, none, sigma, o, start);
+  CHECK(s.classes[1].scale == doctest::Approx(std::sqrt(1e-10 - 1e-14) / sigma(0)).epsilon(1e-3));
+  CHECK(s.classes[1].reason == identify::ScaleReason::evidence);
+  CHECK(s.classes[2].scale == doctest::Approx(o.min_scale));
+  CHECK(s.classes[2].reason == identify::ScaleReason::lower_bound);
+  const std::string text = identify::format_prior_scales(s);
+  INFO(text);
+  CHECK(has(text, "  compliance1 "));
+  CHECK(has(text, " deg at its load"));
+  CHECK(has(text, "  compliance3 "));
+  CHECK(has(text, " mm at its load"));
+}
+
 TEST_CASE("one scaled joint among six: its ratio is freed, the others held, as if the scaled joint were known") {
   // The PUMA 560 with every joint's scale identified where the truth scales joint 2 by 0.3 %
   // (a gear's ratio): with one width for all six scales, the scaled joint widened every joint's

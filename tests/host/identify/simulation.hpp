@@ -24,11 +24,12 @@
 
 namespace kincal::simulation {
 
-// `prior` with no prior on any link's mass or centre of mass (mass<i>, com_*<i>) of a model with
-// `joints` joints: geometry+sag's masses free, as they were before their priors (issue #41).
-inline void free_masses(identify::PriorOptions& prior, std::size_t joints) {
+// `prior` with no prior on any link's mass or centre of mass or any joint's compliance (mass<i>,
+// com_*<i>, compliance<i>) of a model with `joints` joints: geometry+sag's terms free, as they were
+// before their priors (issue #41).
+inline void free_sag_priors(identify::PriorOptions& prior, std::size_t joints) {
   for (std::size_t i = 1; i <= joints; ++i)
-    for (const char* p : {"mass", "com_x", "com_y", "com_z"})
+    for (const char* p : {"mass", "com_x", "com_y", "com_z", "compliance"})
       prior.sigma.emplace_back(p + std::to_string(i), std::numeric_limits<double>::infinity());
 }
 
