@@ -117,7 +117,7 @@ FrameCheck frame_check(const model::RobotModel& nominal, const model::Dataset& d
 // re-seated 40 mm away for the last 8 of 20 rows of a UR10 with a joint scale error: the 33
 // parameters absorbed most of it (14 mm RMS left), a second part fits 2.2 to 2.4 times better,
 // F(9, 18) = 7.7 to 9.5, p 1.4e-4 to 3e-5 as the noise's REML counts the priors' rows or not -- a
-// level of 1e-4 named it by a factor of 3 on one and not on the other, 1e-3 by 7 on both (the
+// level of 1e-4 named it by a factor of 3 on one and not on the other, 1e-3 by 7 and 29 (the
 // check only names a cause where the fit is already unexplained); the real UR10's rows without a
 // move never reach an unexplained fit.
 inline constexpr double kCalibratedMovedRatio = 2.5;
