@@ -17,7 +17,6 @@ PriorClass class_of_kind(core::ParameterKind kind) {
   using K = core::ParameterKind;
   if (kind == model::kLinkMass) return PriorClass::link_mass;
   if (model::is_mass_parameter(kind)) return PriorClass::mass_centre;
-  if (model::is_gravity_direction_parameter(kind)) return PriorClass::gravity_direction;
   if (kind == model::kJointCompliance) return PriorClass::joint_compliance;
   if (model::is_joint_map_parameter(kind)) return PriorClass::joint_ratio;
   if (kind == K::link_d || kind == K::link_a) return PriorClass::link_length;
@@ -27,8 +26,10 @@ PriorClass class_of_kind(core::ParameterKind kind) {
 }
 
 // A class of one parameter, its width the evidence's closed form (prior_scale.hpp): a joint
-// ratio's or a compliance's, a property of its own joint.
-bool own_class(PriorClass kind) { return kind == PriorClass::joint_ratio || kind == PriorClass::joint_compliance; }
+// ratio's, a compliance's or a mass centre's, a property of its own joint or link.
+bool own_class(PriorClass kind) {
+  return kind == PriorClass::joint_ratio || kind == PriorClass::joint_compliance || kind == PriorClass::mass_centre;
+}
 
 // The class's default widths as the report prints them, times `scale`.
 std::string class_sigmas(const ClassScale& c, const PriorOptions& o, double scale) {
@@ -53,9 +54,6 @@ std::string class_sigmas(const ClassScale& c, const PriorOptions& o, double scal
       break;
     case PriorClass::mass_centre:
       std::snprintf(text, sizeof text, "%.3g mm", o.centre_m * f * 1e3);
-      break;
-    case PriorClass::gravity_direction:
-      std::snprintf(text, sizeof text, "%.3g deg", o.gravity_direction_rad * f * kDeg);
       break;
     case PriorClass::joint_compliance:
       if (c.prismatic)
@@ -105,8 +103,6 @@ const char* prior_class_name(PriorClass c) {
       return "link masses";
     case PriorClass::mass_centre:
       return "mass centres";
-    case PriorClass::gravity_direction:
-      return "gravity direction";
     case PriorClass::joint_compliance:
       return "joint compliance";
     default:
@@ -126,7 +122,8 @@ PriorScales initial_prior_scales(const PriorOptions& options, const ParameterIds
     const bool named = std::any_of(options.sigma.begin(), options.sigma.end(), [&](const auto& entry) {
       return model::parameter_name(model::parse_parameter_name(entry.first, joint_count)) == name;
     });
-    kind_of.push_back(named || !std::isfinite(sigma(static_cast<Eigen::Index>(k)))
+    kind_of.push_back(named || !std::isfinite(sigma(static_cast<Eigen::Index>(k))) ||
+                              model::is_gravity_direction_parameter(ids[k].kind)
                           ? -1
                           : static_cast<int>(class_of_kind(ids[k].kind)));
   }
