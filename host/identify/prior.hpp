@@ -85,7 +85,7 @@ struct PriorOptions {
   bool estimate_scales = true;
   double min_scale = 0.1;
   double max_scale = 100.0;
-  double min_ratio_scale = 1e-4;  // a joint ratio's or a given mass's centre's own class (prior_scale.hpp)
+  double min_ratio_scale = 1e-4;  // a joint ratio's own class (prior_scale.hpp): 1 ppm of the 1 %
   // Per-parameter sigmas (SI: m, rad, 1, rad/(N m)), by parameter name (theta5, a2, base_x,
   // tool_rz, scale3, ...); later entries win. Infinity: no prior on that parameter.
   std::vector<std::pair<std::string, double>> sigma;

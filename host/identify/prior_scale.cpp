@@ -135,11 +135,7 @@ PriorScales initial_prior_scales(const PriorOptions& options, const ParameterIds
       if (own || s.classes.empty() || s.classes.back().kind != static_cast<PriorClass>(kind))
         s.classes.push_back({static_cast<PriorClass>(kind), own ? model::parameter_name(ids[k]) : "",
                              ids[k].kind == model::kJointCompliance && ids[k].link < loads.prismatic.size() &&
-                                 loads.prismatic[ids[k].link],
-                             kind == static_cast<int>(PriorClass::mass_centre) &&
-                                 std::none_of(ids.begin(), ids.end(), [&](core::ParameterId id) {
-                                   return id.kind == model::kLinkMass && id.link == ids[k].link;
-                                 })});
+                                 loads.prismatic[ids[k].link]});
       ++s.classes.back().parameters;
       s.class_of[k] = static_cast<int>(s.classes.size()) - 1;
     }
@@ -220,7 +216,7 @@ PriorScales update_prior_scales(const Eigen::MatrixXd& information, const Eigen:
         c.reason = ScaleReason::barely_seen;
         continue;
       }
-      const double lowest = c.kind == PriorClass::joint_ratio || c.given ? options.min_ratio_scale : options.min_scale;
+      const double lowest = c.kind == PriorClass::joint_ratio ? options.min_ratio_scale : options.min_scale;
       const double bounded = std::clamp(wanted[u], lowest, options.max_scale);
       c.reason = wanted[u] < lowest              ? ScaleReason::lower_bound
                  : wanted[u] > options.max_scale ? ScaleReason::upper_bound
@@ -272,10 +268,9 @@ std::string format_prior_scales(const PriorScales& scales) {
                 options.min_scale, options.max_scale);
   std::string out = line;
   const bool ratios = std::any_of(scales.classes.begin(), scales.classes.end(),
-                                  [](const ClassScale& c) { return c.kind == PriorClass::joint_ratio || c.given; });
+                                  [](const ClassScale& c) { return c.kind == PriorClass::joint_ratio; });
   if (ratios) {
-    std::snprintf(line, sizeof line, ", a joint ratio's or a given mass's centre's own from %g",
-                  options.min_ratio_scale);
+    std::snprintf(line, sizeof line, ", a joint ratio's own from %g", options.min_ratio_scale);
     out += line;
   }
   out += "):\n";

@@ -69,10 +69,7 @@
 //                 word of a few noisy parameters; at a hundred times (100 mm, 50 deg) it no longer
 //                 constrains anything an arm could have, i.e. least squares; a joint ratio's
 //                 lower bound is min_ratio_scale, by default 1e-4 (1 ppm: a joint the data do
-//                 not call scaled is held at its nominal ratio), and so is a given mass's centre's
-//                 (geometry+gravity's: 10 um, a centre the data do not call moved stays the model's;
-//                 at 10 mm, the zoo's KR 16 with 300 tracker points went from 0.98 to 1.25 times the
-//                 oracle -- the nine centres at that bound fitted the noise)
+//                 not call scaled is held at its nominal ratio)
 // Off with PriorOptions::estimate_scales = false (the fixed-width candidates of model selection)
 // or strength 0 (no prior).
 //
@@ -119,7 +116,6 @@ struct ClassScale {
   PriorClass kind = PriorClass::link_length;
   std::string parameter;         // a class of one's parameter (scale3, compliance2, com_x4); empty for the others
   bool prismatic = false;        // a compliance's joint is prismatic: its width a length
-  bool given = false;            // a mass centre whose link's mass is given (not identified): see the bounds
   int parameters = 0;            // identified parameters of the class with a default prior
   double scale = 1.0;            // lambda_c: multiplies the class's default sigmas
   double determined = 0.0;       // gamma_c at the chosen scale
