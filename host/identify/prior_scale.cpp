@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <optional>
 
 #include <Eigen/Cholesky>
 
@@ -13,8 +14,10 @@ namespace kincal::identify {
 
 namespace {
 
-PriorClass class_of_kind(core::ParameterKind kind) {
+// A parameter kind's class; none for gravity's direction, which keeps its default (prior_scale.hpp).
+std::optional<PriorClass> class_of_kind(core::ParameterKind kind) {
   using K = core::ParameterKind;
+  if (model::is_gravity_direction_parameter(kind)) return std::nullopt;
   if (kind == model::kLinkMass) return PriorClass::link_mass;
   if (model::is_mass_parameter(kind)) return PriorClass::mass_centre;
   if (kind == model::kJointCompliance) return PriorClass::joint_compliance;
@@ -122,10 +125,9 @@ PriorScales initial_prior_scales(const PriorOptions& options, const ParameterIds
     const bool named = std::any_of(options.sigma.begin(), options.sigma.end(), [&](const auto& entry) {
       return model::parameter_name(model::parse_parameter_name(entry.first, joint_count)) == name;
     });
-    kind_of.push_back(named || !std::isfinite(sigma(static_cast<Eigen::Index>(k))) ||
-                              model::is_gravity_direction_parameter(ids[k].kind)
-                          ? -1
-                          : static_cast<int>(class_of_kind(ids[k].kind)));
+    const std::optional<PriorClass> kind = class_of_kind(ids[k].kind);
+    kind_of.push_back(named || !std::isfinite(sigma(static_cast<Eigen::Index>(k))) || !kind ? -1
+                                                                                            : static_cast<int>(*kind));
   }
   s.class_of.assign(ids.size(), -1);
   for (int kind = 0; kind <= static_cast<int>(PriorClass::mass_centre); ++kind)

@@ -197,7 +197,7 @@ TEST_CASE("on a handful of rows the sag's priors keep geometry+sag from fitting 
   // 0.043 drawn), the priors' gain is the blow-ups avoided.
   CHECK(std::sqrt(drawn2) < 0.7 * std::sqrt(free2));
   CHECK(masses == 9);       // the masses' class in every fit
-  CHECK(centres >= 3 * 9);  // every mass centre its own class, at least three links' in every fit
+  CHECK(centres >= 3 * 9);  // every mass centre its own class: three or more per fit on average
 }
 
 TEST_CASE("geometry+sag is a candidate exactly when the model has neither masses nor a compliance") {
