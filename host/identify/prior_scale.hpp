@@ -155,9 +155,9 @@ PriorScales update_prior_scales(const Parameterization& p, std::span<const doubl
 bool scales_moved(const PriorScales& a, const PriorScales& b, double relative);
 
 // `to` with each class's scale half way from `from`'s in log scale (the geometric mean): the
-// damped update of identify's loop once the estimates cycle (geometry+sag's two mass classes can
-// trade one first moment, m x c, back and forth pass after pass). Same fixed points, the cycle
-// damped.
+// damped update of identify's loop once the estimates cycle (geometry+sag's masses' class and a
+// link's centres can trade one first moment, m x c, back and forth pass after pass). Same fixed
+// points, the cycle damped.
 PriorScales halfway_scales(const PriorScales& from, const PriorScales& to);
 
 // The report's lines: per class the scale the data chose, the resulting sigmas and why
