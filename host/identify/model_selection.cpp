@@ -105,7 +105,10 @@ bool has_masses(const RobotModel& m) {
 std::optional<RobotModel> gravity_model(const RobotModel& nominal) {
   if (!has_masses(nominal) || model::has_compliance(nominal)) return std::nullopt;
   RobotModel with_gravity = nominal;
-  for (model::Joint& j : with_gravity.joints) j.compliance = 0.0;
+  for (model::Joint& j : with_gravity.joints) {
+    j.compliance = 0.0;
+    j.identify_centre = j.mass_kg > 0.0;
+  }
   with_gravity.identify_gravity_direction = true;
   return with_gravity;
 }
@@ -147,9 +150,11 @@ std::vector<Candidate> candidate_models(const RobotModel& nominal, const Identif
   // joint (identifiability holds fixed those gravity does not load, e.g. a vertical first axis).
   const bool masses = has_masses(nominal);
   if (const std::optional<RobotModel> with_gravity = gravity_model(nominal)) {
-    out.push_back(make("geometry+gravity",
-                       "every parameter, each joint's gravity compliance (the model's masses) and gravity's direction",
-                       *with_gravity, base, 1.0, {}));
+    out.push_back(
+        make("geometry+gravity",
+             "every parameter, each joint's gravity compliance (the model's masses, their centres drawn toward the "
+             "model's) and gravity's direction",
+             *with_gravity, base, 1.0, {}));
     out.back().holds = true;
   }
   // No masses and no compliance (most public URDFs): the masses identified with the compliances,

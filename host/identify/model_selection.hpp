@@ -128,9 +128,10 @@ struct Candidate {
   bool holds = false;
 };
 
-// The geometry+gravity candidate's model: the nominal with a gravity compliance on every joint and
-// gravity's direction identified, when its links or payload have masses and it declares no
-// compliance; nullopt otherwise. `kincal plan` plans for it (plan.hpp).
+// The geometry+gravity candidate's model: the nominal with a gravity compliance on every joint,
+// gravity's direction and each link's centre of mass (where the link has a mass) identified, when
+// its links or payload have masses and it declares no compliance; nullopt otherwise. `kincal
+// plan` plans for it (plan.hpp).
 std::optional<RobotModel> gravity_model(const RobotModel& nominal);
 
 // The candidates above for this model and the caller's options.

@@ -1,5 +1,6 @@
 #include "host/identify/prior.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -55,10 +56,18 @@ double default_sigma(const PriorOptions& o, core::ParameterId id, const GravityL
 
 }  // namespace
 
+bool is_given_centre(const ParameterIds& ids, std::size_t k) {
+  return model::is_mass_parameter(ids[k].kind) && ids[k].kind != model::kLinkMass &&
+         std::none_of(ids.begin(), ids.end(),
+                      [&](core::ParameterId id) { return id.kind == model::kLinkMass && id.link == ids[k].link; });
+}
+
 Eigen::VectorXd prior_sigmas(const PriorOptions& options, const ParameterIds& ids, int joint_count,
                              const std::string& where, const GravityLoads& loads) {
   Eigen::VectorXd s(static_cast<Eigen::Index>(ids.size()));
-  for (std::size_t k = 0; k < ids.size(); ++k) s(static_cast<Eigen::Index>(k)) = default_sigma(options, ids[k], loads);
+  for (std::size_t k = 0; k < ids.size(); ++k)
+    s(static_cast<Eigen::Index>(k)) =
+        is_given_centre(ids, k) ? options.given_centre_m : default_sigma(options, ids[k], loads);
   for (const auto& [name, sigma] : options.sigma) {
     core::ParameterId id{};
     try {

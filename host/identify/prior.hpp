@@ -41,6 +41,12 @@
 //                                     IRB 6640, 12 times the oracle); with these widths scaled by
 //                                     the evidence, 0.085 mm, and a model with the data to see
 //                                     the masses lets them go (the scale's bound is 100 x)
+//   com_x<i> .. com_z<i>     1 mm     a centre whose mass is given, not identified (geometry+
+//     (mass given)                    gravity's, robot_model.hpp's identify_centre): a
+//                                     calibrated joint zero turns a link's mass where the truth may
+//                                     not have (a tenth of a degree over half a metre is a
+//                                     millimetre); the data widen it where the file's centre is
+//                                     off (a CAD estimate: sag_test's UR10 with centres 50 mm off)
 //   gravity_rx, gravity_ry   1 deg    an arm's base against level (floors, a first joint's tilt)
 // `sigma` overrides a parameter by name (--prior on the command line, `priors:` in the model
 // file); `strength` multiplies every 1 / sigma (0: no prior at all, the plain least squares of
@@ -78,8 +84,9 @@ struct PriorOptions {
   double deflection_rad = 0.1 * std::numbers::pi / 180.0;  // a compliance's width: its joint's deflection
   double deflection_m = 1e-4;                              // ... a prismatic joint's
   double gravity_direction_rad = 1.0 * std::numbers::pi / 180.0;
-  double mass_kg = 1.0;   // an identified link mass (geometry+sag's gauge units)
-  double centre_m = 0.1;  // an identified centre of mass, per axis
+  double mass_kg = 1.0;          // an identified link mass (geometry+sag's gauge units)
+  double centre_m = 0.1;         // an identified centre of mass, per axis
+  double given_centre_m = 1e-3;  // ... of a given mass (is_given_centre)
   // The data choose each class's width (prior_scale.hpp), within [min_scale, max_scale] times
   // the sigmas above; off: the widths above as they are.
   bool estimate_scales = true;
@@ -98,6 +105,10 @@ struct GravityLoads {
   std::vector<double> largest;
   std::vector<bool> prismatic;
 };
+
+// Whether ids[k] is a centre of mass whose link's mass is not among `ids` (given by the model):
+// its default width is given_centre_m, its class prior_scale.hpp's given centres.
+bool is_given_centre(const ParameterIds& ids, std::size_t k);
 
 // The prior sigma of each parameter (infinity: none), before `strength`. Throws
 // model::InputError for an unknown name in options.sigma (naming it and `where`) or a sigma that

@@ -14,11 +14,13 @@ namespace kincal::identify {
 
 namespace {
 
-// A parameter kind's class; none for gravity's direction, which keeps its default (prior_scale.hpp).
-std::optional<PriorClass> class_of_kind(core::ParameterKind kind) {
+// Parameter ids[k]'s class; none for gravity's direction, which keeps its default (prior_scale.hpp).
+std::optional<PriorClass> class_of_parameter(const ParameterIds& ids, std::size_t k) {
   using K = core::ParameterKind;
+  const core::ParameterKind kind = ids[k].kind;
   if (model::is_gravity_direction_parameter(kind)) return std::nullopt;
   if (kind == model::kLinkMass) return PriorClass::link_mass;
+  if (is_given_centre(ids, k)) return PriorClass::given_centre;
   if (model::is_mass_parameter(kind)) return PriorClass::mass_centre;
   if (kind == model::kJointCompliance) return PriorClass::joint_compliance;
   if (model::is_joint_map_parameter(kind)) return PriorClass::joint_ratio;
@@ -57,6 +59,9 @@ std::string class_sigmas(const ClassScale& c, const PriorOptions& o, double scal
       break;
     case PriorClass::mass_centre:
       std::snprintf(text, sizeof text, "%.3g mm", o.centre_m * f * 1e3);
+      break;
+    case PriorClass::given_centre:
+      std::snprintf(text, sizeof text, "%.3g mm", o.given_centre_m * f * 1e3);
       break;
     case PriorClass::joint_compliance:
       if (c.prismatic)
@@ -106,6 +111,8 @@ const char* prior_class_name(PriorClass c) {
       return "link masses";
     case PriorClass::mass_centre:
       return "mass centres";
+    case PriorClass::given_centre:
+      return "given centres";
     case PriorClass::joint_compliance:
       return "joint compliance";
     default:
@@ -125,12 +132,12 @@ PriorScales initial_prior_scales(const PriorOptions& options, const ParameterIds
     const bool named = std::any_of(options.sigma.begin(), options.sigma.end(), [&](const auto& entry) {
       return model::parameter_name(model::parse_parameter_name(entry.first, joint_count)) == name;
     });
-    const std::optional<PriorClass> kind = class_of_kind(ids[k].kind);
+    const std::optional<PriorClass> kind = class_of_parameter(ids, k);
     kind_of.push_back(named || !std::isfinite(sigma(static_cast<Eigen::Index>(k))) || !kind ? -1
                                                                                             : static_cast<int>(*kind));
   }
   s.class_of.assign(ids.size(), -1);
-  for (int kind = 0; kind <= static_cast<int>(PriorClass::mass_centre); ++kind)
+  for (int kind = 0; kind <= static_cast<int>(PriorClass::given_centre); ++kind)
     for (std::size_t k = 0; k < ids.size(); ++k) {
       if (kind_of[k] != kind) continue;
       const bool own = own_class(static_cast<PriorClass>(kind));

@@ -84,15 +84,15 @@ SagStage second_sag_stage(const RobotModel& model, const IdentifyOptions& option
   for (std::size_t i = 0; i < sag.size(); ++i) sag[i] *= s.model.joints[i].compliance.value_or(0.0);
   const auto largest = std::max_element(sag.begin(), sag.end());
   if (largest == sag.end() || !(*largest > 0.0)) {
-    for (model::Joint& j : s.model.joints) j.identify_mass = false;
+    for (model::Joint& j : s.model.joints) j.identify_mass = j.identify_centre = false;
     s.model.identify_gravity_direction = false;
     s.note =
-        "sag: no joint deflects (every compliance 0 after the first stage); the masses and gravity's direction are "
-        "not identified";
+        "sag: no joint deflects (every compliance 0 after the first stage); the masses, their centres and gravity's "
+        "direction are not identified";
     return s;
   }
-  if (!identifies_masses(s.model)) {  // the model's own masses: no gauge to fix, only gravity's direction is added
-    s.note = "sag: gravity's direction identified from the first stage's compliances";
+  if (!identifies_masses(s.model)) {  // the model's own masses: no gauge to fix
+    s.note = "sag: gravity's direction and the links' centres of mass identified from the first stage's compliances";
     if (!held.empty()) s.note += "; held as the first stage held them: " + held;
     return s;
   }

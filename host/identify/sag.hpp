@@ -19,7 +19,8 @@
 //      load, a wrist's centre along its own axis, ...).
 // Gravity's direction (robot_model.hpp's gravity_rx, gravity_ry) is held in stage 1 and
 // identified in stage 2, for the same reason; the two stages serve geometry+gravity too (the
-// model's own masses: no gauge, only the direction waits for stage 1's compliances).
+// model's own masses: no gauge, only the direction and the links' centres of mass, drawn toward
+// the model's, wait for stage 1's compliances).
 // Priors: the masses and centres of stage 2 are drawn toward the start (1 kg per link at its
 // frame's origin, prior.hpp's widths, each class's scale chosen by the evidence: prior_scale.hpp),
 // so that on a handful of rows the deflection keeps about stage 1's shape and only the data's
@@ -54,7 +55,7 @@ IdentifyOptions first_sag_stage(const RobotModel& model, const IdentifyOptions& 
 // Stage 2's start and options from stage 1's result: `model` with stage 1's compliances, the
 // geometric parameters stage 1 held and (when masses are identified) the gauge's reference
 // compliance added to the fixed parameters; a note says which. With no compliance above 0 after
-// stage 1 (no sag seen), neither the masses nor gravity's direction are identified.
+// stage 1 (no sag seen), neither the masses, their centres nor gravity's direction are identified.
 struct SagStage {
   RobotModel model;
   IdentifyOptions options;

@@ -509,6 +509,9 @@ std::vector<core::ParameterId> all_parameters(const RobotModel& model) {
     if (model.joints[i].identify_mass)
       for (const core::ParameterKind kind : {kLinkMass, kLinkCentreX, kLinkCentreY, kLinkCentreZ})
         ids.push_back({kind, static_cast<std::uint8_t>(i)});
+    else if (model.joints[i].identify_centre)
+      for (const core::ParameterKind kind : {kLinkCentreX, kLinkCentreY, kLinkCentreZ})
+        ids.push_back({kind, static_cast<std::uint8_t>(i)});
   if (model.identify_gravity_direction && has_compliance(model) && !model.joints.empty())
     for (const core::ParameterKind kind : {kGravityRx, kGravityRy}) ids.push_back({kind, 0});
   return ids;
