@@ -702,9 +702,10 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
   Parameterization param(result.start, ids);
   std::vector<double> delta(static_cast<std::size_t>(p), 0.0);
   const GravityLoads loads = compliance_prior_loads(result.start, data);
-  const Eigen::VectorXd default_sigma = prior_sigmas(options.prior, ids, n, "prior", loads);
+  const std::vector<bool> given = given_centres(result.start);
+  const Eigen::VectorXd default_sigma = prior_sigmas(options.prior, ids, n, "prior", loads, given);
   result.prior_sigma = default_sigma;
-  result.prior_scales = initial_prior_scales(options.prior, ids, n, loads);
+  result.prior_scales = initial_prior_scales(options.prior, ids, n, loads, given);
   result.prior_centre = Eigen::VectorXd::Zero(p);
   if (options.start == Start::cpa && options.prior.strength > 0.0)
     result.prior_centre = nominal_in_start(nominal, data, options, param, base_free && options.requested.empty(),

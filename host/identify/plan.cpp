@@ -385,7 +385,7 @@ PlanResult plan_configurations(const model::RobotModel& m, const PlanOptions& op
   // spread that makes options.model_error_m at the tool. The MAP estimate's error has covariance
   // (M + L)^-1 (N + L) (M + L)^-1 (the prior's own spread is L^-1), so L joins both matrices.
   const Eigen::VectorXd sigmas =
-      prior_sigmas(options.prior, ident.identified, n, "plan") *
+      prior_sigmas(options.prior, ident.identified, n, "plan", {}, given_centres(start)) *
       (options.prior.strength > 0.0 ? 1.0 / options.prior.strength : std::numeric_limits<double>::infinity());
   const double joint_sigma = options.model_error_m * w(0);
   Eigen::MatrixXd prior = Eigen::MatrixXd::Zero(p, p);

@@ -1,6 +1,5 @@
 #include "host/identify/prior.hpp"
 
-#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -56,18 +55,24 @@ double default_sigma(const PriorOptions& o, core::ParameterId id, const GravityL
 
 }  // namespace
 
-bool is_given_centre(const ParameterIds& ids, std::size_t k) {
-  return model::is_mass_parameter(ids[k].kind) && ids[k].kind != model::kLinkMass &&
-         std::none_of(ids.begin(), ids.end(),
-                      [&](core::ParameterId id) { return id.kind == model::kLinkMass && id.link == ids[k].link; });
+std::vector<bool> given_centres(const RobotModel& model) {
+  std::vector<bool> out;
+  for (const model::Joint& j : model.joints) out.push_back(j.identify_centre && !j.identify_mass);
+  return out;
+}
+
+bool is_given_centre(core::ParameterId id, const std::vector<bool>& given_centres) {
+  return model::is_mass_parameter(id.kind) && id.kind != model::kLinkMass && id.link < given_centres.size() &&
+         given_centres[id.link];
 }
 
 Eigen::VectorXd prior_sigmas(const PriorOptions& options, const ParameterIds& ids, int joint_count,
-                             const std::string& where, const GravityLoads& loads) {
+                             const std::string& where, const GravityLoads& loads,
+                             const std::vector<bool>& given_centres) {
   Eigen::VectorXd s(static_cast<Eigen::Index>(ids.size()));
   for (std::size_t k = 0; k < ids.size(); ++k)
     s(static_cast<Eigen::Index>(k)) =
-        is_given_centre(ids, k) ? options.given_centre_m : default_sigma(options, ids[k], loads);
+        is_given_centre(ids[k], given_centres) ? options.given_centre_m : default_sigma(options, ids[k], loads);
   for (const auto& [name, sigma] : options.sigma) {
     core::ParameterId id{};
     try {

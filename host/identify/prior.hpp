@@ -86,7 +86,7 @@ struct PriorOptions {
   double gravity_direction_rad = 1.0 * std::numbers::pi / 180.0;
   double mass_kg = 1.0;          // an identified link mass (geometry+sag's gauge units)
   double centre_m = 0.1;         // an identified centre of mass, per axis
-  double given_centre_m = 1e-3;  // ... of a given mass (is_given_centre)
+  double given_centre_m = 1e-3;  // ... of a given mass (given_centres)
   // The data choose each class's width (prior_scale.hpp), within [min_scale, max_scale] times
   // the sigmas above; off: the widths above as they are.
   bool estimate_scales = true;
@@ -106,15 +106,19 @@ struct GravityLoads {
   std::vector<bool> prismatic;
 };
 
-// Whether ids[k] is a centre of mass whose link's mass is not among `ids` (given by the model):
-// its default width is given_centre_m, its class prior_scale.hpp's given centres.
-bool is_given_centre(const ParameterIds& ids, std::size_t k);
+// Per link, whether its centre of mass is identified with its mass given by the model
+// (Joint::identify_centre: geometry+gravity's); such a centre's default width is given_centre_m,
+// its class prior_scale.hpp's given centres. Per link because identifiability may hold a mass
+// fixed whose centres it identifies.
+std::vector<bool> given_centres(const RobotModel& model);
+bool is_given_centre(core::ParameterId id, const std::vector<bool>& given_centres);
 
 // The prior sigma of each parameter (infinity: none), before `strength`. Throws
 // model::InputError for an unknown name in options.sigma (naming it and `where`) or a sigma that
 // is not positive.
 Eigen::VectorXd prior_sigmas(const PriorOptions& options, const ParameterIds& ids, int joint_count,
-                             const std::string& where, const GravityLoads& loads = {});
+                             const std::string& where, const GravityLoads& loads = {},
+                             const std::vector<bool>& given_centres = {});
 
 // The whitened prior weights strength / sigma (0 where there is no prior).
 Eigen::VectorXd prior_weights(const PriorOptions& options, const Eigen::VectorXd& sigmas);

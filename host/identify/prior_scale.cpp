@@ -14,13 +14,13 @@ namespace kincal::identify {
 
 namespace {
 
-// Parameter ids[k]'s class; none for gravity's direction, which keeps its default (prior_scale.hpp).
-std::optional<PriorClass> class_of_parameter(const ParameterIds& ids, std::size_t k) {
+// A parameter's class; none for gravity's direction, which keeps its default (prior_scale.hpp).
+std::optional<PriorClass> class_of_parameter(core::ParameterId id, const std::vector<bool>& given_centres) {
   using K = core::ParameterKind;
-  const core::ParameterKind kind = ids[k].kind;
+  const core::ParameterKind kind = id.kind;
   if (model::is_gravity_direction_parameter(kind)) return std::nullopt;
   if (kind == model::kLinkMass) return PriorClass::link_mass;
-  if (is_given_centre(ids, k)) return PriorClass::given_centre;
+  if (is_given_centre(id, given_centres)) return PriorClass::given_centre;
   if (model::is_mass_parameter(kind)) return PriorClass::mass_centre;
   if (kind == model::kJointCompliance) return PriorClass::joint_compliance;
   if (model::is_joint_map_parameter(kind)) return PriorClass::joint_ratio;
@@ -121,18 +121,18 @@ const char* prior_class_name(PriorClass c) {
 }
 
 PriorScales initial_prior_scales(const PriorOptions& options, const ParameterIds& ids, int joint_count,
-                                 const GravityLoads& loads) {
+                                 const GravityLoads& loads, const std::vector<bool>& given_centres) {
   PriorScales s;
   PriorOptions defaults = options;
   defaults.sigma.clear();
-  const Eigen::VectorXd sigma = prior_sigmas(defaults, ids, joint_count, "prior", loads);
+  const Eigen::VectorXd sigma = prior_sigmas(defaults, ids, joint_count, "prior", loads, given_centres);
   std::vector<int> kind_of;  // each parameter's PriorClass, or -1 for none
   for (std::size_t k = 0; k < ids.size(); ++k) {
     const std::string name = model::parameter_name(ids[k]);
     const bool named = std::any_of(options.sigma.begin(), options.sigma.end(), [&](const auto& entry) {
       return model::parameter_name(model::parse_parameter_name(entry.first, joint_count)) == name;
     });
-    const std::optional<PriorClass> kind = class_of_parameter(ids, k);
+    const std::optional<PriorClass> kind = class_of_parameter(ids[k], given_centres);
     kind_of.push_back(named || !std::isfinite(sigma(static_cast<Eigen::Index>(k))) || !kind ? -1
                                                                                             : static_cast<int>(*kind));
   }

@@ -29,7 +29,7 @@
 //                    the zoo's service cases, was set by the links the data see least -- a 7-joint
 //                    arm's 40 tracker rows, 1.42x the oracle's held-out error; each its own, 1.21x)
 //   given centres    com_x<i> .. com_z<i> of a mass the model gives (geometry+gravity's,
-//                    prior.hpp's is_given_centre): one class -- the model's centres stand together,
+//                    prior.hpp's given_centres): one class -- the model's centres stand together,
 //                    and where they moved it is mostly the calibrated joint zeros' one small turn
 //                    of each link; each its own width from 10 mm fitted the noise of the zoo's KR 16
 //                    with 300 tracker points (1.25x the oracle's held-out error; one class 1.13x,
@@ -137,10 +137,11 @@ struct PriorScales {
   PriorOptions options;             // the default widths and bounds it scales (for the report)
 };
 
-// The classes of the identified parameters `ids` with every scale 1 (`loads` as prior_sigmas
-// takes them); estimated = false when the stage is off (see above) or no parameter has a class.
+// The classes of the identified parameters `ids` with every scale 1 (`loads` and
+// `given_centres` as prior_sigmas takes them); estimated = false when the stage is off (see
+// above) or no parameter has a class.
 PriorScales initial_prior_scales(const PriorOptions& options, const ParameterIds& ids, int joint_count,
-                                 const GravityLoads& loads = {});
+                                 const GravityLoads& loads = {}, const std::vector<bool>& given_centres = {});
 
 // The sigmas (SI, infinity: none) with each class's scale applied to `sigmas` (prior_sigmas').
 Eigen::VectorXd scaled_sigmas(const Eigen::VectorXd& sigmas, const PriorScales& scales);
