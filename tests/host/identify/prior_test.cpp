@@ -480,6 +480,34 @@ TEST_CASE("a compliance's prior is a deflection at its joint's largest load, eac
   CHECK(has(text, " mm at its load"));
 }
 
+TEST_CASE("a given mass's centre: 1 mm, one class for all; a centre whose mass is identified or held is not one") {
+  // Link 2's mass given by the model, its centre identified (geometry+gravity); link 3's mass and
+  // centre identified (geometry+sag), its mass held fixed by identifiability, so not among `ids`.
+  RobotModel m = robot("puma560.yaml");
+  m.joints[1].identify_centre = true;
+  m.joints[2].identify_mass = true;
+  const std::vector<bool> given = identify::given_centres(m);
+  CHECK(given == std::vector<bool>{false, true, false, false, false, false});
+  const identify::ParameterIds ids{
+      {model::kLinkCentreX, 1}, {model::kLinkCentreZ, 1}, {model::kLinkCentreX, 2}, {core::ParameterKind::link_a, 1}};
+  const identify::PriorOptions o;
+  const Eigen::VectorXd sigma = identify::prior_sigmas(o, ids, 6, "test", {}, given);
+  CHECK(sigma(0) == o.given_centre_m);
+  CHECK(sigma(1) == o.given_centre_m);
+  CHECK(sigma(2) == o.centre_m);
+  const identify::PriorScales s = identify::initial_prior_scales(o, ids, 6, {}, given);
+  REQUIRE(s.classes.size() == 3);  // link lengths, com_x3's own class, the given centres together
+  CHECK(s.classes[1].kind == identify::PriorClass::mass_centre);
+  CHECK(s.classes[1].parameter == "com_x3");
+  CHECK(s.classes[2].kind == identify::PriorClass::given_centre);
+  CHECK(s.classes[2].parameters == 2);
+  CHECK(s.class_of == std::vector<int>{2, 2, 1, 0});
+  const std::string text = identify::format_prior_scales(s);
+  INFO(text);
+  CHECK(has(text, "  given centres "));
+  CHECK(has(text, "sigma 1 mm"));
+}
+
 TEST_CASE("one scaled joint among six: its ratio is freed, the others held, as if the scaled joint were known") {
   // The PUMA 560 with every joint's scale identified where the truth scales joint 2 by 0.3 %
   // (a gear's ratio): with one width for all six scales, the scaled joint widened every joint's
