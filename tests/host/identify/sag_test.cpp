@@ -302,6 +302,8 @@ TEST_CASE("geometry+gravity identifies each link's centre of mass, drawn toward 
   const double without_m = simulation::prediction_rms(without.model, truth, held_out);
   MESSAGE("held out ", without_m * 1e3, " mm (the file's centres of mass), ", with_m * 1e3,
           " mm (identified, drawn toward them)");
+  // Measured (seed 13, 150 rows, 0.02 mm noise): 0.0462 -> 0.0097 mm, the 'given centres' class
+  // widened by the data (held at its 1 mm default: 0.0405).
   CHECK(with_m < 0.8 * without_m);
   // Written and read back, the identified centres stay (centre_of_mass is a key of the model file).
   const RobotModel read = model::parse_model(model::write_model(with.model), "written");
