@@ -101,6 +101,23 @@ Fit fit(const char* candidate, const RobotModel& nominal, const RobotModel& trut
   return f;
 }
 
+// `with` (a model with a feature to identify) and `without` (the same with it switched off)
+// identified from `train` with the candidate's options `o`, no rejection gate: `with`'s result and
+// both models' held-out RMS against the truth's positions.
+struct Compared {
+  identify::IdentifyResult with;
+  double with_m = 0.0, without_m = 0.0;
+};
+Compared compare(const RobotModel& with, const RobotModel& without, const model::Dataset& train,
+                 identify::IdentifyOptions o, const RobotModel& truth,
+                 const std::vector<std::vector<double>>& held_out) {
+  o.rejection_gate = false;
+  Compared c{identify::identify(with, train, o), 0.0, 0.0};
+  c.with_m = simulation::prediction_rms(c.with.model, truth, held_out);
+  c.without_m = simulation::prediction_rms(identify::identify(without, train, o).model, truth, held_out);
+  return c;
+}
+
 }  // namespace
 
 TEST_CASE("an arm that sags under masses its model does not have: geometry+sag predicts far better than geometry") {
@@ -246,14 +263,9 @@ TEST_CASE("an arm standing off level: gravity's direction is identified with the
 
   const identify::Candidate c = identify::find_candidate(nominal, {}, "geometry+sag");
   CHECK(c.model.identify_gravity_direction);
-  identify::IdentifyOptions o = c.options;
-  o.rejection_gate = false;
-  const identify::IdentifyResult with = identify::identify(c.model, train, o);
   RobotModel level = c.model;
   level.identify_gravity_direction = false;
-  const identify::IdentifyResult without = identify::identify(level, train, o);
-  const double with_m = simulation::prediction_rms(with.model, truth, held_out);
-  const double without_m = simulation::prediction_rms(without.model, truth, held_out);
+  const auto [with, with_m, without_m] = compare(c.model, level, train, c.options, truth, held_out);
   MESSAGE("held out ", without_m * 1e3, " mm (gravity along frame 0's -z), ", with_m * 1e3,
           " mm (its direction identified)");
   // Measured (seed 7, 150 rows, 0.02 mm noise): 0.0201 -> 0.0100 mm, the second near what the
@@ -292,14 +304,9 @@ TEST_CASE("geometry+gravity identifies each link's centre of mass, drawn toward 
       simulation::measure(truth, sim::random_configurations(nominal, 150, rng), rng, 2e-5, false, 0.0, false);
   const std::vector<std::vector<double>> held_out = sim::random_configurations(nominal, 200, rng);
 
-  identify::IdentifyOptions o = c.options;
-  o.rejection_gate = false;
-  const identify::IdentifyResult with = identify::identify(c.model, train, o);
   RobotModel given = c.model;
   for (model::Joint& j : given.joints) j.identify_centre = false;
-  const identify::IdentifyResult without = identify::identify(given, train, o);
-  const double with_m = simulation::prediction_rms(with.model, truth, held_out);
-  const double without_m = simulation::prediction_rms(without.model, truth, held_out);
+  const auto [with, with_m, without_m] = compare(c.model, given, train, c.options, truth, held_out);
   MESSAGE("held out ", without_m * 1e3, " mm (the file's centres of mass), ", with_m * 1e3,
           " mm (identified, drawn toward them)");
   // Measured (seed 13, 150 rows, 0.02 mm noise): 0.0462 -> 0.0097 mm, the 'given centres' class
