@@ -414,8 +414,8 @@ void judge_correct(const Chain& chain, const CaseData& d, const std::string& dir
   r.reached_prediction_mm = rms_mm(reached_prediction);
   r.reached_oracle_mm = rms_mm(reached_oracle);
   r.joint_change_deg = largest;
-  // The correction leaves at the TCP what the model's error at the corrected readings is there; the
-  // held-out figure measures that error at the measured point instead.
+  // The correction leaves at the TCP what the model's error at the corrected readings is there
+  // (printed beside it, and the model's error at the measured point there).
   if (!marker.empty()) {
     std::ostringstream note;
     note << std::fixed << std::setprecision(4) << "at the corrected readings: TCP " << r.correct_mm
