@@ -76,7 +76,10 @@
 // surer than its data) -- or, for a candidate built on what the user gave about the arm's
 // physics (Candidate::holds), a lower score alone (cross-validation's own rule: the masses, the
 // file's terms are evidence the rows need not repeat; on the shared UR10 at 30 rows gravity
-// predicted better in 25 of 25 choices and the 2-error bar chose it in 8); of those, the lowest
+// predicted better in 25 of 25 choices and the 2-error bar chose it in 8), where the rows see
+// that physics: a candidate with compliances whose gravity deflection at the K folds' held-out
+// rows (RMS) is below its K-fold RMS takes the 2-error bar (on a rigid arm its free compliances
+// fit a coincidence of the rows that the folds see too); of those, the lowest
 // score wins -- but a
 // candidate built on what the user gave about the arm's physics (Candidate::holds: the model
 // file's own scales and compliances, geometry+gravity with its masses) stands against a later
@@ -182,6 +185,9 @@ struct CrossValidation {
   // the data's row each belongs to.
   std::vector<double> kfold_error2, out_of_range_error2;
   std::vector<int> kfold_rows, out_of_range_rows;
+  // A model with compliances: its gravity deflection at each K-fold held-out row (m^2, in
+  // kfold_error2's order; empty for a rigid model) -- whether the rows see its physics.
+  std::vector<double> kfold_deflection2;
 };
 CrossValidation cross_validate(const RobotModel& model, const model::Dataset& data, const IdentifyOptions& options,
                                const SelectionOptions& selection = {});

@@ -737,6 +737,13 @@ TEST_CASE("the selection rule: beat the default row by row, then the lowest scor
   // default.
   CHECK(choose(with_masses, u, scores) == "geometry+gravity");
   CHECK(scores[2].t > -2.0);
+  // ... where the rows see that physics: its gravity deflection at the held-out rows below their
+  // scatter (a rigid arm's compliances fitting the rows' noise), it takes the 2-error bar.
+  std::vector<identify::CrossValidation> unseen = u;
+  unseen[2].kfold_deflection2.assign(u[2].kfold_error2.size(), std::pow(0.5 * u[2].kfold_rms_m, 2));
+  CHECK(choose(with_masses, unseen, scores) == "geometry");
+  unseen[2].kfold_deflection2.assign(u[2].kfold_error2.size(), std::pow(2.0 * u[2].kfold_rms_m, 2));
+  CHECK(choose(with_masses, unseen, scores) == "geometry+gravity");
   // The default unscored stands.
   v[1].kfold_rms_m = -1.0;
   CHECK(choose(with_masses, v, scores) == "geometry");

@@ -316,3 +316,37 @@ TEST_CASE("geometry+gravity identifies each link's centre of mass, drawn toward 
   const RobotModel read = model::parse_model(model::write_model(with.model), "written");
   CHECK(simulation::prediction_rms(read, with.model, held_out) < 1e-9);
 }
+
+TEST_CASE("geometry+gravity's cross-validation measures its deflection: below the rows' scatter on a rigid arm") {
+  // The UR10's file with its masses, 30 rows at 0.02 mm: a rigid arm (small geometric errors
+  // only) and the same arm with compliances. Model selection lets geometry+gravity stand on a
+  // lower score alone only where its gravity deflection at the folds' held-out rows reaches their
+  // scatter (model_selection.cpp): on the rigid arm its free compliances fit only the rows' noise.
+  const RobotModel nominal = robot("ur10.yaml");
+  const identify::Candidate c = identify::find_candidate(nominal, {}, "geometry+gravity");
+  std::mt19937_64 rng(17);
+  sim::ErrorScale errors;
+  errors.length_m = 3e-4;
+  errors.angle_rad = 0.03 * std::numbers::pi / 180.0;
+  const RobotModel rigid = sim::perturbed(nominal, rng, errors);
+  const RobotModel sagging_arm = compliant(rigid, rng);
+  const auto deflection_over_scatter = [&](const RobotModel& truth) {
+    const model::Dataset rows =
+        simulation::measure(truth, sim::random_configurations(nominal, 30, rng), rng, 2e-5, false, 0.0, false);
+    identify::SelectionOptions few;
+    few.folds = identify::selection_folds(30);
+    const identify::CrossValidation v = identify::cross_validate(c.model, rows, c.options, few);
+    REQUIRE(v.kfold_deflection2.size() == v.kfold_error2.size());
+    double d = 0.0;
+    for (const double x : v.kfold_deflection2) d += x;
+    return std::sqrt(d / static_cast<double>(v.kfold_deflection2.size())) / v.kfold_rms_m;
+  };
+  const double on_rigid = deflection_over_scatter(rigid), on_sagging = deflection_over_scatter(sagging_arm);
+  MESSAGE("geometry+gravity's deflection over its K-fold RMS: ", on_rigid, " (rigid), ", on_sagging, " (sagging)");
+  CHECK(on_rigid < 1.0);
+  CHECK(on_sagging > 1.0);
+  // A model without compliances has none to measure.
+  const model::Dataset rows =
+      simulation::measure(rigid, sim::random_configurations(nominal, 30, rng), rng, 2e-5, false, 0.0, false);
+  CHECK(identify::cross_validate(nominal, rows, {}).kfold_deflection2.empty());
+}
