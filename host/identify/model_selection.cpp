@@ -406,7 +406,7 @@ int choose_candidate(std::vector<CandidateScore>& scores, const std::vector<Cros
     scores[c].t = row_paired_t(validations[c], validations[against], any_range);
     const CrossValidation& v = validations[c];
     const bool seen =
-        v.kfold_deflection2.empty() || root_mean(v.kfold_deflection2) >= kVisibleDeflection * root_mean(v.kfold_error2);
+        v.kfold_deflection2.empty() || root_mean(v.kfold_deflection2) >= kVisibleDeflection * v.kfold_rms_m;
     const double bar = scores[c].holds && seen && static_cast<int>(against) == fallback ? kPhysicsBeatsT : kBeatsT;
     return scores[c].score_m < scores[against].score_m && scores[c].t <= -bar;
   };
