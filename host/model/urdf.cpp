@@ -278,6 +278,32 @@ CalibratedUrdf write_calibrated_urdf(const std::string& original_text, const std
   };
 
   const std::vector<Transform> nominal_poses = urdf_link_poses(chain, zero);
+  // The arm's size (kUnchangedM, kUnchangedRad): the farthest origin of the URDF's joints and of the models'
+  // frames (axes 405 m out that meet 3.7 km away put frames there, and an unchanged origin came
+  // back 6e-9 m off: fuzz.urdf, urdf_regressions/frames_3700_m_out.urdf).
+  double size_m = 1.0;
+  for (const Transform& pose : nominal_poses) size_m = std::max(size_m, pose.translation.norm());
+  for (const core::ChainFrames<double>* frames : {&nominal_frames, &cal_frames})
+    for (const Transform& frame : frames->base_T_frame) size_m = std::max(size_m, frame.translation.norm());
+  // A body whose lines did not move (its own axis and the next, or the tool after the last) did not
+  // move: it keeps its nominal pose exactly, however ill-conditioned the frames chain_from_axes
+  // builds on those lines are (axes 3.7e-6 rad from parallel that meet: the frame's turn about its
+  // axis came back 1.4e-10 rad off, fuzz.urdf, urdf_regressions/nearly_parallel_axes_meeting.urdf).
+  const std::vector<AxisLine> nominal_axes = joint_axes(nominal, zero), registered_axes = joint_axes(registered, zero);
+  const auto same_line = [&](std::size_t i) {
+    const AxisLine &a = nominal_axes[i], &b = registered_axes[i];
+    return a.type == b.type && (a.point - b.point).norm() <= kUnchangedM * size_m &&
+           a.direction.cross(b.direction).norm() <= kUnchangedRad * size_m && a.direction.dot(b.direction) > 0.0;
+  };
+  const Transform nominal_tool = forward_kinematics(nominal, zero),
+                  registered_tool = forward_kinematics(registered, zero);
+  const bool same_tool = (nominal_tool.translation - registered_tool.translation).norm() <= kUnchangedM * size_m &&
+                         (calibrated.tool == ToolKind::point ||
+                          Eigen::AngleAxisd(nominal_tool.rotation.transpose() * registered_tool.rotation).angle() <=
+                              kUnchangedRad * size_m);
+  const auto body_unchanged = [&](std::size_t b) {  // body b >= 1 carries axis b and axis b+1 (or the tool)
+    return same_line(b - 1) && (b < nominal_axes.size() ? same_line(b) : same_tool);
+  };
   std::vector<Transform> poses(chain.joints.size());
   std::vector<bool> rewrite(chain.joints.size(), false);
   int body = 0;
@@ -286,19 +312,14 @@ CalibratedUrdf write_calibrated_urdf(const std::string& original_text, const std
     const Transform parent = k == 0 ? Transform{} : poses[k - 1];
     if (j.type != UrdfJointType::fixed) {
       ++body;
-      poses[k] = onto_axis(body_moved(body, nominal_poses[k]), j.axis, cal_axes[static_cast<std::size_t>(body - 1)]);
+      const auto b = static_cast<std::size_t>(body);
+      poses[k] =
+          body_unchanged(b) ? nominal_poses[k] : onto_axis(body_moved(body, nominal_poses[k]), j.axis, cal_axes[b - 1]);
       rewrite[k] = true;
     } else {
       poses[k] = parent * j.parent_T_joint;  // a fixed joint keeps its origin, wherever it is
     }
   }
-  // The arm's size (kUnchangedM, kUnchangedRad): the farthest origin of the URDF's joints and of the models'
-  // frames (axes 405 m out that meet 3.7 km away put frames there, and an unchanged origin came
-  // back 6e-9 m off: fuzz.urdf, urdf_regressions/frames_3700_m_out.urdf).
-  double size_m = 1.0;
-  for (const Transform& pose : poses) size_m = std::max(size_m, pose.translation.norm());
-  for (const core::ChainFrames<double>* frames : {&nominal_frames, &cal_frames})
-    for (const Transform& frame : frames->base_T_frame) size_m = std::max(size_m, frame.translation.norm());
   // The measured point or frame from the tip link: a link of its own when asked, else a note.
   Transform tip_T_measured = poses.back().inverse() * cal_tool;
   if (calibrated.tool == ToolKind::point) tip_T_measured.rotation.setIdentity();

@@ -40,7 +40,9 @@
 //     own calibrated joint axis only as much as needed to lie on that axis with the URDF's
 //     <axis> unchanged. The DH drift of nearly parallel axes (d of metres that cancel) never
 //     reaches the link frames, so meshes stay on their bodies (the reason UR's description
-//     moves offsets along the joint axes).
+//     moves offsets along the joint axes). A body whose lines did not move (its joint axis and
+//     the next, or the tool after the last) keeps its nominal pose as it is, so no frame of it
+//     turns by the rounding of frames built on nearly parallel axes.
 //   - Every fixed joint keeps its origin byte for byte, those beyond the last movable joint
 //     included: the tip link (the flange, --tip-link) and the hand, fingers and TCP links after
 //     it stay on the last body where the URDF puts them (issue #42). The model's tool is the
