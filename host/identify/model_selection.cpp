@@ -8,6 +8,7 @@
 #include <functional>
 #include <iomanip>
 #include <mutex>
+#include <numeric>
 #include <optional>
 #include <random>
 #include <sstream>
@@ -377,12 +378,14 @@ std::string reason_for(const Selection& s, int chosen, bool any_range, bool rang
                 " equations per parameter: its errors count row by row only)"
           : "K-fold RMS (no out-of-range fold: no rows in range, none out of it, or a candidate that cannot "
             "be identified from those in range)";
-  const std::string rule = "a candidate must have a lower " + score +
-                           " than the default and held-out position errors lower row by row, by " +
-                           std::to_string(static_cast<int>(kBeatsT)) +
-                           " standard errors (one built on the arm's own physics -- its masses, its file's scales and "
-                           "compliances -- by a lower score alone); of those the lowest score wins, but one built on "
-                           "the arm's physics stands unless beaten row by row too";
+  const std::string rule =
+      "a candidate must have a lower " + score +
+      " than the default and held-out position errors lower row by row, by " +
+      std::to_string(static_cast<int>(kBeatsT)) +
+      " standard errors (one built on the arm's own physics -- its masses, its file's scales and "
+      "compliances -- by a lower score alone); of those, the ones built on the arm's physics first, "
+      "then the others from the fewest parameters up, each replaces the one chosen only by "
+      "beating it row by row too";
   if (x.score_m < 0.0)
     reason << x.name << ": the default, cross-validation cannot judge it (" << x.why << ")";
   else if (x.name == kDefaultCandidate)
@@ -410,8 +413,15 @@ int choose_candidate(std::vector<CandidateScore>& scores, const std::vector<Cros
     const double bar = scores[c].holds && seen && static_cast<int>(against) == fallback ? kPhysicsBeatsT : kBeatsT;
     return scores[c].score_m < scores[against].score_m && scores[c].t <= -bar;
   };
+  // Physics first, then the generic structures by size: each must beat the one it would replace
+  // (the header's rule).
+  std::vector<std::size_t> order(scores.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return std::pair(!scores[a].holds, scores[a].parameters) < std::pair(!scores[b].holds, scores[b].parameters);
+  });
   int chosen = fallback;
-  for (std::size_t c = 0; c < scores.size(); ++c) {
+  for (const std::size_t c : order) {
     if (scores[c].score_m < 0.0 || static_cast<int>(c) == fallback) continue;
     if (fallback >= 0 && !judge(c, static_cast<std::size_t>(fallback))) continue;  // not better than the default
     if (chosen < 0 || chosen == fallback) {
@@ -419,7 +429,10 @@ int choose_candidate(std::vector<CandidateScore>& scores, const std::vector<Cros
       continue;
     }
     const auto held = static_cast<std::size_t>(chosen);
-    if (scores[held].holds ? judge(c, held) : scores[c].score_m < scores[held].score_m) chosen = static_cast<int>(c);
+    if (!scores[held].holds && scores[c].parameters == scores[held].parameters
+            ? scores[c].score_m < scores[held].score_m
+            : judge(c, held))
+      chosen = static_cast<int>(c);
   }
   return chosen;
 }
