@@ -325,6 +325,13 @@ int run_correct(const CorrectArgs& a) {
                   << (prismatic ? " mm, beyond --max-joint-change-mm " : " deg, beyond --max-joint-change-deg ")
                   << (prismatic ? a.max_change_mm : a.max_change_deg)
                   << "; the target's readings are left as they were";
+        if (const auto& w = results[i].within_limit) {
+          std::cerr << "; held within the limit, the model misses it by " << w->residual_m * 1e3 << " mm, "
+                    << w->residual_rad * 1e3 << " mrad";
+          if (w->spread)
+            std::cerr << " where it predicts to " << w->spread->position_m * 1e3 << " mm, "
+                      << w->spread->orientation_rad * 1e3 << " mrad (sd)";
+        }
       }
       std::cerr << " (residual " << s.residual_m * 1e3 << " mm, " << s.residual_rad * 1e3 << " mrad)\n";
     }
@@ -389,8 +396,8 @@ void add_correct_command(CLI::App& app, int& status) {
   cmd->footer(
       "Exit status: 0 every target reached; 1 bad input (nothing written); 3 some target not reached or refused "
       "(named on standard error; the CSV is written with its outcome, a program is not). A target the model "
-      "misses by at most half its own predicted spread there (a stretched arm at the edge of its reach) counts "
-      "as reached, named on standard error with its residual.");
+      "misses by at most its own predicted spread there (one standard deviation; a stretched arm at the edge of "
+      "its reach) counts as reached, named on standard error with its residual.");
   cmd->callback([a, &status] { status = run_correct(*a); });
 }
 

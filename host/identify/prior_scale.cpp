@@ -200,7 +200,9 @@ PriorScales update_prior_scales(const Eigen::MatrixXd& information, const Eigen:
       if (own_class(next.classes[u].kind)) {
         const double seen = 1.0 / std::max(post.variance(k), 1e-300) - 1.0 / prior2;       // s
         const double alone = seen > 0.0 ? deviation * (seen + 1.0 / prior2) / seen : 0.0;  // m - centre
-        const double width2 = seen > 0.0 ? alone * alone - 1.0 / seen : 0.0;
+        const double se2 = next.classes[u].kind == PriorClass::joint_ratio ? kRatioStandardErrors * kRatioStandardErrors
+                                                                           : 1.0;  // (standard errors)^2
+        const double width2 = seen > 0.0 ? alone * alone - se2 / seen : 0.0;
         wanted[u] = width2 > 0.0 ? std::sqrt(width2) / b(k) : 0.0;
       }
     }

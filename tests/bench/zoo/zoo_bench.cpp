@@ -358,6 +358,36 @@ double true_change_over_limit(const Chain& chain, const Truth& truth, const std:
   return std::min(over, nearest_over_limit(nearest, seed, box_lower, box_upper));
 }
 
+// correct's miss of the refused target at targets.csv's `line` over the model's predicted spread
+// (position or orientation, the larger): for a target refused at the joint-change limit the nearest
+// the model comes within the limit (its message), else the solve's own (corrected.csv); kNone when
+// neither is known.
+double refused_miss_over_spread(const std::string& err, int line,
+                                const std::map<std::string, std::vector<double>>& columns, std::size_t t) {
+  const std::string key = "targets.csv:" + std::to_string(line) + ": not reached";
+  const std::size_t at = err.find(key);
+  if (at == std::string::npos) return kNone;
+  const std::string message = err.substr(at, err.find('\n', at) - at);
+  double m = 0, rad = 0, sd_m = 0, sd_rad = 0;
+  const std::size_t within = message.find("misses it by ");
+  if (within != std::string::npos) {
+    if (std::sscanf(message.c_str() + within, "misses it by %lf mm, %lf mrad where it predicts to %lf mm, %lf mrad", &m,
+                    &rad, &sd_m, &sd_rad) != 4)
+      return kNone;
+  } else if (message.find("joint-change-limit") == std::string::npos) {
+    const auto value = [&](const char* name) {
+      const auto c = columns.find(name);
+      return c == columns.end() || t >= c->second.size() ? kNone : c->second[t];
+    };
+    m = value("residual_m"), rad = value("residual_rad"), sd_m = value("position_sd_m"),
+    sd_rad = value("orientation_sd_rad");
+  } else {
+    return kNone;
+  }
+  if (!(sd_m > 0.0)) return kNone;
+  return std::max(m / sd_m, sd_rad > 0.0 ? rad / sd_rad : 0.0);
+}
+
 // The true arm at correct's joint targets of the targets it reached: its TCP against the nominal
 // goal (mm RMS), kincal's and the oracle's held-out TCP errors at the same rows' readings, and the
 // largest change of a revolute joint (deg). A refused target (exit 3) is a false refusal when the
@@ -381,12 +411,21 @@ void judge_correct(const Chain& chain, const CaseData& d, const std::string& dir
   std::vector<Eigen::Vector3d> reached_prediction, reached_oracle;
   int refused = 0, within = 0;
   double need = 0.0;  // the largest true change over the limit of a refused target
+  const std::string err = read_text(dir + "/correct.err");
+  std::ostringstream each;  // per refused target: its line, the model's miss over its spread, the true need
+  // per target reached within the prediction's spread: the true TCP's miss over the spread, the true need
+  std::ostringstream shorts;
+  each << std::setprecision(3);
+  shorts << std::setprecision(3);
   for (std::size_t t = 0; t < d.held_out.size(); ++t) {
     if (t < outcome.size() && outcome[t] != "reached") {  // refused and named: judged by the true arm's need
       const double over = true_change_over_limit(chain, d.truth, d.held_out[t].q);
       ++refused;
       within += over <= 1.0 ? 1 : 0;
       need = std::max(need, over);
+      const int line = static_cast<int>(t) + 2;  // targets.csv's header is line 1
+      each << (refused == 1 ? "" : ", ") << line << ' ' << outcome[t] << " miss "
+           << refused_miss_over_spread(err, line, columns, t) << " sd, need " << over;
       continue;
     }
     std::vector<double> q;
@@ -399,6 +438,13 @@ void judge_correct(const Chain& chain, const CaseData& d, const std::string& dir
     }
     const Pose goal = d.truth.device_T_root * forward(chain, ChainErrors(chain.joints.size()), d.held_out[t].q);
     e.push_back(tcp(chain, d.truth, q) - goal.translation());
+    const int line = static_cast<int>(t) + 2;
+    const auto sd = columns.find("position_sd_m");
+    if (err.find("targets.csv:" + std::to_string(line) + ": reached within the prediction's spread") !=
+            std::string::npos &&
+        sd != columns.end() && t < sd->second.size())
+      shorts << (shorts.tellp() > 0 ? ", " : "") << line << " true miss " << e.back().norm() / sd->second[t]
+             << " sd, need " << true_change_over_limit(chain, d.truth, d.held_out[t].q);
     if (heldout_tcp.size() == 3)
       reached_prediction.push_back(Eigen::Vector3d(heldout_tcp[0][t], heldout_tcp[1][t], heldout_tcp[2][t]) -
                                    tcp(chain, d.truth, d.held_out[t].q));
@@ -423,11 +469,13 @@ void judge_correct(const Chain& chain, const CaseData& d, const std::string& dir
          << " mm";
     r.notes.push_back(note.str());
   }
+  if (shorts.tellp() > 0)
+    r.notes.push_back("reached within the prediction's spread, by targets.csv line: " + shorts.str());
   if (refused == 0) return;
   std::ostringstream note;
   note << "correct: " << refused << " of " << d.held_out.size() << " targets not reached (exit 3), " << within
        << " of them within the limit on the true arm (largest true need " << std::setprecision(3) << need
-       << " x the limit)";
+       << " x the limit; by targets.csv line: " << each.str() << ")";
   r.notes.push_back(note.str());
   r.refused = r.refused || within > 0;
 }

@@ -340,6 +340,10 @@ TEST_CASE("target corrector: a target whose smallest correction exceeds the limi
     CHECK(r.change_over_limit > 1.0);
     CHECK(r.change == doctest::Approx(r.change_over_limit * tight.revolute_rad));
     CHECK(r.solution.residual_m > 1e-4);  // the residual of the readings left
+    // How near the model comes held within the limit is kept (no spread without a covariance).
+    REQUIRE(r.within_limit);
+    CHECK(r.within_limit->residual_m < r.solution.residual_m);
+    CHECK(!r.within_limit->spread);
   }
 }
 
@@ -372,7 +376,7 @@ TEST_CASE("target corrector: a redundant goal just past the limit in the smalles
   CHECK(refused.solution.q == q);
 }
 
-TEST_CASE("target corrector: a goal the model misses by less than half its predicted spread counts as reached") {
+TEST_CASE("target corrector: a goal the model misses by less than its predicted spread counts as reached") {
   // The PUMA stretched toward a point far out of reach; goals just past that stretch, by a fifth and
   // by three times the spread the model's covariance predicts there.
   model::RobotModel m = robot("puma560.yaml");
@@ -415,11 +419,11 @@ TEST_CASE("target corrector: a goal the model misses by less than half its predi
   CHECK(without.correct(target(0.2), {}, "t.csv").front().solution.outcome != correct::Outcome::reached);
 }
 
-TEST_CASE("target corrector: held within the limit, a goal missed by less than half the spread counts as reached") {
+TEST_CASE("target corrector: held within the limit, a goal missed by less than the spread counts as reached") {
   // A full pose on the 6-joint PUMA has one solution near the seed; with the limit just below its
   // largest turn, the solve held within the limit misses the goal by a hair (near a singularity,
   // what the model cannot tell apart): reached when the model's predicted spread is more than
-  // twice that miss, refused and named when it is less.
+  // that miss, refused and named when it is less.
   model::RobotModel start = robot("puma560.yaml");
   start.base_T_frame0 = model::Transform{};
   const model::RobotModel calibrated = perturbed(start, 2e-3, 2e-3, 6);
@@ -453,6 +457,11 @@ TEST_CASE("target corrector: held within the limit, a goal missed by less than h
   CHECK(narrow.solution.outcome == correct::Outcome::joint_change_limit);
   CHECK(narrow.solution.q == q);
   CHECK(narrow.change_over_limit > 1.0);
+  // The nearest within the limit is the miss `wide` accepted, beyond the narrow spread there.
+  REQUIRE(narrow.within_limit);
+  REQUIRE(narrow.within_limit->spread);
+  CHECK(narrow.within_limit->residual_m == doctest::Approx(wide.solution.residual_m).epsilon(1e-3));
+  CHECK(narrow.within_limit->residual_m > correct::kWithinSpread * narrow.within_limit->spread->position_m);
 }
 
 TEST_CASE("Cartesian targets: base and device frames give the same readings; the seed's wrist is kept") {

@@ -398,10 +398,11 @@ TEST_CASE("prior widths from the data: the evidence per class, the guards, and t
   CHECK_FALSE(identify::initial_prior_scales(o, ids, 3).estimated);
 }
 
-TEST_CASE("a joint ratio is a class of its own: its width in closed form, none when within its standard error") {
+TEST_CASE("a joint ratio is a class of its own: its width in closed form, none within two standard errors") {
   // Three scales and a coupling the data see each alone (information 1 / sigma_d^2, sigma_d 100
-  // ppm): the evidence's width is sqrt(m^2 - sigma_d^2), the lower bound for an estimate within
-  // its standard error; an unseen ratio keeps its default.
+  // ppm): the width is sqrt(m^2 - (2 sigma_d)^2), the lower bound for an estimate within two of its
+  // standard errors (1.5 here: the evidence's own rule, one, would free it); an unseen ratio keeps
+  // its default.
   const identify::ParameterIds ids{{model::kJointScale, 0},
                                    {model::kJointScale, 1},
                                    {model::kJointScale, 2},
@@ -418,17 +419,17 @@ TEST_CASE("a joint ratio is a class of its own: its width in closed form, none w
   Eigen::VectorXd seen(5);
   seen << 1e8, 1e8, 0.0, 1e8, 1e16;
   Eigen::VectorXd delta(5);
-  delta << 3e-3, 0.5e-4, 1e-3, -2e-3, 1e-3;
+  delta << 3e-3, 1.5e-4, 1e-3, -2e-3, 1e-3;
   const Eigen::VectorXd none = Eigen::VectorXd::Zero(5);
   const identify::PriorScales s =
       identify::update_prior_scales(Eigen::MatrixXd(seen.asDiagonal()), none, delta, none, sigma, o, start);
-  CHECK(s.classes[1].scale == doctest::Approx(std::sqrt(9e-6 - 1e-8) / 0.01).epsilon(1e-3));
+  CHECK(s.classes[1].scale == doctest::Approx(std::sqrt(9e-6 - 4e-8) / 0.01).epsilon(1e-3));
   CHECK(s.classes[1].reason == identify::ScaleReason::evidence);
   CHECK(s.classes[2].scale == doctest::Approx(o.min_ratio_scale));
   CHECK(s.classes[2].reason == identify::ScaleReason::lower_bound);
   CHECK(s.classes[3].scale == 1.0);
   CHECK(s.classes[3].reason == identify::ScaleReason::barely_seen);
-  CHECK(s.classes[4].scale == doctest::Approx(std::sqrt(4e-6 - 1e-8) / 0.01).epsilon(1e-3));
+  CHECK(s.classes[4].scale == doctest::Approx(std::sqrt(4e-6 - 4e-8) / 0.01).epsilon(1e-3));
   const std::string text = identify::format_prior_scales(s);
   INFO(text);
   CHECK(has(text, "a joint ratio's own from 0.0001"));
