@@ -120,17 +120,15 @@ void TargetCorrector::limit_change(TargetResult& r, const std::vector<double>& r
     // Held within the limit, a goal the unbounded solve met may be missed by what the model cannot
     // tell (near a singularity, a hundredth of a degree of its error is a tenth of a degree of a
     // joint): judged by the spread as any solve is.
-    std::optional<TargetResult::WithinLimit> nearest;  // the box solves' nearest miss
+    std::optional<Solution> nearest;  // the box solves' nearest miss (its spread only if refused)
     const auto take = [&](Solution solution) {
       TargetResult again = r;
       again.solution = std::move(solution);
       again.short_of.reset();
       judge_by_spread(again, with_base, orientation);
       const JointChange a = largest_change(again.solution.q, reference);
-      if (a.over_limit <= 1.0 && (!nearest || again.solution.residual_m < nearest->residual_m)) {
-        nearest = {again.solution.residual_m, again.solution.residual_rad, std::nullopt};
-        if (covariance_) nearest->spread = predicted_spread(calibrated_, *covariance_, again.solution.q, with_base);
-      }
+      if (a.over_limit <= 1.0 && (!nearest || again.solution.residual_m < nearest->residual_m))
+        nearest = again.solution;
       if (again.solution.outcome != Outcome::reached || a.over_limit > 1.0) return false;
       again.refined = r.refined || r.platform_step_used;  // a joint target's readings: the Newton solve's now
       r = std::move(again);
@@ -146,7 +144,10 @@ void TargetCorrector::limit_change(TargetResult& r, const std::vector<double>& r
       const Solution along = solve_pose_along(arm, goal, orientation, reference, options);
       const JointChange a = largest_change(along.q, reference);
       if (along.outcome == Outcome::reached && a.over_limit < c.over_limit) c = a;
-      r.within_limit = nearest;
+      if (nearest) {
+        r.within_limit = {nearest->residual_m, nearest->residual_rad, std::nullopt};
+        if (covariance_) r.within_limit->spread = predicted_spread(calibrated_, *covariance_, nearest->q, with_base);
+      }
     }
   }
   r.change_over_limit = c.over_limit;

@@ -418,12 +418,12 @@ void judge_correct(const Chain& chain, const CaseData& d, const std::string& dir
   each << std::setprecision(3);
   shorts << std::setprecision(3);
   for (std::size_t t = 0; t < d.held_out.size(); ++t) {
+    const int line = static_cast<int>(t) + 2;             // targets.csv's header is line 1
     if (t < outcome.size() && outcome[t] != "reached") {  // refused and named: judged by the true arm's need
       const double over = true_change_over_limit(chain, d.truth, d.held_out[t].q);
       ++refused;
       within += over <= 1.0 ? 1 : 0;
       need = std::max(need, over);
-      const int line = static_cast<int>(t) + 2;  // targets.csv's header is line 1
       each << (refused == 1 ? "" : ", ") << line << ' ' << outcome[t] << " miss "
            << refused_miss_over_spread(err, line, columns, t) << " sd, need " << over;
       continue;
@@ -438,7 +438,6 @@ void judge_correct(const Chain& chain, const CaseData& d, const std::string& dir
     }
     const Pose goal = d.truth.device_T_root * forward(chain, ChainErrors(chain.joints.size()), d.held_out[t].q);
     e.push_back(tcp(chain, d.truth, q) - goal.translation());
-    const int line = static_cast<int>(t) + 2;
     const auto sd = columns.find("position_sd_m");
     if (err.find("targets.csv:" + std::to_string(line) + ": reached within the prediction's spread") !=
             std::string::npos &&
