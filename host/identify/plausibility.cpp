@@ -139,11 +139,16 @@ void check_positions(const model::Dataset& data, const Predicted& p, std::vector
   std::string what = "the measured points move " + number(ratio) +
                      " times as far between rows as the model predicts (median over " + std::to_string(ratios.size()) +
                      " pairs of rows)";
-  // Lengths a device may export in, as metres per unit: a ratio near 1/unit names it.
+  // Lengths a device may export in, as metres per unit: a ratio within a factor kUnitBand of
+  // 1/unit names it. The ratio is the measured point's moves over the model's, whose tool is not
+  // known yet: a reflector 50-150 mm off the flange of a small arm moves more than the flange (a
+  // ViperX 300 s measured in inches: 45.9, 1.17 times 1/inch). 1.4 keeps the bands apart --
+  // centimetres 71-140, inches 28-55, feet 2.3-4.6, and none reaches the plausible 0.7-1.4.
+  constexpr double kUnitBand = 1.4;
   const std::pair<double, const char*> units[] = {{0.01, "centimetres"}, {0.0254, "inches"}, {0.3048, "feet"}};
   const char* unit = nullptr;
   for (const auto& [metres, name] : units)
-    if (std::abs(std::log(ratio * metres)) < std::log(1.15)) unit = name;
+    if (std::abs(std::log(ratio * metres)) < std::log(kUnitBand)) unit = name;
   if (ratio > 500 && ratio < 2000)
     what += ": likely millimetres given as metres";
   else if (unit)

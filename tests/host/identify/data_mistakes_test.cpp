@@ -357,7 +357,17 @@ TEST_CASE("positions exported in centimetres, inches, feet or millimetres are na
       model::Dataset scaled = data;
       for (model::Measurement& r : scaled.rows) r.position /= metres;
       CHECK(mentions(identify::implausibilities(nominal, scaled), std::string("likely ") + unit + " given as metres"));
+      // A point that moves a third more than the flange the model predicts (a long tool on a small
+      // arm) is still named by its unit; a ratio between the units' bands names none.
+      if (metres == 0.001) continue;
+      for (model::Measurement& r : scaled.rows) r.position *= 1.3;
+      CHECK(mentions(identify::implausibilities(nominal, scaled), std::string("likely ") + unit + " given as metres"));
     }
+    model::Dataset between = data;
+    for (model::Measurement& r : between.rows) r.position *= 1.9;
+    const std::vector<std::string> found = identify::implausibilities(nominal, between);
+    CHECK(mentions(found, "wrong units, wrong joint readings, or not this robot"));
+    CHECK(!mentions(found, "given as metres"));
   }
 }
 
