@@ -348,6 +348,9 @@ constexpr double kPhysicsBeatsT = 0.0;
 // of the K-fold RMS rigid and 53.7 times it sagging (sag_test); the real UR10's selections at 30,
 // 100 and 300 rows and its plans are the same with the condition as without.
 constexpr double kVisibleDeflection = 1.0;
+// Two candidates whose parameters differ by at most this many are of one size: against one not
+// built on physics, the lower score decides (the header's rule; candidates come in order of size).
+constexpr int kSameSize = 1;
 // The out-of-range fold's RMS counts in the score when its training rows give at least this many
 // equations per parameter of the largest candidate judged (the header's Score).
 constexpr int kRangeEquationsPerParameter = 5;
@@ -429,7 +432,7 @@ int choose_candidate(std::vector<CandidateScore>& scores, const std::vector<Cros
       continue;
     }
     const auto held = static_cast<std::size_t>(chosen);
-    if (!scores[held].holds && scores[c].parameters == scores[held].parameters
+    if (!scores[held].holds && scores[c].parameters - scores[held].parameters <= kSameSize
             ? scores[c].score_m < scores[held].score_m
             : judge(c, held))
       chosen = static_cast<int>(c);

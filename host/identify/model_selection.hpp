@@ -83,12 +83,16 @@
 // the user gave about the arm's physics (Candidate::holds: the model file's own scales and
 // compliances, geometry+gravity with its masses) are taken first, then the others from the fewest
 // parameters up, and each replaces the one chosen so far only by beating it row by row by the
-// same 2 errors (one of as many parameters, against one not built on physics, by a lower score
-// alone): a larger structure shows what it adds over the smaller one it would replace as it must
-// over the default (on a 7-joint Franka Panda measured by motion capture at 20 rows with one
-// joint's scale off, geometry+sag's 49 parameters scored 9 % under geometry+scales' 38, paired t
-// -0.9 between them, and predicted 1.35 times the oracle's held-out error where the scales give
-// 1.11; prior_test). When cross-validation cannot judge the default (it
+// same 2 errors (one of as many parameters or one more, against one not built on physics, by a
+// lower score alone): a larger structure shows what it adds over the smaller one it would replace
+// as it must over the default (on a 7-joint Franka Panda measured by motion capture at 20 rows with
+// one joint's scale off, geometry+sag's 49 parameters scored 9 % under geometry+scales' 38, paired
+// t -0.9 between them, and predicted 1.35 times the oracle's held-out error where the scales give
+// 1.11; prior_test), where two structures of about one size -- a joint's scale and its coupling,
+// one parameter apart -- fit the noise alike and the score tells them apart (a ViperX 300 s by
+// motion capture at 20 rows, one joint's scale off: geometry+scales' 33 parameters scored 20 %
+// under geometry+couplings' 32, paired t -1.9, and predicted 1.10 times the oracle's held-out error
+// where the couplings left 1.84). When cross-validation cannot judge the default (it
 // cannot be identified on some fold's rows), it stands. Why not the lowest score alone: the scores
 // of near-equal candidates differ by chance (with tens of rows, five folds of a few rows judge
 // mostly noise, and the lowest alone traded the default for noise on a precise arm), and a

@@ -768,6 +768,20 @@ TEST_CASE(
   CHECK(choose(sized, by_size, scores) == "geometry+sag");
   CHECK(scores[2].against == "geometry+scales");
   CHECK(scores[2].t <= -2.0);
+  // One parameter apart, one size: the lower score alone decides (a ViperX 300 s, motion capture,
+  // 20 rows, one joint's scale off: geometry+scales' 33 parameters scored 20 % under
+  // geometry+couplings' 32 at paired t -1.9, and predicted 1.10 times the oracle's error where the
+  // couplings left 1.84).
+  const std::vector<Named> one_apart{{"registration", false, 9},
+                                     {"geometry", false, 27},
+                                     {"geometry+scales", false, 33},
+                                     {"geometry+couplings", false, 32}};
+  std::vector<identify::CrossValidation> apart{scored(0.5, 0.01), scored(0.1, 0.01), scored(-0.0005, 0.02),
+                                               scored(0.0, 0.01)};
+  REQUIRE(apart[2].kfold_rms_m < apart[3].kfold_rms_m);
+  CHECK(choose(one_apart, apart, scores) == "geometry+scales");
+  CHECK(scores[2].against == "geometry+couplings");
+  CHECK(scores[2].t > -2.0);
 }
 
 TEST_CASE("the selection rule pairs each row once: a row predicted in both folds is one difference") {
