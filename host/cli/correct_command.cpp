@@ -396,8 +396,10 @@ void add_correct_command(CLI::App& app, int& status) {
   cmd->footer(
       "Exit status: 0 every target reached; 1 bad input (nothing written); 3 some target not reached or refused "
       "(named on standard error; the CSV is written with its outcome, a program is not). A target the model "
-      "misses by at most 1.61 times its own predicted spread there (what its own error reaches 19 times in 20; a "
-      "stretched arm at the edge of its reach) counts as reached, named on standard error with its residual.");
+      "misses by at most " +
+      model::shortest_number_text(correct::kWithinSpread) +
+      " times its own predicted spread there (what its own error reaches 19 times in 20; a stretched arm at the "
+      "edge of its reach) counts as reached, named on standard error with its residual.");
   cmd->callback([a, &status] { status = run_correct(*a); });
 }
 
