@@ -237,10 +237,11 @@ struct SolveSummary {
 
 // Plain least squares: outliers are handled by the leverage-aware rejection (a robust loss
 // would bias the variance components the noise model estimates from the same residuals). Within
-// the physical bounds (problem.hpp), which `delta` must meet on entry.
+// the physical bounds `bounds` (problem.hpp), which `delta` must meet on entry.
 SolveSummary solve_ceres(Parameterization& p, const model::Dataset& data, const Weights& w,
                          const std::vector<int>& rows, const Eigen::VectorXd& prior_weight,
-                         const Eigen::VectorXd& prior_centre, int max_iterations, std::vector<double>& delta) {
+                         const Eigen::VectorXd& prior_centre, const PhysicalBounds& bounds, int max_iterations,
+                         std::vector<double>& delta) {
   ceres::Problem problem;
   for (int r : rows) {
     const auto k = static_cast<std::size_t>(r);
@@ -248,7 +249,6 @@ SolveSummary solve_ceres(Parameterization& p, const model::Dataset& data, const 
   }
   if ((prior_weight.array() > 0.0).any())
     problem.AddResidualBlock(new PriorCost(prior_weight, prior_centre), nullptr, delta.data());
-  const PhysicalBounds bounds = physical_bounds(p);
   for (Eigen::Index k = 0; k < bounds.lower.size(); ++k) {
     if (std::isfinite(bounds.lower(k)))
       problem.SetParameterLowerBound(delta.data(), static_cast<int>(k), bounds.lower(k));
@@ -440,7 +440,8 @@ Eigen::VectorXd nominal_in_start(const RobotModel& nominal, const model::Dataset
   Parameterization fit(param.start(), param.ids());
   std::vector<double> delta(static_cast<std::size_t>(fit.size()), 0.0);
   const Eigen::VectorXd none = Eigen::VectorXd::Zero(fit.size());
-  solve_ceres(fit, poses, unit, all_rows(poses), none, none, options.max_iterations, delta);
+  solve_ceres(fit, poses, unit, all_rows(poses), none, none, physical_bounds(fit, options.negative_masses),
+              options.max_iterations, delta);
   std::ostringstream note;
   note.precision(3);
   note << "priors centred on the nominal: the start is not the nominal; the nominal in the start's parameters "
@@ -712,9 +713,21 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
                                            result.orientation_used, result.notes);
   // A compliance's prior is on the deflection itself, centred on a rigid joint whatever the start
   // (a model file's value, the sag's first stage: prior.hpp).
-  for (int k = 0; k < p; ++k)
-    if (ids[static_cast<std::size_t>(k)].kind == model::kJointCompliance)
-      result.prior_centre(k) = -result.start.joints.at(ids[static_cast<std::size_t>(k)].link).compliance.value_or(0.0);
+  // An identified mass's prior, and its centre's, are centred on the sag's start -- kStartMass_kg
+  // at its frame's origin -- whatever the start (the masses sag.hpp spreads for its last solve).
+  for (int k = 0; k < p; ++k) {
+    const core::ParameterId id = ids[static_cast<std::size_t>(k)];
+    if (!model::is_joint_map_parameter(id.kind)) continue;
+    const model::Joint& joint = result.start.joints.at(id.link);
+    if (id.kind == model::kJointCompliance) {
+      result.prior_centre(k) = -joint.compliance.value_or(0.0);
+    } else if (id.kind == model::kLinkMass && joint.identify_mass) {
+      result.prior_centre(k) = kStartMass_kg - joint.mass_kg;
+    } else if (model::is_mass_parameter(id.kind) && joint.identify_mass) {
+      result.prior_centre(k) =
+          -joint.centre_of_mass_m(static_cast<Eigen::Index>(id.kind) - static_cast<Eigen::Index>(model::kLinkCentreX));
+    }
+  }
   Eigen::VectorXd prior_weight = prior_weights(options.prior, result.prior_sigma);
   const double negligible_position2 = 1e-6 * result.median_instrument_sigma_m * result.median_instrument_sigma_m;
 
@@ -734,7 +747,7 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
         stacked(param, data, weights, rows, r, &j);
         append_prior(prior_weight, result.prior_centre, delta, r, j);
         const Eigen::VectorXd step = j.colPivHouseholderQr().solve(-r);
-        const PhysicalBounds bounds = physical_bounds(param);  // the step clamped to them
+        const PhysicalBounds bounds = physical_bounds(param, options.negative_masses);  // the step clamped to them
         for (int k = 0; k < p; ++k)
           delta[static_cast<std::size_t>(k)] = std::clamp(step(k), bounds.lower(k), bounds.upper(k));
         param.set(delta);
@@ -742,7 +755,8 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
         result.termination = "one linear step (first-order model)";
       } else {
         const SolveSummary s =
-            solve_ceres(param, data, weights, rows, prior_weight, result.prior_centre, options.max_iterations, delta);
+            solve_ceres(param, data, weights, rows, prior_weight, result.prior_centre,
+                        physical_bounds(param, options.negative_masses), options.max_iterations, delta);
         result.iterations += s.iterations;
         result.termination = s.termination;
       }
@@ -876,7 +890,7 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
     {
       const Eigen::VectorXd w = prior_weights(options.prior, out.prior_sigma);  // the result's own widths
       const Eigen::MatrixXd info = j.transpose() * j + Eigen::MatrixXd(w.cwiseAbs2().asDiagonal());
-      out.at_bound = on_bound(physical_bounds(param), at);
+      out.at_bound = on_bound(physical_bounds(param, options.negative_masses), at);
       std::vector<Eigen::Index> free;
       for (Eigen::Index k = 0; k < p; ++k)
         if (!out.at_bound[static_cast<std::size_t>(k)]) free.push_back(k);
@@ -941,12 +955,18 @@ constexpr double kGateT = 2.0;
 IdentifyResult gated(const RobotModel& nominal, const model::Dataset& data, const IdentifyOptions& options,
                      const CrossValidation* with_rule) {
   if (needs_sag_start(nominal, options)) {
-    // Masses to identify and no compliance yet (sag.hpp): stage 1, then the rest from its compliances.
+    // Masses to identify and no compliance yet (sag.hpp): stage 1, then the rest from its compliances
+    // (and stage 3 when a mass went below 0).
     const SagStage second = second_sag_stage(
         nominal, options, identify_ungated(nominal, data, first_sag_stage(nominal, options)).model, data);
     IdentifyResult r = gated(second.model, data, second.options, with_rule);
+    std::string note = second.note;
+    if (const std::optional<SagStage> third = third_sag_stage(second, r)) {
+      r = gated(third->model, data, third->options, with_rule);
+      note += "; " + third->note;
+    }
     finish_sag_result(r, nominal);
-    r.notes.push_back(second.note);
+    r.notes.push_back(note);
     return r;
   }
   IdentifyResult unrejected;

@@ -149,6 +149,9 @@ struct IdentifyOptions {
   double parallel_tolerance_rad = 0.1;
   PriorOptions prior;                   // MAP with these priors (prior.hpp); prior.strength = 0: least squares
   bool estimate_measured_point = true;  // the measured point first (measured_point.hpp, issue #42)
+  // An identified mass may go below 0 in the solve: the sag's first solve of its masses, whose
+  // result sag.hpp spreads along the chain (problem.hpp's physical_bounds).
+  bool negative_masses = false;
 };
 
 // Position (and orientation) errors of a model against measurements.

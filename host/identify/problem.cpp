@@ -185,7 +185,7 @@ double arm_size_m(const model::RobotModel& m) {
 
 }  // namespace
 
-PhysicalBounds physical_bounds(const Parameterization& p) {
+PhysicalBounds physical_bounds(const Parameterization& p, bool negative_masses) {
   const auto n = static_cast<Eigen::Index>(p.size());
   PhysicalBounds b{Eigen::VectorXd::Constant(n, -std::numeric_limits<double>::infinity()),
                    Eigen::VectorXd::Constant(n, std::numeric_limits<double>::infinity())};
@@ -199,7 +199,7 @@ PhysicalBounds physical_bounds(const Parameterization& p) {
       b.lower(i) = -joint.compliance.value_or(0.0);
       b.upper(i) = model::kMaxCompliance - joint.compliance.value_or(0.0);
     } else if (kind == model::kLinkMass) {
-      b.lower(i) = -joint.mass_kg;
+      b.lower(i) = (negative_masses ? -model::kMaxMass_kg : 0.0) - joint.mass_kg;
       b.upper(i) = model::kMaxMass_kg - joint.mass_kg;
     } else if (kind == model::kJointScale) {
       b.lower(i) = model::kMinScale - joint.scale.value_or(1.0);

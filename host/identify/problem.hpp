@@ -95,10 +95,13 @@ Eigen::Matrix<double, 6, 1> small_motion(const Transform& a, const Transform& b)
 // [kMinScale, kMaxScale], a coupling within kMaxCoupling): a Kinova Gen3's first joint, its axis
 // 7 urad off vertical in its URDF, took a compliance of 1.86 rad/(N m) that predict then refused.
 // The solve keeps to them (Ceres bounds; the first-order step is clamped to them).
+// `negative_masses`: an identified mass may go below 0, down to -kMaxMass_kg -- the sag's first
+// solve of its masses, where only their sums along a run of revolute joints reach the loads and a
+// mass the data cannot tell from its neighbours' is held at the start's (sag.hpp's spread).
 struct PhysicalBounds {
   Eigen::VectorXd lower, upper;
 };
-PhysicalBounds physical_bounds(const Parameterization& p);
+PhysicalBounds physical_bounds(const Parameterization& p, bool negative_masses);
 // Of each change in `delta`: on its lower or upper bound (to a part in 1e9 of the bound; the
 // solve clamps to them exactly).
 std::vector<bool> on_bound(const PhysicalBounds& b, std::span<const double> delta);

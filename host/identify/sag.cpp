@@ -6,6 +6,8 @@
 #include <optional>
 #include <sstream>
 
+#include "host/model/axes.hpp"
+
 namespace kincal::identify {
 
 RobotModel with_identified_masses(const RobotModel& nominal) {
@@ -96,6 +98,7 @@ SagStage second_sag_stage(const RobotModel& model, const IdentifyOptions& option
     if (!held.empty()) s.note += "; held as the first stage held them: " + held;
     return s;
   }
+  s.options.negative_masses = true;  // see the top: third_sag_stage keeps them at or above 0
   const auto reference = static_cast<std::uint8_t>(largest - sag.begin());
   const std::string name = model::parameter_name({model::kJointCompliance, reference});
   s.options.fixed.push_back(name);
@@ -106,6 +109,100 @@ SagStage second_sag_stage(const RobotModel& model, const IdentifyOptions& option
        << " kg per link; it deflects most, " << *largest * 180.0 / std::numbers::pi
        << " deg at the data's poses), so the masses are in that gauge's units";
   if (!held.empty()) note << "; held as the first stage held them (not separable without the masses): " << held;
+  s.note = note.str();
+  return s;
+}
+
+std::optional<RobotModel> spread_masses_evenly(const RobotModel& model) {
+  const std::vector<double> zero(model.joints.size(), 0.0);
+  const core::ChainFrames<double> frames = model::chain_at_joints(model, zero).frames;
+  const std::vector<model::AxisLine> axes = model::joint_axes(model, zero);
+  // A point in link i's frame (frame i + 1 of the chain, where its centre of mass is given).
+  const auto in_link = [&](std::size_t i, const model::Vector3& p) -> model::Vector3 {
+    const model::Transform& f = frames.base_T_frame[i + 1];
+    return f.rotation.transpose() * (p - f.translation);
+  };
+  RobotModel out = model;
+  std::vector<model::Vector3> moment;
+  for (const model::Joint& j : model.joints) moment.push_back(j.mass_kg * j.centre_of_mass_m);
+  for (std::size_t first = 0; first < model.joints.size();) {
+    if (!model.joints[first].identify_mass) {
+      ++first;
+      continue;
+    }
+    std::size_t last = first;  // the run: links first..last, joints first+1..last revolute
+    while (last + 1 < model.joints.size() && model.joints[last + 1].identify_mass &&
+           model.joints[last + 1].type == core::JointType::revolute)
+      ++last;
+    double beyond = 0.0;  // the masses of links k..last
+    for (std::size_t k = first; k <= last; ++k) beyond += model.joints[k].mass_kg;
+    const double mean = beyond / static_cast<double>(last - first + 1);
+    if (!(mean > 0.0)) return std::nullopt;
+    for (std::size_t k = first + 1; k <= last; ++k) {
+      beyond -= model.joints[k - 1].mass_kg;
+      // Across joint k, from links k..last to link k - 1: what they hold beyond their share.
+      const double moved = beyond - mean * static_cast<double>(last - k + 1);
+      moment[k - 1] += moved * in_link(k - 1, axes[k].point);
+      moment[k] -= moved * in_link(k, axes[k].point);
+    }
+    for (std::size_t k = first; k <= last; ++k) {
+      out.joints[k].mass_kg = mean;
+      out.joints[k].centre_of_mass_m = moment[k] / mean;
+    }
+    first = last + 1;
+  }
+  return out;
+}
+
+std::optional<SagStage> third_sag_stage(const SagStage& second, const IdentifyResult& solved) {
+  const std::vector<model::Joint>& joints = solved.model.joints;
+  const auto negative = std::find_if(joints.begin(), joints.end(),
+                                     [](const model::Joint& j) { return j.identify_mass && j.mass_kg < 0.0; });
+  if (negative == joints.end()) return std::nullopt;
+  SagStage s = second;
+  s.options.negative_masses = false;
+  std::ostringstream note;
+  note << "sag: the free-signed solve left link " << (negative - joints.begin()) + 1 << "'s mass at "
+       << negative->mass_kg << " kg (only the masses' sums along revolute joints reach the loads); ";
+  const std::optional<RobotModel> spread = spread_masses_evenly(solved.model);
+  if (!spread) {
+    note << "solved again from the start with no mass below 0 (they summed to 0 or less)";
+    s.note = note.str();
+    return s;
+  }
+  // The gauge turned so that the masses average the start's again: masses x f, compliances / f.
+  double sum = 0.0;
+  int count = 0;
+  for (const model::Joint& j : spread->joints) {
+    if (!j.identify_mass) continue;
+    sum += j.mass_kg;
+    ++count;
+  }
+  const double f = kStartMass_kg * count / sum;
+  std::string gauge;
+  for (std::size_t i = 0; i < s.model.joints.size(); ++i) {
+    model::Joint& j = s.model.joints[i];
+    j.mass_kg = f * spread->joints[i].mass_kg;
+    j.centre_of_mass_m = spread->joints[i].centre_of_mass_m;
+    if (j.compliance) *j.compliance /= f;
+    const std::string name = model::parameter_name({model::kJointCompliance, static_cast<std::uint8_t>(i)});
+    if (std::find(s.options.fixed.begin(), s.options.fixed.end(), name) != s.options.fixed.end()) {
+      std::ostringstream g;
+      g << name << " at " << *j.compliance * 1e6 << " urad/Nm";
+      gauge = g.str();
+    }
+  }
+  // The same parameters as the free-signed solve: only what its held masses hold has changed.
+  for (const HeldFixed& h : solved.identifiability.held_fixed) {
+    const std::string name = model::parameter_name(h.id);
+    if (!model::is_mass_parameter(h.id.kind) ||
+        std::find(s.options.fixed.begin(), s.options.fixed.end(), name) != s.options.fixed.end())
+      continue;
+    s.options.fixed.push_back(name);
+    s.options.fixed_because.emplace(name, h.reason);
+  }
+  note << "solved again from the same loads, the masses spread evenly along the chain at " << kStartMass_kg
+       << " kg per link (the gauge: " << gauge << "), none below 0";
   s.note = note.str();
   return s;
 }

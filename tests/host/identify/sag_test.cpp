@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <string>
 
@@ -243,6 +244,41 @@ TEST_CASE("geometry+sag is a candidate exactly when the model has neither masses
     CHECK(j.mass_kg == identify::kStartMass_kg);
     CHECK(j.centre_of_mass_m.isZero(0.0));
     CHECK(j.compliance == 0.0);
+  }
+}
+
+TEST_CASE("spreading the identified masses along revolute joints changes no gravity load") {
+  std::mt19937_64 rng(5);
+  // The PUMA's six revolute joints are one run; the Stanford arm's boom and the ARID's first
+  // joint are prismatic: a run ends before each (its mass is what the prismatic joint carries).
+  for (const char* name : {"puma560.yaml", "stanford_rrp.yaml", "arid_prrr.yaml", "ur10.urdf"}) {
+    CAPTURE(name);
+    RobotModel m = identify::with_identified_masses(sim::perturbed(robot(name), rng));
+    for (model::Joint& j : m.joints) {
+      j.mass_kg = uniform(rng, -0.5, 3.0);  // a free-signed solve's masses, some below 0
+      j.centre_of_mass_m = model::Vector3(uniform(rng, -0.3, 0.3), uniform(rng, -0.3, 0.3), uniform(rng, -0.3, 0.3));
+    }
+    const std::optional<RobotModel> spread = identify::spread_masses_evenly(m);
+    REQUIRE(spread);
+    for (const std::vector<double>& q : sim::random_configurations(m, 20, rng)) {
+      const model::ChainAtJoints at = model::chain_at_joints(m, q);
+      const core::JointVector<double> before = model::gravity_forces(m, at.chain, at.coupled);
+      const core::JointVector<double> after = model::gravity_forces(*spread, at.chain, at.coupled);
+      CHECK((after - before).cwiseAbs().maxCoeff() <= 1e-9 * std::max(1.0, before.cwiseAbs().maxCoeff()));
+    }
+    // Over each run every link the run's mean mass, above 0.
+    for (std::size_t first = 0; first < m.joints.size();) {
+      std::size_t last = first;
+      while (last + 1 < m.joints.size() && m.joints[last + 1].type == core::JointType::revolute) ++last;
+      double sum = 0.0;
+      for (std::size_t k = first; k <= last; ++k) sum += m.joints[k].mass_kg;
+      for (std::size_t k = first; k <= last; ++k)
+        CHECK(spread->joints[k].mass_kg == doctest::Approx(sum / static_cast<double>(last - first + 1)));
+      first = last + 1;
+    }
+    // A run whose masses sum to 0 or less has no such spread.
+    for (model::Joint& j : m.joints) j.mass_kg = -std::abs(j.mass_kg);
+    CHECK_FALSE(identify::spread_masses_evenly(m));
   }
 }
 
