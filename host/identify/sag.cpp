@@ -188,7 +188,7 @@ std::optional<SagStage> third_sag_stage(const SagStage& second, const IdentifyRe
     const std::string name = model::parameter_name({model::kJointCompliance, static_cast<std::uint8_t>(i)});
     if (std::find(s.options.fixed.begin(), s.options.fixed.end(), name) != s.options.fixed.end()) {
       std::ostringstream g;
-      g << name << " at " << *j.compliance * 1e6 << " urad/Nm";
+      g << name << " at " << j.compliance.value_or(0.0) * 1e6 << " urad/Nm";
       gauge = g.str();
     }
   }

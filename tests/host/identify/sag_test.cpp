@@ -251,9 +251,12 @@ TEST_CASE("spreading the identified masses along revolute joints changes no grav
   std::mt19937_64 rng(5);
   // The PUMA's six revolute joints are one run; the Stanford arm's boom and the ARID's first
   // joint are prismatic: a run ends before each (its mass is what the prismatic joint carries).
-  for (const char* name : {"puma560.yaml", "stanford_rrp.yaml", "arid_prrr.yaml", "ur10.urdf"}) {
-    CAPTURE(name);
-    RobotModel m = identify::with_identified_masses(sim::perturbed(robot(name), rng));
+  // DH, Doty's convention and (the PUMA's table read as) modified DH.
+  RobotModel modified = robot("puma560.yaml");
+  for (model::Joint& j : modified.joints) j.convention = core::LinkConvention::modified_dh;
+  for (const RobotModel& arm : {robot("puma560.yaml"), robot("stanford_rrp.yaml"), robot("arid_prrr.yaml"), modified}) {
+    CAPTURE(arm.name);
+    RobotModel m = identify::with_identified_masses(sim::perturbed(arm, rng));
     for (model::Joint& j : m.joints) {
       j.mass_kg = uniform(rng, -0.5, 3.0);  // a free-signed solve's masses, some below 0
       j.centre_of_mass_m = model::Vector3(uniform(rng, -0.3, 0.3), uniform(rng, -0.3, 0.3), uniform(rng, -0.3, 0.3));
