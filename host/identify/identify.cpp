@@ -713,21 +713,9 @@ IdentifyResult identify_ungated(const RobotModel& nominal, const model::Dataset&
                                            result.orientation_used, result.notes);
   // A compliance's prior is on the deflection itself, centred on a rigid joint whatever the start
   // (a model file's value, the sag's first stage: prior.hpp).
-  // An identified mass's prior, and its centre's, are centred on the sag's start -- kStartMass_kg
-  // at its frame's origin -- whatever the start (the masses sag.hpp spreads for its last solve).
-  for (int k = 0; k < p; ++k) {
-    const core::ParameterId id = ids[static_cast<std::size_t>(k)];
-    if (!model::is_joint_map_parameter(id.kind)) continue;
-    const model::Joint& joint = result.start.joints.at(id.link);
-    if (id.kind == model::kJointCompliance) {
-      result.prior_centre(k) = -joint.compliance.value_or(0.0);
-    } else if (id.kind == model::kLinkMass && joint.identify_mass) {
-      result.prior_centre(k) = kStartMass_kg - joint.mass_kg;
-    } else if (model::is_mass_parameter(id.kind) && joint.identify_mass) {
-      result.prior_centre(k) =
-          -joint.centre_of_mass_m(static_cast<Eigen::Index>(id.kind) - static_cast<Eigen::Index>(model::kLinkCentreX));
-    }
-  }
+  for (int k = 0; k < p; ++k)
+    if (ids[static_cast<std::size_t>(k)].kind == model::kJointCompliance)
+      result.prior_centre(k) = -result.start.joints.at(ids[static_cast<std::size_t>(k)].link).compliance.value_or(0.0);
   Eigen::VectorXd prior_weight = prior_weights(options.prior, result.prior_sigma);
   const double negligible_position2 = 1e-6 * result.median_instrument_sigma_m * result.median_instrument_sigma_m;
 

@@ -36,8 +36,10 @@
 // with a tracker, 100 rows: a link's mass at 0, 1.28 x the oracle's held-out error; free to go
 // below 0, 1.005 x). So stage 2 solves with the masses free of sign; when one ends below 0, a
 // third solve starts from the same loads with every run's mass spread evenly over its links
-// (spread_masses_evenly) and keeps every mass at or above 0. The priors stay centred on the start
-// (identify.cpp), so the third solve differs from the second only by what the held masses hold.
+// (spread_masses_evenly) and keeps every mass at or above 0. Its priors are centred on its own
+// start, the second's result spread, as every stage's are: so it stays with what the second found
+// (the UR10's 300 real rows without its masses: 0.3987 mm held out; with the priors left centred
+// on 1 kg at each frame's origin, which now means other loads, 0.4012, and 0.3993 bounded at 0).
 #pragma once
 
 #include <optional>
