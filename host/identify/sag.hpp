@@ -67,7 +67,8 @@ IdentifyOptions first_sag_stage(const RobotModel& model, const IdentifyOptions& 
 
 // Stage 2's start and options from stage 1's result: `model` with stage 1's compliances, the
 // geometric parameters stage 1 held and (when masses are identified) the gauge's reference
-// compliance added to the fixed parameters; a note says which. With no compliance above 0 after
+// compliance added to the fixed parameters and the masses free of sign (third_sag_stage); a note
+// says which. With no compliance above 0 after
 // stage 1 (no sag seen), neither the masses, their centres nor gravity's direction are identified.
 struct SagStage {
   RobotModel model;
@@ -80,7 +81,7 @@ SagStage second_sag_stage(const RobotModel& model, const IdentifyOptions& option
 // Stage 3, when stage 2's result `solved` (from `second`, the masses free of sign) has a mass
 // below 0: `second` with every link's mass and centre from spread_masses_evenly(solved.model),
 // the gauge turned so that they average kStartMass_kg again (masses x f, every compliance / f:
-// the same loads, and the start's balance between the masses' and the centres' priors), the
+// the same deflections, and the start's balance between the masses' and the centres' priors), the
 // masses and centres stage 2 held held again, and every mass kept at or above 0; a note says so.
 // When a run's masses sum to 0 or less, `second` with the masses kept at or above 0. None when no
 // mass is below 0: stage 2's result stands.
