@@ -68,8 +68,8 @@ IdentifyOptions first_sag_stage(const RobotModel& model, const IdentifyOptions& 
 // Stage 2's start and options from stage 1's result: `model` with stage 1's compliances, the
 // geometric parameters stage 1 held and (when masses are identified) the gauge's reference
 // compliance added to the fixed parameters and the masses free of sign (third_sag_stage); a note
-// says which. With no compliance above 0 after
-// stage 1 (no sag seen), neither the masses, their centres nor gravity's direction are identified.
+// says which. With no compliance above 0 after stage 1 (no sag seen), neither the masses, their
+// centres nor gravity's direction are identified.
 struct SagStage {
   RobotModel model;
   IdentifyOptions options;
