@@ -211,6 +211,14 @@ double orientation_misfit(const OrientationFit& fit, const std::optional<model::
   return std::max(fit.median_rad, between);
 }
 
+// Beyond kConventionMisfit_deg the other quaternion conventions are tried, and one that fits is
+// named; beyond kMisfit_deg the orientations are refused though none fits. Between the two, a
+// model whose angles are a few degrees off: the zoo's arms with every angle up to 4 deg off (every
+// length 20 mm) missed by 12-16 deg, its mistakes (joints swapped, reversed, turned, degrees
+// as radians, logs out of step) by 75-137.
+inline constexpr double kConventionMisfit_deg = 10.0;
+inline constexpr double kMisfit_deg = 30.0;
+
 void check_orientations(const model::Dataset& data, const Predicted& p,
                         const std::optional<model::Matrix3>& position_registration, std::vector<std::string>& found) {
   if (!data.has_orientation) return;
@@ -229,9 +237,9 @@ void check_orientations(const model::Dataset& data, const Predicted& p,
   const std::optional<OrientationFit> turns = orientation_mismatch(as_given, p);
   if (!turns) return;
   const double given = orientation_misfit(*turns, position_registration);
-  if (given <= 10.0 / kDegreesPerRadian) return;
+  if (given <= kConventionMisfit_deg / kDegreesPerRadian) return;
   std::string what =
-      turns->median_rad > 10.0 / kDegreesPerRadian
+      turns->median_rad > kConventionMisfit_deg / kDegreesPerRadian
           ? "the measured orientations turn between rows differently from the model's, by " +
                 number(turns->median_rad * kDegreesPerRadian) + " degrees (median after the best registration)"
           : "the measured orientations turn between rows as the model's, but in a frame " +
@@ -246,17 +254,19 @@ void check_orientations(const model::Dataset& data, const Predicted& p,
        "Hamilton's, w first"}};
   double best = 0.25 * given;
   std::string cause = ": wrong orientation columns or not this robot";
+  bool named = false;
   for (const auto& [quaternions, words] : others) {
     const std::optional<OrientationFit> fit = orientation_mismatch(*quaternions, p);
     if (!fit) continue;
     const double other = orientation_misfit(*fit, position_registration);
     if (other < best) {
       best = other;
+      named = true;
       cause = std::string(": likely ") + words + "; read so they differ by " + number(other * kDegreesPerRadian) +
               " degrees)";
     }
   }
-  found.push_back(what + cause);
+  if (named || given > kMisfit_deg / kDegreesPerRadian) found.push_back(what + cause);
 }
 
 void check_exact_fit(const model::Dataset& data, const Predicted& p, const PlausibilityOptions& options,

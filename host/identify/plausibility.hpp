@@ -13,9 +13,11 @@
 //                 inches, feet). A rigid registration keeps distances.
 //   orientations  the rotation between consecutive rows, measured M against predicted P, must be
 //                 M = B P B^T for one registration rotation B: B is fitted (Kabsch on the rotation
-//                 vectors of the pairs turning 5..150 degrees) and a median misfit above 10
-//                 degrees is implausible; the quaternions read as x,y,z,w, inverted (the JPL
-//                 convention) or both are tried and named when they fit.
+//                 vectors of the pairs turning 5..150 degrees); above a median misfit of 10
+//                 degrees the quaternions read as x,y,z,w, inverted (the JPL convention) or both
+//                 are tried and named when they fit (4 x better); above 30 degrees the data are
+//                 implausible though none fits (a model a few degrees off in every angle misses by
+//                 up to about 16).
 //                 (Unit norm is checked by the dataset reader.)
 //   far points    a measured point farther from the median point than twice the model's own
 //                 spread plus 0.5 m (a typing error), or more than 1 km from the device (1e308):

@@ -399,6 +399,17 @@ TEST_CASE("orientations in another quaternion convention are named; correct pose
         truth, simulation::single_joint_sweeps(home, std::vector<std::vector<double>>(nominal.joints.size(), sweep)),
         rng, 2e-5, true, 1e-4, false);
     CHECK(identify::implausibilities(nominal, sweeps).empty());
+    // A rough description of the arm (every angle some 4 deg off, every length 20 mm): the turns
+    // miss by more than 10 deg, and no other convention fits -- not refused.
+    sim::ErrorScale rough;
+    rough.length_m = 20e-3;
+    rough.angle_rad = 4.0 * std::numbers::pi / 180.0;
+    model::RobotModel rough_truth = sim::perturbed(nominal, rng, rough);
+    rough_truth.base_T_frame0 = truth.base_T_frame0;
+    rough_truth.flange_T_tool = truth.flange_T_tool;
+    const model::Dataset rough_data =
+        simulation::measure(rough_truth, sim::random_configurations(nominal, 40, rng), rng, 2e-5, true, 1e-4, false);
+    CHECK(identify::implausibilities(nominal, rough_data).empty());
 
     CHECK(mentions(identify::implausibilities(nominal, with(data, as_xyzw)), "likely quaternions in x,y,z,w order"));
     CHECK(mentions(identify::implausibilities(nominal, with(data, inverse)),
