@@ -25,13 +25,15 @@
 // cases).
 //
 // Usage: zoo_bench [--cases N] [--filter TEXT] [--work DIR] [--kincal PATH] [--draw N] [--robot URDF]
-//                  [--tip-link LINK]
+//                  [--tip-link LINK] [--error-scale F] [--noise-scale F]
 //   --cases N: the first N cases of the design; --filter: only cases whose label (robot/instrument/
 //   class/size/mistake) contains TEXT; --work: the folder the cases' files are kept in;
 //   --identify-arg ARG: an argument added to identify's defaults (repeat it), to judge a non-default;
 //   --draw N: another draw of the design (design()), to see how the figures spread; --robot URDF:
 //   that robot (repeat it) instead of the zoo's, the design's cases on it in turn; --tip-link: its
-//   chain's last link, where a gripper's or a camera's leaf lies deeper than the flange.
+//   chain's last link, where a gripper's or a camera's leaf lies deeper than the flange;
+//   --error-scale F, --noise-scale F: every class's geometric errors, every instrument's noise
+//   times F (the figures are at 1), to judge error sizes and instruments beyond the design's.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -200,10 +202,10 @@ struct CaseData {
   std::vector<Row> train, held_out;  // correct's targets: the nominal TCP at the held-out readings
 };
 
-CaseData simulate(const CaseSpec& c) {
+CaseData simulate(const CaseSpec& c, const TruthScales& scales) {
   std::mt19937 rng(c.seed);
   const Chain& chain = c.robot->chain;
-  CaseData d{make_truth(chain, c.instrument, c.error_class, rng), {}, {}};
+  CaseData d{make_truth(chain, c.instrument, c.error_class, rng, scales), {}, {}};
   d.train = measure(chain, d.truth, configurations(chain, d.truth, c.size, rng), rng);
   d.held_out = measure(chain, d.truth, configurations(chain, d.truth, kHeldOut, rng), rng);
   return d;
@@ -677,6 +679,11 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 1000));
   app.add_option("--identify-arg", identify_args, "an argument added to identify's (repeat it; judges a non-default)")
       ->allow_extra_args(false);
+  TruthScales scales;
+  app.add_option("--error-scale", scales.errors, "every error class's geometric errors times this (1: the figures')")
+      ->check(CLI::Range(0.0, 100.0));
+  app.add_option("--noise-scale", scales.noise, "every instrument's noise times this (1: the figures')")
+      ->check(CLI::Range(0.01, 100.0));
   CLI11_PARSE(app, argc, argv);
   work = fs::absolute(work).string();
 
@@ -694,13 +701,16 @@ int main(int argc, char** argv) {
   std::cout << "cases: " << cases.size() << " of " << all.size() << " (" << robots.size()
             << " robots; 48 clean: 4 instruments x 4 sizes x 3 error classes; " << all.size() - 48 << " mistakes) + "
             << kHeldOut << " held-out rows each, the nominal TCP at their readings correct's targets\n";
+  if (scales.errors != 1.0 || scales.noise != 1.0)
+    std::cout << "truths: geometric errors x " << scales.errors << ", instrument noise x " << scales.noise
+              << " (the figures' zoo is at 1)\n";
 
   std::vector<std::pair<CaseSpec, CaseResult>> results;
   for (const CaseSpec& c : cases) {
     const std::string dir = work + "/case" + std::to_string(c.index);
     fs::create_directories(dir);
     std::cout << "case " << c.index << " " << c.label() << '\n' << std::flush;
-    const CaseData d = simulate(c);
+    const CaseData d = simulate(c, scales);
     write_text(dir + "/held_out.csv", dataset_csv(c.robot->chain, d.truth, d.held_out, "h", Mistake::none));
     CaseResult r;
     if (c.mistake == Mistake::none) {

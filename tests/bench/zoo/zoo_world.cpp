@@ -223,13 +223,15 @@ const char* name(Mistake m) {
 
 bool measures_pose(Instrument i) { return i == Instrument::tracker_6dof || i == Instrument::camera; }
 
-Truth make_truth(const Chain& chain, Instrument instrument, ErrorClass error_class, std::mt19937& rng) {
+Truth make_truth(const Chain& chain, Instrument instrument, ErrorClass error_class, std::mt19937& rng,
+                 const TruthScales& scales) {
   Truth t(chain.joints.size());
   t.instrument = instrument;
+  const double f = scales.errors;
   if (error_class == ErrorClass::service)
-    set_geometry_errors(t, chain, 1e-3, 5e-3, 0.2 * kDeg, 1.0 * kDeg, rng);
+    set_geometry_errors(t, chain, f * 1e-3, f * 5e-3, f * 0.2 * kDeg, f * 1.0 * kDeg, rng);
   else
-    set_geometry_errors(t, chain, 0.1e-3, 0.5e-3, 0.01 * kDeg, 0.05 * kDeg, rng);
+    set_geometry_errors(t, chain, f * 0.1e-3, f * 0.5e-3, f * 0.01 * kDeg, f * 0.05 * kDeg, rng);
   place_flange_as_nominal(t, chain);
   if (error_class == ErrorClass::service) set_compliance(t, chain, rng);
   const std::vector<int> revolute = revolute_joints(chain);
@@ -260,6 +262,8 @@ Truth make_truth(const Chain& chain, Instrument instrument, ErrorClass error_cla
       t.rotation_sigma_rad = 0.02 * kDeg;
       break;
   }
+  t.position_sigma_m *= scales.noise;
+  t.rotation_sigma_rad *= scales.noise;
   return t;
 }
 

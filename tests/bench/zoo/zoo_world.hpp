@@ -53,7 +53,15 @@ struct Row {
   Pose measured, truth;
 };
 
-Truth make_truth(const Chain& chain, Instrument instrument, ErrorClass error_class, std::mt19937& rng);
+// How far a non-default zoo moves its truths (zoo_bench --error-scale, --noise-scale): every error
+// class's geometric errors and every instrument's noise times these.
+struct TruthScales {
+  double errors = 1.0;
+  double noise = 1.0;
+};
+
+Truth make_truth(const Chain& chain, Instrument instrument, ErrorClass error_class, std::mt19937& rng,
+                 const TruthScales& scales = {});
 
 // Slides the flange along and turns it about the last axis to where the nominal chain puts it
 // relative to the last two axes' common normal: what no measurement on the last body can tell from
