@@ -61,7 +61,7 @@ struct TruthScales {
 };
 
 Truth make_truth(const Chain& chain, Instrument instrument, ErrorClass error_class, std::mt19937& rng,
-                 const TruthScales& scales = {});
+                 const TruthScales& scales);
 
 // Slides the flange along and turns it about the last axis to where the nominal chain puts it
 // relative to the last two axes' common normal: what no measurement on the last body can tell from
