@@ -947,12 +947,18 @@ IdentifyResult gated(const RobotModel& nominal, const model::Dataset& data, cons
     // (and stage 3 when a mass went below 0).
     const SagStage second = second_sag_stage(
         nominal, options, identify_ungated(nominal, data, first_sag_stage(nominal, options)).model, data);
-    IdentifyResult r = gated(second.model, data, second.options, with_rule);
-    std::string note = second.note;
-    if (const std::optional<SagStage> third = third_sag_stage(second, r)) {
-      r = gated(third->model, data, third->options, with_rule);
-      note += "; " + third->note;
-    }
+    SagStage stage = second;
+    IdentifyResult r = gated(stage.model, data, stage.options, with_rule);
+    std::string note = stage.note;
+    const auto next = [&](const std::optional<SagStage>& then) {
+      if (!then) return false;
+      stage = *then;
+      r = gated(stage.model, data, stage.options, with_rule);
+      note += "; " + stage.note;
+      return true;
+    };
+    next(third_sag_stage(stage, r));
+    if (next(tilted_sag_stage(stage, r, data))) next(third_sag_stage(stage, r));
     finish_sag_result(r, nominal);
     r.notes.push_back(note);
     return r;

@@ -207,6 +207,31 @@ std::optional<SagStage> third_sag_stage(const SagStage& second, const IdentifyRe
   return s;
 }
 
+std::optional<SagStage> tilted_sag_stage(const SagStage& stage, const IdentifyResult& solved,
+                                         const model::Dataset& data) {
+  if (!stage.model.identify_gravity_direction) return std::nullopt;
+  ParameterIds compliances;
+  for (const HeldFixed& h : solved.identifiability.held_fixed)
+    if (h.id.kind == model::kJointCompliance) compliances.push_back(h.id);
+  SagStage s = stage;
+  s.model.gravity_mps2 = solved.model.gravity_mps2;
+  const std::vector<HeldFixed> before = unloaded_compliances(stage.model, data, compliances);
+  const std::vector<HeldFixed> after = unloaded_compliances(s.model, data, compliances);
+  std::string freed;
+  for (const HeldFixed& h : before)
+    if (std::none_of(after.begin(), after.end(), [&](const HeldFixed& a) { return a.id.link == h.id.link; }))
+      freed += (freed.empty() ? "" : ", ") + model::parameter_name(h.id);
+  if (freed.empty()) return std::nullopt;
+  const double turn =
+      std::acos(std::clamp(stage.model.gravity_mps2.normalized().dot(s.model.gravity_mps2.normalized()), -1.0, 1.0));
+  std::ostringstream note;
+  note << "sag: solved again with gravity's direction where the fit found it (" << turn * 180.0 / std::numbers::pi
+       << " deg from the start's), which loads the joints of " << freed
+       << " that the start's held as unloaded: their sag is compliance x tilt, invisible from a start with neither";
+  s.note = note.str();
+  return s;
+}
+
 std::vector<HeldFixed> unloaded_compliances(const RobotModel& model, const model::Dataset& data,
                                             const ParameterIds& candidates) {
   std::vector<HeldFixed> out;

@@ -87,6 +87,17 @@ SagStage second_sag_stage(const RobotModel& model, const IdentifyOptions& option
 // mass is below 0: stage 2's result stands.
 std::optional<SagStage> third_sag_stage(const SagStage& second, const IdentifyResult& solved);
 
+// Stage 2 (or 3) again, when gravity's direction as `solved` (from `stage`) found it loads a joint
+// whose compliance the stage held because gravity barely loaded it at its start: a first axis
+// that stands vertical in the file but tilted against gravity on the real arm (an arm off level, a
+// first joint tilted on its base). Its sag is compliance x tilt, zero in both at the start, so no
+// solve from there could find it; from the found direction the compliance acts and is identified
+// beside everything else. `stage` with gravity as found (its prior centred there, as every
+// stage's is on its start); a note says which compliances are freed. None when no held
+// compliance is loaded at the found direction.
+std::optional<SagStage> tilted_sag_stage(const SagStage& stage, const IdentifyResult& solved,
+                                         const model::Dataset& data);
+
 // `model` with the same gravity loads in every pose and, over each run of links joined by revolute
 // joints whose masses are identified, every link's mass the run's mean: mass moved across each
 // joint at a point of its axis, with its first moment (see the top). None when a run's masses sum
