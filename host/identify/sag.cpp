@@ -226,8 +226,8 @@ std::optional<SagStage> tilted_sag_stage(const SagStage& stage, const IdentifyRe
       std::acos(std::clamp(stage.model.gravity_mps2.normalized().dot(s.model.gravity_mps2.normalized()), -1.0, 1.0));
   std::ostringstream note;
   note << "sag: solved again with gravity's direction where the fit found it (" << turn * 180.0 / std::numbers::pi
-       << " deg from the start's), which loads the joints of " << freed
-       << " that the start's held as unloaded: their sag is compliance x tilt, invisible from a start with neither";
+       << " deg from the start's), which loads what the start held as unloaded (" << freed
+       << " freed): a sag of compliance x tilt, invisible from a start with neither";
   s.note = note.str();
   return s;
 }
