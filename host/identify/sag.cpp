@@ -217,10 +217,25 @@ std::optional<SagStage> tilted_sag_stage(const SagStage& stage, const IdentifyRe
   s.model.gravity_mps2 = solved.model.gravity_mps2;
   const std::vector<HeldFixed> before = unloaded_compliances(stage.model, data, compliances);
   const std::vector<HeldFixed> after = unloaded_compliances(s.model, data, compliances);
+  // A freed compliance's prior: no more compliant than a joint of its kind that deflects by the
+  // default deflection under the most loaded one's load (its own load, the tilt's, is a few
+  // percent of that, and the default width at it let 20-40 rows fit a compliance to their noise).
+  const std::vector<double> largest = largest_gravity_loads(s.model, data);
   std::string freed;
-  for (const HeldFixed& h : before)
-    if (std::none_of(after.begin(), after.end(), [&](const HeldFixed& a) { return a.id.link == h.id.link; }))
-      freed += (freed.empty() ? "" : ", ") + model::parameter_name(h.id);
+  for (const HeldFixed& h : before) {
+    if (std::any_of(after.begin(), after.end(), [&](const HeldFixed& a) { return a.id.link == h.id.link; })) continue;
+    const std::string name = model::parameter_name(h.id);
+    freed += (freed.empty() ? "" : ", ") + name;
+    const bool prismatic = s.model.joints[h.id.link].type == core::JointType::prismatic;
+    double most = 0.0;
+    for (std::size_t i = 0; i < largest.size(); ++i)
+      if ((s.model.joints[i].type == core::JointType::prismatic) == prismatic) most = std::max(most, largest[i]);
+    const bool named = std::any_of(s.options.prior.sigma.begin(), s.options.prior.sigma.end(),
+                                   [&](const auto& entry) { return entry.first == name; });
+    if (most > 0.0 && !named)
+      s.options.prior.sigma.emplace_back(
+          name, (prismatic ? s.options.prior.deflection_m : s.options.prior.deflection_rad) / most);
+  }
   if (freed.empty()) return std::nullopt;
   const double turn =
       std::acos(std::clamp(stage.model.gravity_mps2.normalized().dot(s.model.gravity_mps2.normalized()), -1.0, 1.0));
