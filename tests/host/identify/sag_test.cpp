@@ -361,10 +361,11 @@ TEST_CASE("an arm off level whose first joint gives way too: its sag under the t
   CHECK(note != r.notes.end());
   const double c1 = r.model.joints[0].compliance.value_or(0.0);
   MESSAGE("compliance1 ", c1 * 1e6, " urad/Nm, the truth's ", stiffest_compliance * 1e6);
-  // Measured (seed 19, 150 rows, 0.02 mm noise): 0.0511 -> 0.0103 mm, compliance1 76.2 urad/Nm of
-  // the truth's 77.2; held, as the start alone decided before, the first two.
+  // Measured (seed 19, 150 rows, 0.02 mm noise): 0.0511 -> 0.0110 mm, compliance1 65.2 urad/Nm of
+  // the truth's 77.2 (drawn toward a rigid joint by its prior, the default deflection at the most
+  // loaded joint's load; 76.2 without it); held, as the start alone decided before, the first two.
   CHECK(freed_m < 0.5 * held_m);
-  CHECK(std::abs(c1 - stiffest_compliance) < 0.2 * stiffest_compliance);
+  CHECK(std::abs(c1 - stiffest_compliance) < 0.25 * stiffest_compliance);
 }
 
 TEST_CASE("geometry+gravity identifies each link's centre of mass, drawn toward the model's") {
