@@ -944,7 +944,8 @@ IdentifyResult gated(const RobotModel& nominal, const model::Dataset& data, cons
                      const CrossValidation* with_rule) {
   if (needs_sag_start(nominal, options)) {
     // Masses to identify and no compliance yet (sag.hpp): stage 1, then the rest from its compliances
-    // (and stage 3 when a mass went below 0).
+    // (and stage 3 when a mass went below 0; again from the gravity found when it loads a compliance
+    // the start held as unloaded, and stage 3 after it when needed).
     const SagStage second = second_sag_stage(
         nominal, options, identify_ungated(nominal, data, first_sag_stage(nominal, options)).model, data);
     SagStage stage = second;

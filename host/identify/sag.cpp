@@ -217,9 +217,7 @@ std::optional<SagStage> tilted_sag_stage(const SagStage& stage, const IdentifyRe
   s.model.gravity_mps2 = solved.model.gravity_mps2;
   const std::vector<HeldFixed> before = unloaded_compliances(stage.model, data, compliances);
   const std::vector<HeldFixed> after = unloaded_compliances(s.model, data, compliances);
-  // A freed compliance's prior: no more compliant than a joint of its kind that deflects by the
-  // default deflection under the most loaded one's load (its own load, the tilt's, is a few
-  // percent of that, and the default width at it let 20-40 rows fit a compliance to their noise).
+  // A freed compliance's prior (see the header): the default deflection at the most loaded load.
   const std::vector<double> largest = largest_gravity_loads(s.model, data);
   std::string freed;
   for (const HeldFixed& h : before) {

@@ -99,8 +99,10 @@ std::optional<SagStage> third_sag_stage(const SagStage& second, const IdentifyRe
 // first joint tilted on its base). Its sag is compliance x tilt, zero in both at the start, so no
 // solve from there could find it; from the found direction the compliance acts and is identified
 // beside everything else. `stage` with gravity as found (its prior centred there, as every
-// stage's is on its start); a note says which compliances are freed. None when no held
-// compliance is loaded at the found direction.
+// stage's is on its start) and each freed compliance's prior the default deflection at the most
+// loaded joint's load (of its kind), unless the caller names one: at its own load, the tilt's, a
+// few percent of that, the default let 20-40 rows fit it to their noise. A note says which
+// compliances are freed. None when no held compliance is loaded at the found direction.
 std::optional<SagStage> tilted_sag_stage(const SagStage& stage, const IdentifyResult& solved,
                                          const model::Dataset& data);
 
