@@ -27,6 +27,20 @@ double uniform(std::mt19937_64& rng, double lo, double hi) {
   return std::uniform_real_distribution<double>(lo, hi)(rng);
 }
 
+// Small geometric errors for sim::perturbed: 0.3 mm and 0.03 deg.
+sim::ErrorScale small_errors() {
+  sim::ErrorScale errors;
+  errors.length_m = 3e-4;
+  errors.angle_rad = 0.03 * std::numbers::pi / 180.0;
+  return errors;
+}
+
+// `g` turned 0.6 deg about frame 0's x and -0.8 deg about its y: a base on a floor off level.
+model::Vector3 off_level(const model::Vector3& g) {
+  const double rx = 0.6 * std::numbers::pi / 180.0, ry = -0.8 * std::numbers::pi / 180.0;
+  return Eigen::AngleAxisd(ry, model::Vector3::UnitY()) * (Eigen::AngleAxisd(rx, model::Vector3::UnitX()) * g);
+}
+
 // `truth` (with masses) with a compliance on each joint that gravity loads by at least a tenth of
 // the largest load: 0.05-0.2 deg of deflection at its largest torque (issue #41's service class),
 // drawn from `rng`.
@@ -77,9 +91,7 @@ SagCase sag_case(const char* name, std::mt19937_64& rng, int rows, bool along_li
     j.mass_kg = 0.0;
   }
   c.nominal.payload.mass_kg = 0.0;
-  sim::ErrorScale errors;
-  errors.length_m = 3e-4;
-  errors.angle_rad = 0.03 * std::numbers::pi / 180.0;
+  const sim::ErrorScale errors = small_errors();
   c.truth = sagging(sim::perturbed(c.nominal, rng, errors), rng, along_link);
   c.train =
       simulation::measure(c.truth, sim::random_configurations(c.nominal, rows, rng), rng, 2e-5, false, 0.0, false);
@@ -288,14 +300,9 @@ TEST_CASE("spreading the identified masses along revolute joints changes no grav
 TEST_CASE("an arm standing off level: gravity's direction is identified with the sag") {
   const RobotModel nominal = robot("ur5.yaml");
   std::mt19937_64 rng(7);
-  sim::ErrorScale errors;
-  errors.length_m = 3e-4;
-  errors.angle_rad = 0.03 * std::numbers::pi / 180.0;
+  const sim::ErrorScale errors = small_errors();
   RobotModel truth = sagging(sim::perturbed(nominal, rng, errors), rng);
-  // Gravity 0.6 deg about frame 0's x and -0.8 deg about its y: a base on a floor off level.
-  const double rx = 0.6 * std::numbers::pi / 180.0, ry = -0.8 * std::numbers::pi / 180.0;
-  truth.gravity_mps2 = Eigen::AngleAxisd(ry, model::Vector3::UnitY()) *
-                       (Eigen::AngleAxisd(rx, model::Vector3::UnitX()) * truth.gravity_mps2);
+  truth.gravity_mps2 = off_level(truth.gravity_mps2);
   const model::Dataset train =
       simulation::measure(truth, sim::random_configurations(nominal, 150, rng), rng, 2e-5, false, 0.0, false);
   const std::vector<std::vector<double>> held_out = sim::random_configurations(nominal, 200, rng);
@@ -328,17 +335,13 @@ TEST_CASE("an arm off level whose first joint gives way too: its sag under the t
   const RobotModel nominal = robot("ur10.yaml");
   const identify::Candidate c = identify::find_candidate(nominal, {}, "geometry+gravity");
   std::mt19937_64 rng(19);
-  sim::ErrorScale errors;
-  errors.length_m = 3e-4;
-  errors.angle_rad = 0.03 * std::numbers::pi / 180.0;
+  const sim::ErrorScale errors = small_errors();
   RobotModel truth = compliant(sim::perturbed(nominal, rng, errors), rng);
   double stiffest_compliance = 0.0;
   for (const model::Joint& j : truth.joints)
     stiffest_compliance = std::max(stiffest_compliance, j.compliance.value_or(0.0));
   truth.joints[0].compliance = stiffest_compliance;
-  const double rx = 0.6 * std::numbers::pi / 180.0, ry = -0.8 * std::numbers::pi / 180.0;
-  truth.gravity_mps2 = Eigen::AngleAxisd(ry, model::Vector3::UnitY()) *
-                       (Eigen::AngleAxisd(rx, model::Vector3::UnitX()) * truth.gravity_mps2);
+  truth.gravity_mps2 = off_level(truth.gravity_mps2);
   const model::Dataset train =
       simulation::measure(truth, sim::random_configurations(nominal, 150, rng), rng, 2e-5, false, 0.0, false);
   const std::vector<std::vector<double>> held_out = sim::random_configurations(nominal, 200, rng);
@@ -379,9 +382,7 @@ TEST_CASE("geometry+gravity identifies each link's centre of mass, drawn toward 
   // CAD estimate, a cable, a link's zero that turned its mass where the model turns only the next
   // axis), compliances on the joints gravity loads.
   std::mt19937_64 rng(13);
-  sim::ErrorScale errors;
-  errors.length_m = 3e-4;
-  errors.angle_rad = 0.03 * std::numbers::pi / 180.0;
+  const sim::ErrorScale errors = small_errors();
   RobotModel truth = sim::perturbed(nominal, rng, errors);
   for (model::Joint& j : truth.joints)
     j.centre_of_mass_m +=
@@ -412,9 +413,7 @@ TEST_CASE("geometry+gravity's cross-validation measures its deflection: below th
   const RobotModel nominal = robot("ur10.yaml");
   const identify::Candidate c = identify::find_candidate(nominal, {}, "geometry+gravity");
   std::mt19937_64 rng(17);
-  sim::ErrorScale errors;
-  errors.length_m = 3e-4;
-  errors.angle_rad = 0.03 * std::numbers::pi / 180.0;
+  const sim::ErrorScale errors = small_errors();
   const RobotModel rigid = sim::perturbed(nominal, rng, errors);
   const RobotModel sagging_arm = compliant(rigid, rng);
   const auto deflection_over_scatter = [&](const RobotModel& truth) {
