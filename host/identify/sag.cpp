@@ -29,6 +29,14 @@ bool identifies_masses(const RobotModel& model) {
   return std::any_of(model.joints.begin(), model.joints.end(), [](const model::Joint& j) { return j.identify_mass; });
 }
 
+// The largest of `largest` (one load per joint) over the joints of joint `link`'s kind.
+double most_of_kind(const RobotModel& model, const std::vector<double>& largest, std::size_t link) {
+  double most = 0.0;
+  for (std::size_t i = 0; i < largest.size(); ++i)
+    if (model.joints[i].type == model.joints[link].type) most = std::max(most, largest[i]);
+  return most;
+}
+
 }  // namespace
 
 std::vector<double> largest_gravity_loads(const RobotModel& model, const model::Dataset& data) {
@@ -225,9 +233,7 @@ std::optional<SagStage> tilted_sag_stage(const SagStage& stage, const IdentifyRe
     const std::string name = model::parameter_name(h.id);
     freed += (freed.empty() ? "" : ", ") + name;
     const bool prismatic = s.model.joints[h.id.link].type == core::JointType::prismatic;
-    double most = 0.0;
-    for (std::size_t i = 0; i < largest.size(); ++i)
-      if ((s.model.joints[i].type == core::JointType::prismatic) == prismatic) most = std::max(most, largest[i]);
+    const double most = most_of_kind(s.model, largest, h.id.link);
     const bool named = std::any_of(s.options.prior.sigma.begin(), s.options.prior.sigma.end(),
                                    [&](const auto& entry) { return entry.first == name; });
     if (most > 0.0 && !named)
@@ -252,12 +258,9 @@ std::vector<HeldFixed> unloaded_compliances(const RobotModel& model, const model
                                [](core::ParameterId id) { return id.kind == model::kJointCompliance; });
   if (!any) return out;
   const std::vector<double> largest = largest_gravity_loads(model, data);
-  const auto kind_of = [&](std::size_t i) { return model.joints[i].type; };
   for (const core::ParameterId id : candidates) {
     if (id.kind != model::kJointCompliance) continue;
-    double most = 0.0;
-    for (std::size_t i = 0; i < largest.size(); ++i)
-      if (kind_of(i) == kind_of(id.link)) most = std::max(most, largest[i]);
+    const double most = most_of_kind(model, largest, id.link);
     const double share = most > 0.0 ? largest[id.link] / most : 0.0;
     if (share > kUnloadedShare) continue;
     std::ostringstream reason;
