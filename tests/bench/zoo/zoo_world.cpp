@@ -93,17 +93,22 @@ Pose flange_placement(const Chain& chain, const ChainErrors& errors) {
 }
 
 // Compliance on every revolute joint whose gravity torque reaches 10 % of the largest: 0.05-0.2 deg
-// of deflection at its largest torque over the joint space.
+// of deflection at its largest torque over the joint space. A revolute joint gravity barely loads
+// (a vertical first axis, tilted only by its origin's errors) gets the most loaded joint's
+// compliance: a base bearing about as stiff as the shoulder's, whose small sag is a real arm's too.
 void set_compliance(Truth& t, const Chain& chain, std::mt19937& rng) {
   std::vector<double> largest(chain.joints.size(), 0.0);
   for (int k = 0; k < 300; ++k) {
     const std::vector<double> tau = gravity_torques(chain, t.errors, uniform_configuration(chain, rng));
     for (std::size_t i = 0; i < tau.size(); ++i) largest[i] = std::max(largest[i], std::abs(tau[i]));
   }
-  const double top = *std::max_element(largest.begin(), largest.end());
+  const auto top = std::max_element(largest.begin(), largest.end());
+  if (*top <= 0.0) return;
   for (std::size_t i = 0; i < largest.size(); ++i)
-    if (largest[i] >= 0.1 * top && top > 0.0)
-      t.errors.compliance_rad_per_nm[i] = uniform(rng, 0.05, 0.2) * kDeg / largest[i];
+    if (largest[i] >= 0.1 * *top) t.errors.compliance_rad_per_nm[i] = uniform(rng, 0.05, 0.2) * kDeg / largest[i];
+  const double top_joint = t.errors.compliance_rad_per_nm[static_cast<std::size_t>(top - largest.begin())];
+  for (std::size_t i = 0; i < largest.size(); ++i)
+    if (largest[i] < 0.1 * *top && !chain.joints[i].prismatic) t.errors.compliance_rad_per_nm[i] = top_joint;
 }
 
 std::vector<int> revolute_joints(const Chain& chain) {
