@@ -68,7 +68,10 @@ Layout layout_of(const Chain& chain, const Truth& truth, std::mt19937& rng, bool
            chain.joints.size()};
   for (std::size_t j = 0; j < l.joints && !geometry_only; ++j) {
     if (truth.errors.scale[j] != 0.0) l.scaled.push_back(j);
-    if (truth.errors.compliance_rad_per_nm[j] != 0.0) l.compliant.push_back(j);
+    if (truth.compliance_known[j])
+      l.start.errors.compliance_rad_per_nm[j] = truth.errors.compliance_rad_per_nm[j];
+    else if (truth.errors.compliance_rad_per_nm[j] != 0.0)
+      l.compliant.push_back(j);
   }
   l.start.instrument = truth.instrument;
   l.start.position_sigma_m = truth.position_sigma_m;

@@ -108,7 +108,10 @@ void set_compliance(Truth& t, const Chain& chain, std::mt19937& rng) {
     if (largest[i] >= 0.1 * *top) t.errors.compliance_rad_per_nm[i] = uniform(rng, 0.05, 0.2) * kDeg / largest[i];
   const double top_joint = t.errors.compliance_rad_per_nm[static_cast<std::size_t>(top - largest.begin())];
   for (std::size_t i = 0; i < largest.size(); ++i)
-    if (largest[i] < 0.1 * *top && !chain.joints[i].prismatic) t.errors.compliance_rad_per_nm[i] = top_joint;
+    if (largest[i] < 0.1 * *top && !chain.joints[i].prismatic) {
+      t.errors.compliance_rad_per_nm[i] = top_joint;
+      t.compliance_known[i] = true;
+    }
 }
 
 std::vector<int> revolute_joints(const Chain& chain) {

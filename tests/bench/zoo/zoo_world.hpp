@@ -43,7 +43,11 @@ struct Truth {
   Eigen::Vector3d position_sigma_m;  // per axis of the device frame
   double rotation_sigma_rad = 0.0;
   Eigen::Vector3d workspace_centre_root;  // where the device looks
-  explicit Truth(std::size_t joints) : errors(joints) {}
+  // Per joint: a compliance on a joint gravity barely loads (below a tenth of the most loaded
+  // joint's torque), which the oracle is given as it is given the masses: fitted by plain least
+  // squares, a deflection that small only adds the noise to the reference.
+  std::vector<bool> compliance_known;
+  explicit Truth(std::size_t joints) : errors(joints), compliance_known(joints, false) {}
 };
 
 // One reading: the controller's joint values, the noisy measurement and the truth it came from, in
