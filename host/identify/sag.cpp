@@ -234,11 +234,10 @@ std::optional<SagStage> tilted_sag_stage(const SagStage& stage, const IdentifyRe
     freed += (freed.empty() ? "" : ", ") + name;
     const bool prismatic = s.model.joints[h.id.link].type == core::JointType::prismatic;
     const double most = most_of_kind(s.model, largest, h.id.link);
-    const bool named = std::any_of(s.options.prior.sigma.begin(), s.options.prior.sigma.end(),
-                                   [&](const auto& entry) { return entry.first == name; });
-    if (most > 0.0 && !named)
-      s.options.prior.sigma.emplace_back(
-          name, (prismatic ? s.options.prior.deflection_m : s.options.prior.deflection_rad) / most);
+    // First in the list: a prior the caller named for it, in any spelling, comes later and wins.
+    if (most > 0.0)
+      s.options.prior.sigma.emplace(s.options.prior.sigma.begin(), name,
+                                    (prismatic ? s.options.prior.deflection_m : s.options.prior.deflection_rad) / most);
   }
   if (freed.empty()) return std::nullopt;
   const double turn =
