@@ -89,6 +89,7 @@ struct CaseResult {
   double kincal_mm = kNone, oracle_mm = kNone, geometry_oracle_mm = kNone, flange_moved_mm = kNone, correct_mm = kNone,
          joint_change_deg = kNone;
   double kincal_tcp_mm = kNone, oracle_tcp_mm = kNone;  // held out at the TCP (the flange) instead
+  bool oracle_converged = true;                         // false: the oracle's fit stopped at its iteration cap
   // kincal's and the oracle's held-out TCP error over the rows whose targets correct reached (paired)
   double reached_prediction_mm = kNone, reached_oracle_mm = kNone;
   std::vector<Eigen::Vector3d> oracle_tcp_errors;  // per held-out row
@@ -248,6 +249,7 @@ double heldout_rms_kincal(const Chain& chain, const std::string& file, const Cas
 struct OracleRms {
   double point_mm = kNone, tcp_mm = kNone;
   std::vector<Eigen::Vector3d> tcp_errors;  // per held-out row
+  bool converged = false;
 };
 OracleRms heldout_rms_oracle(const Chain& chain, const CaseData& d, unsigned seed, bool geometry_only) {
   std::mt19937 rng(seed);
@@ -257,7 +259,7 @@ OracleRms heldout_rms_oracle(const Chain& chain, const CaseData& d, unsigned see
     e.push_back(measured_truth(chain, fit.estimate, r.q).translation() - r.truth.translation());
   place_flange_as_nominal(fit.estimate, chain);
   for (const Row& r : d.held_out) at_tcp.push_back(tcp(chain, fit.estimate, r.q) - tcp(chain, d.truth, r.q));
-  return {rms_mm(e), rms_mm(at_tcp), at_tcp};
+  return {rms_mm(e), rms_mm(at_tcp), at_tcp, fit.converged};
 }
 
 // The TCP (the flange link) at the held-out rows' nominal poses, in the device frame (the true
@@ -527,6 +529,7 @@ CaseResult run_clean(const Context& ctx, const CaseSpec& c, const CaseData& d, c
   r.oracle_mm = oracle.point_mm;
   r.oracle_tcp_mm = oracle.tcp_mm;
   r.oracle_tcp_errors = oracle.tcp_errors;
+  r.oracle_converged = oracle.converged;
   r.geometry_oracle_mm =
       c.error_class == ErrorClass::precise ? r.oracle_mm : heldout_rms_oracle(chain, d, c.seed + 7u, true).point_mm;
   if (c.error_class == ErrorClass::service && !chain.masses_from_urdf)
@@ -737,7 +740,7 @@ int main(int argc, char** argv) {
                "failed\n";
   Ratios heldout, geometry, correct, correct_point, tcp_heldout, correct_oracle;
   double flange = 0.0, joint_change = 0.0;
-  int unusable = 0, false_refusals = 0, missed = 0, mistakes = 0, clean = 0;
+  int unusable = 0, false_refusals = 0, missed = 0, mistakes = 0, clean = 0, oracle_unconverged = 0;
   for (const auto& [c, r] : results) {
     const double ratio = r.kincal_mm / r.oracle_mm, correct_ratio = r.correct_mm / r.reached_prediction_mm;
     std::string what;
@@ -757,6 +760,7 @@ int main(int argc, char** argv) {
     }
     ++clean;
     unusable += r.unusable ? 1 : 0;
+    oracle_unconverged += r.oracle_converged ? 0 : 1;
     false_refusals += r.refused ? 1 : 0;
     heldout.add(ratio, c.label());
     geometry.add(r.kincal_mm / r.geometry_oracle_mm, c.label());
@@ -785,6 +789,7 @@ int main(int argc, char** argv) {
             << "FIGURE zoo_correct_worst_over_measured_point_prediction " << fixed(correct_point.worst(), 3)
             << " ratio\n"
             << "FIGURE zoo_worst_tcp_heldout_over_oracle " << fixed(tcp_heldout.worst(), 3) << " ratio\n"
-            << "FIGURE zoo_correct_worst_over_tcp_oracle " << fixed(correct_oracle.worst(), 3) << " ratio\n";
+            << "FIGURE zoo_correct_worst_over_tcp_oracle " << fixed(correct_oracle.worst(), 3) << " ratio\n"
+            << "FIGURE zoo_oracle_unconverged " << oracle_unconverged << " cases\n";
   return 0;
 }
