@@ -1,9 +1,9 @@
 // The zoo's oracle (issue #41): the truth's own structure (the parameters the error class changed,
 // the registration and the measured point or frame) fitted by plain least squares -- Ceres'
 // Levenberg-Marquardt with numeric derivatives of the zoo's forward kinematics, no prior, each row
-// weighted by the instrument's true noise -- from the nominal chain; the masses and the compliances
-// of joints gravity barely loads are given (Truth::compliance_known). What the best fit of the
-// right model reaches on the same rows; kincal's defaults are judged against it.
+// weighted by the instrument's true noise -- from the nominal chain, to convergence; the masses and
+// the compliances of joints gravity barely loads are given (Truth::compliance_known). What the best
+// fit of the right model reaches on the same rows; kincal's defaults are judged against it.
 #pragma once
 
 #include <random>
