@@ -530,6 +530,7 @@ CaseResult run_clean(const Context& ctx, const CaseSpec& c, const CaseData& d, c
   r.oracle_tcp_mm = oracle.tcp_mm;
   r.oracle_tcp_errors = oracle.tcp_errors;
   r.oracle_converged = oracle.converged;
+  if (!oracle.converged) r.notes.push_back("the oracle stopped at its iteration cap");
   r.geometry_oracle_mm =
       c.error_class == ErrorClass::precise ? r.oracle_mm : heldout_rms_oracle(chain, d, c.seed + 7u, true).point_mm;
   if (c.error_class == ErrorClass::service && !chain.masses_from_urdf)
