@@ -45,7 +45,7 @@ struct Truth {
   Eigen::Vector3d workspace_centre_root;  // where the device looks
   // Per joint: a compliance on a joint gravity barely loads (below a tenth of the most loaded
   // joint's torque), which the oracle is given as it is given the masses: fitted by plain least
-  // squares, a deflection that small only adds the noise to the reference.
+  // squares, a deflection that small only adds noise to the reference.
   std::vector<bool> compliance_known;
   explicit Truth(std::size_t joints) : errors(joints), compliance_known(joints, false) {}
 };
